@@ -1,0 +1,45 @@
+"""``egtviz bench``: run the suites and print one table."""
+
+from __future__ import annotations
+
+import platform
+import sys
+
+
+def _suites(name: str, repeats: int):
+    if name in ("core", "all"):
+        from .core import run_projection_bench
+        from .estimation import run_estimation_bench
+        from .panoramic import bench_conics
+
+        yield "core", lambda: run_projection_bench(repeats=repeats) + bench_conics() + run_estimation_bench(repeats=repeats)
+    if name in ("viewer", "all"):
+        from .viewer import run_viewer_bench
+
+        yield "viewer", run_viewer_bench
+    if name in ("servo", "all"):
+        from .servo import run_servo_bench
+
+        yield "servo", run_servo_bench
+
+
+def format_table(rows: list[dict]) -> str:
+    head = f"{'case':<58} {'ours ms':>9} {'OpenCV ms':>10} {'ratio':>7}  note"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        cv = "" if r.get("opencv_ms") is None else f"{r['opencv_ms']:.3f}"
+        ratio = "" if r.get("ratio") is None else f"{r['ratio']:.2f}"
+        lines.append(f"{r['case']:<58} {r['ours_ms']:>9.3f} {cv:>10} {ratio:>7}  {r.get('note', '')}")
+    return "\n".join(lines)
+
+
+def run(suite: str = "all", repeats: int = 20) -> int:
+    print(f"egtviz bench {suite}: Python {platform.python_version()}, {platform.machine()}, one run, medians", flush=True)
+    for name, fn in _suites(suite, repeats):
+        print(f"\n[{name}]", flush=True)
+        print(format_table(fn()), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(run(*(sys.argv[1:2] or ["all"])))

@@ -1,0 +1,19 @@
+"""The numeric core of egtviz: pure numpy/scipy, points as rows, no viewer imports.
+
+Conventions: ``docs/conventions.md``.
+"""
+
+from ._validate import DegenerateConfigurationError as DegenerateConfigurationError
+from ._validate import GeometryError as GeometryError
+from .epipolar import EpipolarPair as EpipolarPair
+from .epipolar import epipolar_lines as epipolar_lines
+from .epipolar import epipolar_lines_in_first as epipolar_lines_in_first
+from .epipolar import epipolar_pair as epipolar_pair
+from .homogeneous import clip_lines_to_rect as clip_lines_to_rect
+from .homogeneous import normalize_homogeneous as normalize_homogeneous
+from .pinhole import Intrinsics as Intrinsics
+from .pinhole import PinholeCamera as PinholeCamera
+from .poses import Pose as Pose
+from .poses import rotx as rotx
+from .poses import roty as roty
+from .poses import rotz as rotz

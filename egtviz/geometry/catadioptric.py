@@ -1,0 +1,243 @@
+r"""Central catadioptric (panoramic) camera: a mirror plus a CCD.
+
+EGT reference, section 3; ``docs/conventions.md``, "Central catadioptric
+camera". A world point :math:`X_w` goes into the mirror frame,
+:math:`X = R^T (X_w - t)`, the ray from the focus towards it meets the mirror at
+:math:`X_h = \lambda X` (:math:`\lambda > 0`, see
+:meth:`~egtviz.geometry.mirrors.HyperbolicMirror.intersect`), and the CCD images
+the mirror point:
+
+.. math::
+    m \sim K (X_h + (0, 0, 2e)) \quad \text{(hyperbolic, pin-hole CCD at } (0,0,-2e)),
+    \qquad m \sim K (x_h, y_h, 1) \quad \text{(parabolic, orthographic CCD)}.
+
+The same pixels follow from the unified sphere model (Geyer & Daniilidis;
+Barreto): with the *unified frame* obtained from the mirror frame by the
+rotation :math:`F = \mathrm{diag}(1, -1, -1)` (its z axis points from the mirror
+to the CCD), a direction is put on the unit sphere, :math:`s = F d / |d|`, and
+projected from :math:`(0, 0, -\xi)`:
+
+.. math:: m \sim K_g \begin{bmatrix} s_x \\ s_y \\ s_z + \xi \end{bmatrix},
+    \qquad K_g = K\, \mathrm{diag}(\gamma, -\gamma, 1),
+
+with :math:`\xi`, :math:`\gamma` from the mirror (:attr:`HyperbolicMirror.xi`,
+:attr:`HyperbolicMirror.gamma`). Indeed for the hyperbola with a unit direction
+:math:`\lambda = b^2 / (a - e d_z)` and
+:math:`x_h / (z_h + 2e) = b^2 d_x / (2ae - (a^2 + e^2) d_z) = \gamma d_x / (\xi - d_z)`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import numpy.typing as npt
+
+from ._validate import GeometryError, as_calibration, as_points
+from .mirrors import HyperbolicMirror, Mirror, ParabolicMirror
+from .poses import Pose
+
+__all__ = ["CatadioptricCamera", "PanoramicProjection", "UNIFIED_FLIP"]
+
+#: Rotation from the mirror frame to the unified-model frame (a half turn about x).
+UNIFIED_FLIP = np.diag([1.0, -1.0, -1.0])
+UNIFIED_FLIP.setflags(write=False)
+
+_DEFAULT_K = ((1e3, 0.0, 320.0), (0.0, 1e3, 240.0), (0.0, 0.0, 1.0))
+
+
+@dataclass(frozen=True, eq=False)
+class PanoramicProjection:
+    """Result of projecting points through a catadioptric camera."""
+
+    pixels: np.ndarray
+    """(N, 2) pixel coordinates; NaN where not ``visible``."""
+    mirror_points: np.ndarray
+    """(N, 3) mirror points :math:`X_h` in the mirror frame; NaN where not ``visible``."""
+    visible: np.ndarray
+    """(N,) bool: the ray from the focus meets the mirror inside the rim."""
+    in_image: np.ndarray
+    """(N,) bool: ``visible`` and the pixel lies in ``[0, width] x [0, height]``."""
+
+
+@dataclass(frozen=True, eq=False)
+class CatadioptricCamera:
+    r"""A central catadioptric camera: mirror with focus at ``pose.t``, axis ``pose.R[:, 2]``.
+
+    Args:
+        pose: the mirror frame in the world (``H = [R t; 0 1]``; ``R = I`` is an
+            upright mirror).
+        mirror: a :class:`HyperbolicMirror` (pin-hole CCD) or
+            :class:`ParabolicMirror` (orthographic CCD).
+        K: (3, 3) CCD calibration. For the orthographic CCD its focal entries
+            are pixels per scene unit.
+        width: image width in pixels.
+        height: image height in pixels.
+
+    Raises:
+        GeometryError: on a bad pose, mirror, calibration or image size.
+    """
+
+    pose: Pose = field(default_factory=Pose)
+    """Mirror frame in the world."""
+    mirror: Mirror = field(default_factory=HyperbolicMirror)
+    """The mirror (EGT's default: hyperbolic, ``a = 3``, ``b = 1``)."""
+    K: np.ndarray = field(default_factory=lambda: np.array(_DEFAULT_K))
+    """(3, 3) calibration of the CCD, normalised to ``K[2, 2] = 1``."""
+    width: int = 640
+    """Image width in pixels."""
+    height: int = 480
+    """Image height in pixels."""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.pose, Pose):
+            raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
+        if not isinstance(self.mirror, (HyperbolicMirror, ParabolicMirror)):
+            raise GeometryError(
+                f"mirror: expected a HyperbolicMirror or ParabolicMirror, got {type(self.mirror).__name__}"
+            )
+        K = as_calibration(self.K, "K").copy()
+        K.setflags(write=False)
+        object.__setattr__(self, "K", K)
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value <= 0:
+                raise GeometryError(f"{name}: expected a positive integer, got {value!r}")
+            object.__setattr__(self, name, int(value))
+
+    # ------------------------------------------------------------------ frames
+    def moved(self, pose: Pose) -> CatadioptricCamera:
+        """The same camera at a new pose."""
+        return replace(self, pose=pose)
+
+    @property
+    def focus_world(self) -> np.ndarray:
+        """(3,) the mirror focus (single viewpoint) in the world, ``pose.t``."""
+        return self.pose.t.copy()
+
+    @property
+    def ccd_center_world(self) -> np.ndarray:
+        """(3,) the CCD's position in the world: the point ``(0, 0, -ccd_offset)`` of the mirror frame.
+
+        For the hyperbola this is the CCD pin-hole (second focus, ``2 e`` below
+        the focus); for the parabola's orthographic CCD it is only where it is drawn.
+        """
+        return self.pose.to_world([0.0, 0.0, -self.mirror.ccd_offset])[0]
+
+    @property
+    def unified_calibration(self) -> np.ndarray:
+        r"""The generalised calibration :math:`K_g = K\,\mathrm{diag}(\gamma, -\gamma, 1)` of the unified model."""
+        g = self.mirror.gamma
+        return self.K @ np.diag([g, -g, 1.0])
+
+    # -------------------------------------------------------------- projection
+    def project(self, X_world: npt.ArrayLike) -> PanoramicProjection:
+        r"""Project world points through the mirror onto the CCD.
+
+        .. math:: X = R^T (X_w - t), \quad X_h = \lambda X, \quad
+            m \sim K (X_h + (0, 0, 2e)) \ \text{or}\ m \sim K (x_h, y_h, 1).
+
+        Args:
+            X_world: (N, 3) world points (a single (3,) point is N = 1).
+
+        Returns:
+            A :class:`PanoramicProjection`; points in the blind cone, above the
+            rim or at the focus itself have NaN pixels and ``visible = False``.
+        """
+        X = self.pose.to_local(as_points(X_world, "X_world", 3))
+        return self._project_mirror_frame(X)
+
+    def project_directions(self, d_mirror: npt.ArrayLike) -> PanoramicProjection:
+        """Like :meth:`project` for ray directions ``d_mirror`` (N, 3) already in the mirror frame."""
+        return self._project_mirror_frame(as_points(d_mirror, "d_mirror", 3))
+
+    def _project_mirror_frame(self, d: np.ndarray) -> PanoramicProjection:
+        lam, visible = self.mirror.intersect(d)
+        Xh = lam[:, None] * d  # NaN rows where not visible
+        if isinstance(self.mirror, HyperbolicMirror):
+            P = Xh + np.array([0.0, 0.0, self.mirror.ccd_offset])
+        else:
+            P = np.column_stack([Xh[:, 0], Xh[:, 1], np.ones(len(Xh))])
+        m = P @ self.K.T
+        pixels = m[:, :2] / m[:, 2:3]
+        return PanoramicProjection(pixels, Xh, visible, visible & self._inside(pixels))
+
+    def _inside(self, pixels: np.ndarray) -> np.ndarray:
+        with np.errstate(invalid="ignore"):
+            u, v = pixels[:, 0], pixels[:, 1]
+            return (u >= 0) & (u <= self.width) & (v >= 0) & (v <= self.height)
+
+    def _unified_homogeneous(self, d_mirror: np.ndarray) -> np.ndarray:
+        r"""Unnormalised homogeneous pixels :math:`K_g (s_x, s_y, s_z + \xi)` of (N, 3) mirror-frame directions.
+
+        No visibility test: this is the algebraic image of the whole sphere
+        (including the blind cone's phantom points), as used by the conics.
+        """
+        norm = np.linalg.norm(d_mirror, axis=1, keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (d_mirror / norm) @ UNIFIED_FLIP.T
+        q = s + np.array([0.0, 0.0, self.mirror.xi])
+        return q @ self.unified_calibration.T
+
+    def project_unified(self, X_world: npt.ArrayLike) -> np.ndarray:
+        r"""Project world points with the unified sphere model (the same pixels as :meth:`project`).
+
+        .. math:: s = F \frac{X}{|X|}, \qquad
+            m \sim K_g \begin{bmatrix} s_x \\ s_y \\ s_z + \xi \end{bmatrix}.
+
+        Args:
+            X_world: (N, 3) world points.
+
+        Returns:
+            (N, 2) pixels; NaN where the point is not visible (the unified
+            formula alone would also give the phantom images of blind-cone rays).
+        """
+        X = self.pose.to_local(as_points(X_world, "X_world", 3))
+        _, visible = self.mirror.intersect(X)
+        m = self._unified_homogeneous(X)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pixels = m[:, :2] / m[:, 2:3]
+        pixels[~visible] = np.nan
+        return pixels
+
+    def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
+        r"""Unit rays from the focus, in the world frame, that image at ``pixels``.
+
+        Lifts :math:`q = K_g^{-1} m = (x, y, 1)` to the unit sphere (the root in
+        front of the projection centre),
+
+        .. math:: s = \eta\,(x, y, 1) - (0, 0, \xi), \qquad
+            \eta = \frac{\xi + \sqrt{1 + (1 - \xi^2)(x^2 + y^2)}}{x^2 + y^2 + 1},
+
+        then :math:`d = R F s`.
+
+        Args:
+            pixels: (N, 2) pixel coordinates.
+
+        Returns:
+            (N, 3) unit world directions; NaN rows for pixels that are not the
+            image of a visible mirror point (outside the rim's image, or a
+            hyperbola pixel only reachable by blind-cone rays).
+        """
+        m = as_points(pixels, "pixels", 2)
+        q = np.column_stack([m, np.ones(len(m))]) @ np.linalg.inv(self.unified_calibration).T
+        x, y = q[:, 0] / q[:, 2], q[:, 1] / q[:, 2]
+        xi = self.mirror.xi
+        r2 = x * x + y * y
+        eta = (xi + np.sqrt(1.0 + (1.0 - xi * xi) * r2)) / (r2 + 1.0)
+        s = np.column_stack([eta * x, eta * y, eta - xi])
+        d = s @ UNIFIED_FLIP.T
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        _, hit = self.mirror.intersect(d)
+        d[~hit] = np.nan
+        return d @ self.pose.R.T
+
+    def rim_image(self, n: int = 256) -> np.ndarray:
+        """(n, 2) pixels of the mirror's rim: the outer boundary of the mirror's image."""
+        P = self.mirror.rim_points(n)
+        if isinstance(self.mirror, HyperbolicMirror):
+            P = P + np.array([0.0, 0.0, self.mirror.ccd_offset])
+        else:
+            P = np.column_stack([P[:, 0], P[:, 1], np.ones(len(P))])
+        m = P @ self.K.T
+        return m[:, :2] / m[:, 2:3]

@@ -1,0 +1,174 @@
+r"""Pin-hole camera: intrinsics, projection with visibility, back-projection, frustum.
+
+.. math:: m \sim K [R^T \mid -R^T t] X_w,\qquad
+   K = \begin{bmatrix} k_u f & \gamma & u_0 \\ 0 & k_v f & v_0 \\ 0 & 0 & 1 \end{bmatrix}
+
+(EGT reference, section 2; Hartley & Zisserman 6.1). Frames: ``docs/conventions.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from ._validate import GeometryError, as_calibration, as_points, as_positive
+from .poses import Pose
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """Calibration of a pin-hole camera and the size of its image."""
+
+    focal_length: float = 0.008
+    """f, metres."""
+    pixels_per_metre: tuple[float, float] = (100_000.0, 100_000.0)
+    """(ku, kv): pixels per metre along u and v (the inverse of the pixel size)."""
+    principal_point: tuple[float, float] = (320.0, 240.0)
+    """(u0, v0) in pixels."""
+    skew: float = 0.0
+    """gamma, in pixels."""
+    width: int = 640
+    """Image width in pixels."""
+    height: int = 480
+    """Image height in pixels."""
+
+    def __post_init__(self) -> None:
+        as_positive(self.focal_length, "focal_length")
+        ku, kv = (as_positive(k, "pixels_per_metre") for k in self.pixels_per_metre)
+        object.__setattr__(self, "pixels_per_metre", (ku, kv))
+        u0, v0 = (float(c) for c in self.principal_point)
+        if not (np.isfinite(u0) and np.isfinite(v0)):
+            raise GeometryError("principal_point: expected finite (u0, v0)")
+        object.__setattr__(self, "principal_point", (u0, v0))
+        if not np.isfinite(self.skew):
+            raise GeometryError("skew: expected a finite number")
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if int(value) != value or value < 1:
+                raise GeometryError(f"{name}: expected a positive whole number of pixels, got {value!r}")
+            object.__setattr__(self, name, int(value))
+
+    @classmethod
+    def from_K(cls, K: npt.ArrayLike, width: int = 640, height: int = 480, focal_length: float = 1.0) -> Intrinsics:
+        """Intrinsics whose matrix is ``K``; ``focal_length`` only splits ``ku f`` into its factors."""
+        K = as_calibration(K, "K")
+        f = as_positive(focal_length, "focal_length")
+        if K[0, 0] <= 0 or K[1, 1] <= 0:
+            raise GeometryError("K: expected positive focal lengths K[0,0], K[1,1]")
+        return cls(f, (K[0, 0] / f, K[1, 1] / f), (K[0, 2], K[1, 2]), K[0, 1], width, height)
+
+    @property
+    def K(self) -> np.ndarray:
+        """The 3x3 calibration matrix."""
+        ku, kv = self.pixels_per_metre
+        u0, v0 = self.principal_point
+        f = self.focal_length
+        return np.array([[ku * f, self.skew, u0], [0.0, kv * f, v0], [0.0, 0.0, 1.0]])
+
+    @property
+    def focal_pixels(self) -> tuple[float, float]:
+        """(ku f, kv f): the focal length in pixels."""
+        ku, kv = self.pixels_per_metre
+        return ku * self.focal_length, kv * self.focal_length
+
+    @property
+    def fov_y(self) -> float:
+        """Vertical field of view in radians."""
+        return 2.0 * float(np.arctan2(self.height / 2.0, self.focal_pixels[1]))
+
+    @property
+    def aspect(self) -> float:
+        """width / height."""
+        return self.width / self.height
+
+
+@dataclass(frozen=True)
+class PinholeProjection:
+    """Result of projecting N world points into a pin-hole camera."""
+
+    pixels: np.ndarray
+    """(N, 2) pixels; NaN where the point is behind the camera."""
+    depth: np.ndarray
+    """(N,) z in the camera frame (negative or zero: behind)."""
+    in_front: np.ndarray
+    """(N,) bool, ``depth > 0``: the point has an image."""
+    in_image: np.ndarray
+    """(N,) bool, in front and inside ``[0, width] x [0, height]``."""
+
+
+@dataclass(frozen=True)
+class PinholeCamera:
+    """A pin-hole camera: a pose in the world and intrinsics."""
+
+    pose: Pose = dataclasses.field(default_factory=Pose)
+    intrinsics: Intrinsics = dataclasses.field(default_factory=Intrinsics)
+
+    @property
+    def K(self) -> np.ndarray:
+        return self.intrinsics.K
+
+    @property
+    def center(self) -> np.ndarray:
+        """(3,) camera centre in world coordinates."""
+        return self.pose.t
+
+    @property
+    def P(self) -> np.ndarray:
+        r"""3x4 projection matrix :math:`P = K [R^T \mid -R^T t]`."""
+        R, t = self.pose.R, self.pose.t
+        return self.K @ np.hstack([R.T, (-R.T @ t)[:, None]])
+
+    def moved(self, pose: Pose) -> PinholeCamera:
+        """The same camera at another pose."""
+        return dataclasses.replace(self, pose=pose)
+
+    def with_intrinsics(self, intrinsics: Intrinsics) -> PinholeCamera:
+        return dataclasses.replace(self, intrinsics=intrinsics)
+
+    def project(self, X_world: npt.ArrayLike) -> PinholeProjection:
+        r"""Project world points (N, 3): :math:`m \sim K R^T (X_w - t)`.
+
+        Points with :math:`z_c \le 0` are behind the camera: NaN pixel, ``in_front`` False.
+        """
+        X = as_points(X_world, "X_world", 3)
+        # One fused product: K R^T (X - t), without building (N, 4) homogeneous points.
+        M = self.K @ self.pose.R.T
+        m = (X - self.pose.t) @ M.T
+        depth = m[:, 2].copy()
+        in_front = depth > 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pixels = m[:, :2] / depth[:, None]
+        pixels[~in_front] = np.nan
+        w, h = self.intrinsics.width, self.intrinsics.height
+        u, v = pixels[:, 0], pixels[:, 1]
+        with np.errstate(invalid="ignore"):
+            in_image = in_front & (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
+        return PinholeProjection(pixels, depth, in_front, in_image)
+
+    def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
+        r"""Unit world directions (N, 3) of the rays through ``pixels`` (N, 2): :math:`d \propto R K^{-1} m`."""
+        m = as_points(pixels, "pixels", 2)
+        d_cam = np.linalg.solve(self.K, np.column_stack([m, np.ones(len(m))]).T).T
+        d = d_cam @ self.pose.R.T
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+    def frustum_corners(self, depth: float = 1.0) -> np.ndarray:
+        """(4, 3) world points of the image corners at ``depth`` along the optical axis.
+
+        Order: (0, 0), (w, 0), (w, h), (0, h) in pixels.
+        """
+        depth = as_positive(depth, "depth")
+        w, h = self.intrinsics.width, self.intrinsics.height
+        corners = np.array([[0.0, 0.0, 1.0], [w, 0.0, 1.0], [w, h, 1.0], [0.0, h, 1.0]])
+        d_cam = np.linalg.solve(self.K, corners.T).T
+        d_cam = d_cam * (depth / d_cam[:, 2:3])
+        return self.pose.to_world(d_cam)
+
+    def image_to_world(self, pixels: npt.ArrayLike, depth: float = 1.0) -> np.ndarray:
+        """World points (N, 3) of ``pixels`` (N, 2) on the plane ``z_c = depth`` (for drawing the image in 3D)."""
+        m = as_points(pixels, "pixels", 2)
+        d_cam = np.linalg.solve(self.K, np.column_stack([m, np.ones(len(m))]).T).T
+        return self.pose.to_world(d_cam * as_positive(depth, "depth"))

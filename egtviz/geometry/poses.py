@@ -1,0 +1,205 @@
+r"""Rotations and rigid poses.
+
+A pose is :math:`H = [R\ t;\ 0\ 1]`: ``t`` is the frame's origin (camera centre,
+mirror focus) in world coordinates and the columns of ``R`` are the frame's axes
+in world coordinates, so a world point maps into the frame as
+:math:`X_c = R^T (X_w - t)` (EGT reference, section 1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from scipy.spatial.transform import Rotation
+
+from ._validate import GeometryError, as_matrix, as_points, as_rotation, as_vector
+
+
+def rotx(angle: float) -> np.ndarray:
+    r"""Right-handed rotation about x by ``angle`` radians (EGT ``rotox``).
+
+    .. math:: R_x(a) = \begin{bmatrix}1&0&0\\0&\cos a&-\sin a\\0&\sin a&\cos a\end{bmatrix}
+    """
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def roty(angle: float) -> np.ndarray:
+    r"""Right-handed rotation about y by ``angle`` radians (EGT ``rotoy``).
+
+    .. math:: R_y(a) = \begin{bmatrix}\cos a&0&\sin a\\0&1&0\\-\sin a&0&\cos a\end{bmatrix}
+    """
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def rotz(angle: float) -> np.ndarray:
+    r"""Right-handed rotation about z by ``angle`` radians (EGT ``rotoz``).
+
+    .. math:: R_z(a) = \begin{bmatrix}\cos a&-\sin a&0\\\sin a&\cos a&0\\0&0&1\end{bmatrix}
+    """
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+#: The rotation EGT's ``f_Rt2H`` folds in: a pin-hole camera "with no rotation"
+#: looks along world +y with its image v axis pointing to world -z.
+EGT_CAMERA_BASE = rotx(-np.pi / 2)
+
+
+def skew(v: npt.ArrayLike) -> np.ndarray:
+    r"""The cross-product matrix :math:`[v]_\times`, with :math:`[v]_\times w = v \times w`."""
+    x, y, z = as_vector(v, "v", 3)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+@dataclass(frozen=True, eq=False)
+class Pose:
+    r"""A rigid pose :math:`H = [R\ t;\ 0\ 1]` of a frame in the world."""
+
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))
+    """(3, 3) rotation; columns are the frame's axes in world coordinates."""
+    t: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    """(3,) origin of the frame in world coordinates."""
+
+    def __post_init__(self) -> None:
+        R = as_rotation(self.R, "R")
+        # Re-orthonormalise so repeated composition does not drift.
+        u, _, vt = np.linalg.svd(R)
+        object.__setattr__(self, "R", u @ vt)
+        object.__setattr__(self, "t", as_vector(self.t, "t", 3).copy())
+        self.R.setflags(write=False)
+        self.t.setflags(write=False)
+
+    @classmethod
+    def from_matrix(cls, H: npt.ArrayLike) -> Pose:
+        """Pose from a 4x4 homogeneous matrix ``[R t; 0 1]``."""
+        H = as_matrix(H, "H", (4, 4))
+        if not np.allclose(H[3], [0.0, 0.0, 0.0, 1.0]):
+            raise GeometryError("H: expected last row [0, 0, 0, 1]")
+        return cls(H[:3, :3], H[:3, 3])
+
+    @classmethod
+    def from_egt(cls, R: npt.ArrayLike, t: npt.ArrayLike) -> Pose:
+        r"""EGT's ``f_Rt2H`` convention: :math:`H = [R_x(-\pi/2) R\ t;\ 0\ 1]`.
+
+        ``R`` turns the camera about its own axes, ``t`` is in world coordinates.
+        """
+        return cls(EGT_CAMERA_BASE @ as_rotation(R, "R"), t)
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 4x4 homogeneous matrix ``H``."""
+        H = np.eye(4)
+        H[:3, :3] = self.R
+        H[:3, 3] = self.t
+        return H
+
+    @property
+    def egt_rotation(self) -> np.ndarray:
+        r"""The ``R`` that ``f_Rt2H`` would need: :math:`R_x(-\pi/2)^T R`."""
+        return EGT_CAMERA_BASE.T @ self.R
+
+    def to_local(self, X_world: npt.ArrayLike) -> np.ndarray:
+        r"""World points (N, 3) into this frame: :math:`X = R^T (X_w - t)`."""
+        X = as_points(X_world, "X_world", 3)
+        return (X - self.t) @ self.R
+
+    def to_world(self, X_local: npt.ArrayLike) -> np.ndarray:
+        r"""Local points (N, 3) into the world: :math:`X_w = R X + t`."""
+        X = as_points(X_local, "X_local", 3)
+        return X @ self.R.T + self.t
+
+    def direction_to_world(self, d_local: npt.ArrayLike) -> np.ndarray:
+        """Local directions (N, 3) into world directions (rotation only)."""
+        return as_points(d_local, "d_local", 3) @ self.R.T
+
+    def compose(self, other: Pose) -> Pose:
+        """``self @ other``: ``other`` expressed in this frame, returned in the world."""
+        return Pose(self.R @ other.R, self.R @ other.t + self.t)
+
+    def inverse(self) -> Pose:
+        """The inverse pose ``H^-1``."""
+        return Pose(self.R.T, -self.R.T @ self.t)
+
+    def with_position(self, t: npt.ArrayLike) -> Pose:
+        """The same orientation at a new position."""
+        return Pose(self.R, t)
+
+    def with_rotation(self, R: npt.ArrayLike) -> Pose:
+        """The same position with a new orientation."""
+        return Pose(R, self.t)
+
+    @property
+    def quat_wxyz(self) -> np.ndarray:
+        """Orientation as a unit quaternion ``(w, x, y, z)`` (viser's order)."""
+        return quat_wxyz_from_matrix(self.R)
+
+    def __repr__(self) -> str:
+        return f"Pose(R={np.round(self.R, 6).tolist()}, t={np.round(self.t, 6).tolist()})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Pose):
+            return NotImplemented
+        return bool(np.array_equal(self.R, other.R) and np.array_equal(self.t, other.t))
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+def quat_wxyz_from_matrix(R: npt.ArrayLike) -> np.ndarray:
+    """Unit quaternion ``(w, x, y, z)`` of a rotation matrix, with ``w >= 0``."""
+    q = Rotation.from_matrix(as_rotation(R, "R")).as_quat(scalar_first=True)
+    return q if q[0] >= 0 else -q
+
+
+def matrix_from_quat_wxyz(q: npt.ArrayLike) -> np.ndarray:
+    """Rotation matrix of a quaternion ``(w, x, y, z)``; it need not be unit-norm."""
+    q = as_vector(q, "q", 4)
+    if np.linalg.norm(q) < 1e-12:
+        raise GeometryError("q: a zero quaternion is not a rotation")
+    return Rotation.from_quat(q, scalar_first=True).as_matrix()
+
+
+def egt_rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    r"""EGT user rotation from yaw, pitch, roll (radians) about the camera's own axes.
+
+    In EGT's camera frame (x right, y down, z along the optical axis):
+    yaw turns about the camera's y axis (pan), pitch about its x axis (tilt),
+    roll about its z axis (the optical axis), applied in that order as
+    intrinsic rotations:
+
+    .. math:: R = R_y(\text{yaw})\, R_x(\text{pitch})\, R_z(\text{roll})
+
+    Feed the result to :meth:`Pose.from_egt` (``f_Rt2H``); ``rotoy(pi/4)`` is a
+    yaw of 45 degrees.
+    """
+    return roty(yaw) @ rotx(pitch) @ rotz(roll)
+
+
+def ypr_from_egt_rotation(R: npt.ArrayLike) -> tuple[float, float, float]:
+    """Inverse of :func:`egt_rotation_from_ypr`: ``(yaw, pitch, roll)`` in radians.
+
+    Pitch is in ``[-pi/2, pi/2]``; at the gimbal lock (pitch = +-pi/2) roll is 0.
+    """
+    R = as_rotation(R, "R")
+    # Intrinsic Y-X-Z Euler angles.
+    yaw, pitch, roll = Rotation.from_matrix(R).as_euler("YXZ")
+    return float(yaw), float(pitch), float(roll)
+
+
+def look_at(eye: npt.ArrayLike, target: npt.ArrayLike, up: npt.ArrayLike = (0.0, 0.0, 1.0)) -> Pose:
+    """Camera pose at ``eye`` whose optical axis (+z) points at ``target``, image v (+y) towards -``up``."""
+    eye = as_vector(eye, "eye", 3)
+    z = as_vector(target, "target", 3) - eye
+    if np.linalg.norm(z) < 1e-12:
+        raise GeometryError("target: coincides with eye, the viewing direction is undefined")
+    z = z / np.linalg.norm(z)
+    up = as_vector(up, "up", 3)
+    x = np.cross(z, up)
+    if np.linalg.norm(x) < 1e-9:
+        x = np.cross(z, [1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.cross(z, [0.0, 1.0, 0.0])
+    x = x / np.linalg.norm(x)
+    y = np.cross(z, x)
+    return Pose(np.column_stack([x, y, z]), eye)

@@ -1,0 +1,301 @@
+"""``SceneModel``: the one mutable holder of a scene, with validation, undo and change notifications.
+
+The viewer, the lessons and the CLI all change a scene through this small API;
+each call validates, replaces the immutable :class:`Scene`, and notifies the
+subscribers once (or once per :meth:`SceneModel.batch`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..geometry import GeometryError
+from .scene import Scene, SceneFileError
+from .specs import CAMERA_KINDS, DisplayOptions, PanoramicSpec, PinholeSpec, SceneError, SurfaceSpec, _triple
+
+UNDO_DEPTH = 100
+
+
+@dataclass(frozen=True)
+class Change:
+    """What a notification is about: ``kind`` (e.g. ``"camera"``, ``"points"``, ``"load"``) and the names touched."""
+
+    kind: str
+    names: tuple[str, ...] = ()
+
+
+Listener = Callable[[Scene, Change], None]
+
+
+class SceneModel:
+    """Holds a :class:`Scene`; every mutation validates first and leaves the scene unchanged on error."""
+
+    def __init__(self, scene: Scene | None = None) -> None:
+        from .examples import default_scene
+
+        self._initial = scene if scene is not None else default_scene()
+        self._scene = self._initial
+        self._undo: list[Scene] = []
+        self._listeners: list[Listener] = []
+        self._lock = threading.RLock()
+        self._batch_depth = 0
+        self._batch_changes: list[Change] = []
+        self._batch_start: Scene | None = None
+
+    # -- reading ---------------------------------------------------------------
+
+    @property
+    def scene(self) -> Scene:
+        return self._scene
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener(scene, change)`` after each change; returns the function that unsubscribes."""
+        with self._lock:
+            self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if listener in self._listeners:
+                    self._listeners.remove(listener)
+
+        return unsubscribe
+
+    # -- the core of every mutation ---------------------------------------------
+
+    def _commit(self, new: Scene, change: Change, *, undoable: bool = True) -> None:
+        with self._lock:
+            if self._batch_depth:
+                self._scene = new
+                self._batch_changes.append(change)
+                return
+            if undoable:
+                self._undo.append(self._scene)
+                del self._undo[:-UNDO_DEPTH]
+            self._scene = new
+            listeners = list(self._listeners)
+        for listener in listeners:
+            listener(new, change)
+
+    def _replace(self, change: Change, **fields: Any) -> None:
+        try:
+            new = self._scene.replace(**fields)
+        except (GeometryError, TypeError) as exc:
+            raise SceneError(str(exc)) from exc
+        self._commit(new, change)
+
+    @contextmanager
+    def batch(self, kind: str = "batch") -> Iterator[None]:
+        """Group changes: one undo step and one notification at the end; all or nothing on error."""
+        with self._lock:
+            if self._batch_depth == 0:
+                self._batch_start = self._scene
+                self._batch_changes = []
+            self._batch_depth += 1
+        try:
+            yield
+        except BaseException:
+            with self._lock:
+                self._batch_depth -= 1
+                if self._batch_depth == 0:
+                    self._scene = self._batch_start  # type: ignore[assignment]
+            raise
+        with self._lock:
+            self._batch_depth -= 1
+            if self._batch_depth:
+                return
+            changes, start = self._batch_changes, self._batch_start
+            if not changes:
+                return
+            names = tuple(dict.fromkeys(n for c in changes for n in c.names))
+            self._undo.append(start)  # type: ignore[arg-type]
+            del self._undo[:-UNDO_DEPTH]
+            new = self._scene
+            listeners = list(self._listeners)
+        change = changes[0] if len(changes) == 1 else Change(kind, names)
+        for listener in listeners:
+            listener(new, change)
+
+    # -- cameras ---------------------------------------------------------------
+
+    def update_camera(self, name: str, **fields: Any) -> None:
+        """Change fields of a camera spec (e.g. ``focal_length=0.01``); ``name=`` renames it."""
+        scene = self._scene
+        spec = scene.camera(name)
+        try:
+            new_spec = dataclasses.replace(spec, **fields)
+        except TypeError as exc:
+            raise SceneError(f"camera {name!r}: {exc}") from exc
+        except GeometryError as exc:
+            raise SceneError(f"camera {name!r}: {exc}") from exc
+        cameras = tuple(new_spec if c.name == name else c for c in scene.cameras)
+        pair = scene.pair
+        if pair and new_spec.name != name:
+            pair = tuple(new_spec.name if n == name else n for n in pair)  # type: ignore[assignment]
+        self._replace(Change("camera", (name, new_spec.name) if new_spec.name != name else (name,)), cameras=cameras, pair=pair)
+
+    def set_camera_pose(self, name: str, position: Any, R_world: Any) -> None:
+        """Place a camera from a world pose (a gizmo drag): the spec keeps its own angle convention."""
+        spec = self._scene.camera(name)
+        R = np.asarray(R_world, dtype=np.float64)
+        if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+            raise SceneError("R_world: expected a finite 3x3 rotation")
+        self.update_camera(name, position=_triple(position, "position"), ypr_deg=spec.ypr_from_world_rotation(R))
+
+    def add_camera(self, kind: str = "pinhole", name: str | None = None, **fields: Any) -> str:
+        """Add a camera of ``kind`` (``"pinhole"`` or ``"panoramic"``); returns its name."""
+        if kind not in CAMERA_KINDS:
+            raise SceneError(f"kind: expected one of {sorted(CAMERA_KINDS)}, got {kind!r}")
+        scene = self._scene
+        if name is None:
+            prefix = "cam" if kind == "pinhole" else "pano"
+            i = 1
+            while f"{prefix}{i}" in scene.camera_names:
+                i += 1
+            name = f"{prefix}{i}"
+        if name in scene.camera_names:
+            raise SceneError(f"name: a camera named {name!r} exists already")
+        if not fields:
+            # Place the newcomer where it sees the points, away from the others.
+            k = len(scene.cameras)
+            angle = -np.pi / 2 + 0.6 * (k + 1) * (-1) ** k
+            pos = (8.0 * np.cos(angle), 8.0 * np.sin(angle), 1.5 if kind == "pinhole" else 0.5)
+            if kind == "pinhole":
+                yaw = float(np.degrees(np.arctan2(-pos[0], -pos[1])))
+                fields = {"position": pos, "ypr_deg": (yaw, -3.0, 0.0)}
+            else:
+                fields = {"position": pos}
+        spec = CAMERA_KINDS[kind](name=name, **fields)
+        self._replace(Change("add_camera", (name,)), cameras=scene.cameras + (spec,))
+        return name
+
+    def remove_camera(self, name: str) -> None:
+        scene = self._scene
+        scene.camera(name)
+        cameras = tuple(c for c in scene.cameras if c.name != name)
+        pair = scene.pair if scene.pair and name not in scene.pair else None
+        self._replace(
+            Change("remove_camera", (name,)),
+            cameras=cameras,
+            pair=pair,
+            locked=scene.locked - {name},
+            highlighted=scene.highlighted - {name},
+        )
+
+    def set_pair(self, name1: str, name2: str) -> None:
+        """Choose the two cameras whose epipolar geometry is drawn."""
+        self._replace(Change("pair", (name1, name2)), pair=(name1, name2))
+
+    # -- points and surfaces -------------------------------------------------------
+
+    def set_point(self, index: int, xyz: Any) -> None:
+        points = list(self._scene.points)
+        if not 0 <= index < len(points):
+            raise SceneError(f"index: no point {index} (have {len(points)})")
+        points[index] = _triple(xyz, f"point {index}")
+        self._replace(Change("points", (f"point:{index}",)), points=tuple(points))
+
+    def set_points(self, points: Any) -> None:
+        """Replace all points at once ((N, 3) array-like)."""
+        arr = np.asarray(points, dtype=np.float64)
+        if arr.size == 0:
+            arr = arr.reshape(0, 3)
+        if arr.ndim != 2 or arr.shape[1] != 3 or not np.all(np.isfinite(arr)):
+            raise SceneError(f"points: expected finite (N, 3), got shape {arr.shape}")
+        self._replace(Change("points"), points=tuple(map(tuple, arr)), selected_point=None)
+
+    def add_point(self, xyz: Any) -> int:
+        p = _triple(xyz, "point")
+        self._replace(Change("add_point"), points=self._scene.points + (p,))
+        return len(self._scene.points) - 1
+
+    def remove_point(self, index: int) -> None:
+        scene = self._scene
+        if not 0 <= index < len(scene.points):
+            raise SceneError(f"index: no point {index} (have {len(scene.points)})")
+        points = scene.points[:index] + scene.points[index + 1 :]
+        sel = scene.selected_point
+        sel = None if sel == index else (sel - 1 if sel is not None and sel > index else sel)
+        self._replace(Change("remove_point", (f"point:{index}",)), points=points, selected_point=sel)
+
+    def randomize_points(self, n: int = 8, seed: int | None = None, *, center=(0.0, 0.0, 1.0), extent: float = 2.0) -> None:
+        """Replace the points with ``n`` uniform random points in a cube of side ``2 * extent``."""
+        if int(n) != n or n < 0 or n > 100_000:
+            raise SceneError(f"n: expected a whole number in 0..100000, got {n!r}")
+        rng = np.random.default_rng(seed)
+        pts = np.asarray(_triple(center, "center")) + rng.uniform(-extent, extent, size=(int(n), 3))
+        self.set_points(pts)
+
+    def add_surface(self, spec: SurfaceSpec) -> None:
+        if not isinstance(spec, SurfaceSpec):
+            raise SceneError(f"spec: expected a SurfaceSpec, got {type(spec).__name__}")
+        self._replace(Change("surfaces"), surfaces=self._scene.surfaces + (spec,))
+
+    def remove_surface(self, index: int) -> None:
+        s = self._scene.surfaces
+        if not 0 <= index < len(s):
+            raise SceneError(f"index: no surface {index} (have {len(s)})")
+        self._replace(Change("surfaces"), surfaces=s[:index] + s[index + 1 :])
+
+    # -- display, selection, lessons' controls -------------------------------------
+
+    def select_point(self, index: int | None) -> None:
+        self._replace(Change("selection"), selected_point=index)
+
+    def set_option(self, name: str, value: bool) -> None:
+        opts = self._scene.options
+        if name not in {f.name for f in dataclasses.fields(DisplayOptions)}:
+            raise SceneError(f"option: unknown display option {name!r}")
+        self._replace(Change("options", (name,)), options=dataclasses.replace(opts, **{name: bool(value)}))
+
+    def lock(self, name: str, locked: bool = True) -> None:
+        """Lock (or unlock) a gizmo: a camera name or ``"point:<i>"``."""
+        new = self._scene.locked | {name} if locked else self._scene.locked - {name}
+        self._replace(Change("lock", (name,)), locked=new)
+
+    def highlight(self, names: Any) -> None:
+        self._replace(Change("highlight", tuple(names)), highlighted=frozenset(names))
+
+    # -- history and files -------------------------------------------------------
+
+    def undo(self) -> bool:
+        """Go back one change; False when there is nothing to undo."""
+        with self._lock:
+            if not self._undo:
+                return False
+            previous = self._undo.pop()
+        self._commit(previous, Change("undo"), undoable=False)
+        return True
+
+    @property
+    def can_undo(self) -> bool:
+        return bool(self._undo)
+
+    def reset(self, scene: Scene | None = None) -> None:
+        """Back to the scene the model started with (or to ``scene``); undoable."""
+        self._commit(scene if scene is not None else self._initial, Change("reset"))
+
+    def save(self, path: str | Path) -> None:
+        self._scene.save(path)
+
+    def load(self, path: str | Path) -> None:
+        """Replace the scene with a file's; on error (``SceneFileError``) nothing changes."""
+        scene = Scene.load(path)
+        self._commit(scene, Change("load", (str(path),)))
+
+
+__all__ = [
+    "Change",
+    "PanoramicSpec",
+    "PinholeSpec",
+    "SceneError",
+    "SceneFileError",
+    "SceneModel",
+]

@@ -1,0 +1,225 @@
+"""What a scene holds: camera, surface and display specifications (frozen, serialisable).
+
+A spec stores what a person edits (positions, angles in degrees, focal length
+in metres); ``.camera()`` turns it into the numeric core's camera. Rotation
+conventions: ``docs/conventions.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from ..geometry import GeometryError, Intrinsics, PinholeCamera, Pose
+from ..geometry.poses import egt_rotation_from_ypr, rotx, roty, rotz, ypr_from_egt_rotation
+
+
+class SceneError(ValueError):
+    """A change to a scene that cannot be applied (the scene is left unchanged)."""
+
+
+def _triple(value: Any, name: str) -> tuple[float, float, float]:
+    try:
+        x = tuple(float(v) for v in value)
+    except (TypeError, ValueError) as exc:
+        raise SceneError(f"{name}: expected three numbers, got {value!r}") from exc
+    if len(x) != 3 or not all(np.isfinite(x)):
+        raise SceneError(f"{name}: expected three finite numbers, got {value!r}")
+    return x  # type: ignore[return-value]
+
+
+def _pair(value: Any, name: str) -> tuple[float, float]:
+    try:
+        x = tuple(float(v) for v in value)
+    except (TypeError, ValueError) as exc:
+        raise SceneError(f"{name}: expected two numbers, got {value!r}") from exc
+    if len(x) != 2 or not all(np.isfinite(x)):
+        raise SceneError(f"{name}: expected two finite numbers, got {value!r}")
+    return x  # type: ignore[return-value]
+
+
+def _check_name(name: Any) -> str:
+    if not isinstance(name, str) or not name.strip():
+        raise SceneError(f"name: expected a non-empty string, got {name!r}")
+    return name.strip()
+
+
+@dataclass(frozen=True)
+class PinholeSpec:
+    """A pin-hole camera placed in EGT's convention (``f_Rt2H``)."""
+
+    name: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Camera centre in world coordinates."""
+    ypr_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Yaw, pitch, roll in degrees about the camera's own axes: ``R = roty(yaw) rotx(pitch) rotz(roll)``,
+    then ``H = [rotx(-90 deg) R, t]``. All zero: looking along world +y."""
+    focal_length: float = 0.008
+    """Metres."""
+    pixels_per_metre: tuple[float, float] = (100_000.0, 100_000.0)
+    principal_point: tuple[float, float] = (320.0, 240.0)
+    skew: float = 0.0
+    width: int = 640
+    height: int = 480
+
+    kind: ClassVar[Literal["pinhole"]] = "pinhole"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "name", _check_name(self.name))
+        object.__setattr__(self, "position", _triple(self.position, "position"))
+        object.__setattr__(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg"))
+        object.__setattr__(self, "pixels_per_metre", _pair(self.pixels_per_metre, "pixels_per_metre"))
+        object.__setattr__(self, "principal_point", _pair(self.principal_point, "principal_point"))
+        try:
+            self.intrinsics  # noqa: B018 - validates focal length, pixel size, image size
+        except GeometryError as exc:
+            raise SceneError(f"camera {self.name!r}: {exc}") from exc
+
+    @property
+    def intrinsics(self) -> Intrinsics:
+        return Intrinsics(
+            self.focal_length, self.pixels_per_metre, self.principal_point, self.skew, self.width, self.height
+        )
+
+    @property
+    def pose(self) -> Pose:
+        yaw, pitch, roll = np.radians(self.ypr_deg)
+        return Pose.from_egt(egt_rotation_from_ypr(yaw, pitch, roll), self.position)
+
+    def camera(self) -> PinholeCamera:
+        return PinholeCamera(self.pose, self.intrinsics)
+
+    @staticmethod
+    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
+        R_egt = Pose(R_world, np.zeros(3)).egt_rotation
+        return tuple(float(np.degrees(a)) for a in ypr_from_egt_rotation(R_egt))  # type: ignore[return-value]
+
+
+def panoramic_rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """Mirror-frame rotation ``R = rotz(yaw) roty(pitch) rotx(roll)`` (radians); all zero: upright mirror."""
+    return rotz(yaw) @ roty(pitch) @ rotx(roll)
+
+
+@dataclass(frozen=True)
+class PanoramicSpec:
+    """A central catadioptric camera: mirror focus at ``position``, mirror axis the frame's z."""
+
+    name: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ypr_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Degrees: ``R = rotz(yaw) roty(pitch) rotx(roll)``; zero is an upright mirror."""
+    mirror: Literal["hyperbolic", "parabolic"] = "hyperbolic"
+    a: float = 3.0
+    """Hyperbola ``a``; for a parabolic mirror, its parameter ``h``."""
+    b: float = 1.0
+    """Hyperbola ``b`` (unused by a parabolic mirror)."""
+    focal_pixels: float = 1000.0
+    principal_point: tuple[float, float] = (320.0, 240.0)
+    width: int = 640
+    height: int = 480
+
+    kind: ClassVar[Literal["panoramic"]] = "panoramic"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "name", _check_name(self.name))
+        object.__setattr__(self, "position", _triple(self.position, "position"))
+        object.__setattr__(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg"))
+        object.__setattr__(self, "principal_point", _pair(self.principal_point, "principal_point"))
+        if self.mirror not in ("hyperbolic", "parabolic"):
+            raise SceneError(f"camera {self.name!r}: mirror must be 'hyperbolic' or 'parabolic', got {self.mirror!r}")
+        try:
+            self.camera()
+        except GeometryError as exc:
+            raise SceneError(f"camera {self.name!r}: {exc}") from exc
+
+    @property
+    def K(self) -> np.ndarray:
+        u0, v0 = self.principal_point
+        f = self.focal_pixels
+        return np.array([[f, 0.0, u0], [0.0, f, v0], [0.0, 0.0, 1.0]])
+
+    @property
+    def pose(self) -> Pose:
+        return Pose(panoramic_rotation_from_ypr(*np.radians(self.ypr_deg)), self.position)
+
+    def mirror_model(self):
+        from ..geometry.mirrors import HyperbolicMirror, ParabolicMirror
+
+        if self.mirror == "hyperbolic":
+            return HyperbolicMirror(self.a, self.b)
+        return ParabolicMirror(self.a)
+
+    def camera(self):
+        from ..geometry.catadioptric import CatadioptricCamera
+
+        for name in ("focal_pixels", "a", "b"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not np.isfinite(value) or value <= 0:
+                raise GeometryError(f"{name}: expected a positive finite number, got {value!r}")
+        return CatadioptricCamera(self.pose, self.mirror_model(), self.K, self.width, self.height)
+
+    @staticmethod
+    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+        from scipy.spatial.transform import Rotation
+
+        yaw, pitch, roll = Rotation.from_matrix(R_world).as_euler("ZYX")
+        return float(np.degrees(yaw)), float(np.degrees(pitch)), float(np.degrees(roll))
+
+
+CameraSpec = PinholeSpec | PanoramicSpec
+CAMERA_KINDS: dict[str, type] = {"pinhole": PinholeSpec, "panoramic": PanoramicSpec}
+
+
+@dataclass(frozen=True)
+class SurfaceSpec:
+    """A surface sampled into points with normals (EGT's ``f_3Dsurface``)."""
+
+    kind: Literal["plane", "sphere", "mesh"] = "plane"
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    size: float = 2.0
+    """Plane side length or sphere radius; the mesh's scale factor."""
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    """Plane normal (ignored by sphere and mesh)."""
+    samples: int = 100
+    path: str = ""
+    """Mesh file (relative to ``assets/`` or absolute), for ``kind = "mesh"``."""
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("plane", "sphere", "mesh"):
+            raise SceneError(f"surface kind: expected plane, sphere or mesh, got {self.kind!r}")
+        object.__setattr__(self, "center", _triple(self.center, "center"))
+        object.__setattr__(self, "normal", _triple(self.normal, "normal"))
+        if np.linalg.norm(self.normal) < 1e-12:
+            raise SceneError("surface normal: must not be zero")
+        if not np.isfinite(self.size) or self.size <= 0:
+            raise SceneError(f"surface size: expected a positive number, got {self.size!r}")
+        if int(self.samples) != self.samples or not 1 <= self.samples <= 10_000:
+            raise SceneError(f"surface samples: expected a whole number in 1..10000, got {self.samples!r}")
+        if self.kind == "mesh" and not self.path:
+            raise SceneError("surface path: a mesh surface needs a file")
+
+
+@dataclass(frozen=True)
+class DisplayOptions:
+    """What the viewer shows."""
+
+    show_rays: bool = True
+    show_planes: bool = True
+    show_frames: bool = True
+    show_labels: bool = True
+    show_surfaces: bool = True
+
+
+def spec_to_dict(spec: Any) -> dict[str, Any]:
+    """A spec as plain JSON data (tuples become lists)."""
+    out = {}
+    for f in dataclasses.fields(spec):
+        v = getattr(spec, f.name)
+        out[f.name] = list(v) if isinstance(v, tuple) else v
+    if hasattr(type(spec), "kind") and isinstance(type(spec).__dict__.get("kind"), str):
+        out = {"kind": spec.kind, **out}
+    return out

@@ -1,0 +1,641 @@
+r"""Pin-hole camera on a Puma 560: Rives' hybrid task function (EGT reference, section 7).
+
+The camera is fixed to the arm's end effector (:data:`CAMERA_TOOL`: 6 cm along
+the tool z axis, the optical axis along tool z, image v pointing along tool x).
+Given the image of a few scene points at the target pose (the *desired*
+features), the controller:
+
+1. **priority task** :math:`e_1` (rotation): for every feature, the distance of
+   the current ray :math:`p_i` from the epipolar plane spanned by the epipole
+   direction :math:`\hat e` (the image of the target centre, from F) and the
+   desired ray :math:`q_i`,
+
+   .. math:: e_{1,i} = p_i \cdot \frac{\hat e \times q_i}{\lVert \hat e \times q_i \rVert}.
+
+   :math:`e_1 = 0` means that every current feature lies on the line through the
+   epipole and its desired position: the two views differ by a pure
+   translation (Rives, IROS 2000). Rays are :math:`K^{-1} m` normalised, so
+   :math:`e_{1,i}` is (the sine of) an angle; in pixels it is the distance of the
+   feature to its epipolar line (``extras["epipolar_distances_px"]``).
+
+2. **secondary task** (the camera's distance to the target pose)
+   :math:`h_s = \tfrac12 \lVert c - c^* \rVert^2`, whose gradient in the camera
+   frame is :math:`g = \partial h_s / \partial X^T = (R^T (c - c^*), 0)`, acts in
+   the null space of the first:
+
+   .. math:: e = W^+ e_1 + \beta\,\kappa\,(I - W^+ W)\, g, \qquad
+      \tau = -\lambda\, e,
+
+   with :math:`\tau = (v, \omega)` the camera twist in the camera frame and
+   :math:`W = \partial e_1 / \partial X` restricted to its depth-independent
+   (rotational) columns, :math:`W = [0 \mid J_\omega]`,
+   :math:`J_{\omega,i} = -((p_i \times \hat e) \times q_i)^T / \lVert \hat e \times q_i\rVert`.
+   The priority task therefore turns the camera, the secondary task translates it
+   (``beta = 0`` switches the translation off). ``kappa`` (``secondary_gain``)
+   makes the translation slower than the rotation, so the two phases show.
+
+3. The camera twist, rotated into the world frame, becomes joint velocities by
+   damped least squares, :math:`\dot q = J^T (J J^T + \mu^2 I)^{-1} \tau_w`,
+   with :math:`\mu` growing as the manipulability falls below a threshold
+   (Nakamura). Joint angles are clipped to the arm's limits and the clipping is
+   reported.
+
+F comes either from the true poses (``f_algorithm=None``; the epipole is then
+:math:`R^T (c^* - c)`) or is estimated at every step from the noisy current and
+desired features with :mod:`egtviz.geometry.estimation` (1 linear 8-point,
+2 normalised 8-point, 3 Sampson), with ``m_desired^T F m_current = 0``; the
+epipole is the right null vector of F, :math:`\hat e \propto K^{-1} e`.
+The secondary task uses the true camera position, as Rives' simulations do.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from collections.abc import Callable
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from egtviz.geometry.pinhole import Intrinsics
+from egtviz.geometry.poses import Pose
+
+from .result import Recorder, ServoResult
+
+__all__ = [
+    "CAMERA_TOOL",
+    "TARGET_Q",
+    "ESTIMATORS",
+    "default_intrinsics",
+    "default_scene",
+    "puma",
+    "camera_pose_from_q",
+    "draw_start_pose",
+    "rays_from_pixels",
+    "epipole_direction",
+    "epipolar_task",
+    "secondary_gradient",
+    "hybrid_twist",
+    "joint_velocities",
+    "step_joints",
+    "rotation_angle",
+    "simulate_pinhole",
+]
+
+#: Camera frame relative to the Puma's flange: 6 cm along tool z, then a -90 degree turn about z
+#: so that the image v axis points along tool x (image "down" is world down at the target).
+CAMERA_TOOL = np.array(
+    [
+        [0.0, 1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.06],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+)
+
+#: Target joint angles (radians): the camera looks forward and down at the scene in front of the arm.
+TARGET_Q = np.array([0.0, np.radians(70.0), np.radians(-200.0), 0.0, np.radians(40.0), 0.0])
+
+#: Distance from the target camera to the centre of the scene, metres.
+SCENE_DEPTH = 0.5
+
+#: F estimators by EGT's number (``f_Festim``'s ``algorithm``) and CLI name.
+ESTIMATORS = {1: "fundamental_8point", 2: "fundamental_normalized_8point", 3: "fundamental_sampson"}
+ESTIMATOR_NAMES = {None: "true", 1: "linear", 2: "normalized", 3: "sampson"}
+
+#: Manipulability below which a start configuration is called singular.
+SINGULAR_MANIPULABILITY = 1e-3
+
+
+def default_intrinsics() -> Intrinsics:
+    """A wide-angle 640x480 camera (focal length 250 px, about 104 x 88 degrees) so large start rotations stay in view."""
+    return Intrinsics(focal_length=0.0025, pixels_per_metre=(1e5, 1e5), principal_point=(320.0, 240.0))
+
+
+@lru_cache(maxsize=1)
+def puma() -> tuple[Any, Any]:
+    """The cached ``(robot, ets)`` pair: rtb's Puma 560 with :data:`CAMERA_TOOL`, and its compiled ETS.
+
+    ``ets.eval(q)`` is the 4x4 camera pose and ``ets.jacob0(q)`` its world-frame Jacobian
+    ``[v; omega]`` (the same as ``robot.fkine``/``robot.jacob0``, about 20x faster).
+    """
+    import roboticstoolbox as rtb
+    from spatialmath import SE3
+
+    robot = rtb.models.DH.Puma560()
+    robot.tool = SE3(CAMERA_TOOL, check=False)
+    return robot, robot.ets()
+
+
+def camera_pose_from_q(q: npt.ArrayLike) -> Pose:
+    """The camera pose of the arm at joint angles ``q`` (6,)."""
+    _, ets = puma()
+    return Pose.from_matrix(ets.eval(np.asarray(q, dtype=float)))
+
+
+def default_scene(target_pose: Pose, n_points: int = 12) -> np.ndarray:
+    """(n, 3) world points in a 30 x 30 x 20 cm box, :data:`SCENE_DEPTH` in front of ``target_pose``.
+
+    Fixed (its own generator), so every seed sees the same scene.
+    """
+    rng = np.random.default_rng(20_000)
+    local = rng.uniform([-0.15, -0.15, SCENE_DEPTH - 0.1], [0.15, 0.15, SCENE_DEPTH + 0.1], size=(n_points, 3))
+    return target_pose.to_world(local)
+
+
+def _axis_angle_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
+    axis = axis / np.linalg.norm(axis)
+    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
+
+
+def draw_start_pose(
+    rng: np.random.Generator,
+    target_pose: Pose,
+    look_at_point: npt.ArrayLike,
+    angle_range: tuple[float, float] = (np.radians(20.0), np.radians(60.0)),
+    distance_range: tuple[float, float] = (0.2, 0.5),
+) -> Pose:
+    r"""A start pose ``angle_range`` from the target about a random axis, ``distance_range`` away.
+
+    The rotation :math:`R_\Delta` (random axis, angle uniform in ``angle_range``) is
+    applied in the world, :math:`R_s = R_\Delta R^*`, and the centre is moved on
+    the orbit around ``look_at_point`` (:math:`c_s = p + s R_\Delta (c^* - p)`) so
+    that the scene stays in view; ``s`` is chosen so that
+    :math:`\lVert c_s - c^* \rVert` is a distance drawn uniformly from the part of
+    ``distance_range`` that the orbit can reach.
+    """
+    p = np.asarray(look_at_point, dtype=float)
+    axis = rng.normal(size=3)
+    angle = rng.uniform(*angle_range)
+    R_delta = _axis_angle_matrix(axis, angle)
+    w = target_pose.t - p
+    w2 = R_delta @ w
+    ww = float(w @ w)
+    cos_phi = float(w @ w2) / ww
+    sin2 = max(0.0, 1.0 - cos_phi**2)
+    d_min = math.sqrt(ww * sin2)
+    lo = max(distance_range[0], d_min * 1.001)
+    hi = max(distance_range[1], lo)
+    d = rng.uniform(lo, hi)
+    root = math.sqrt(max(0.0, d * d / ww - sin2))
+    s = min((cos_phi + root, cos_phi - root), key=lambda x: abs(x - 1.0))
+    return Pose(R_delta @ target_pose.R, p + s * w2)
+
+
+# ---------------------------------------------------------------- control law (pure functions)
+def rays_from_pixels(pixels: np.ndarray, K_inv: np.ndarray) -> np.ndarray:
+    """Unit rays (N, 3) in the camera frame of pixels (N, 2): :math:`K^{-1} m` normalised."""
+    r = pixels @ K_inv[:, :2].T + K_inv[:, 2]
+    return r / np.linalg.norm(r, axis=1, keepdims=True)
+
+
+def epipole_direction(F: np.ndarray, K_inv: np.ndarray) -> np.ndarray | None:
+    r"""Unit direction :math:`K^{-1} e` of the epipole of image 1 (``F e = 0``), or ``None`` if F is zero or not finite."""
+    if not np.all(np.isfinite(F)) or np.linalg.norm(F) == 0.0:
+        return None
+    _, _, Vt = np.linalg.svd(F)
+    d = K_inv @ Vt[2]
+    n = np.linalg.norm(d)
+    return d / n if n > 0 else None
+
+
+def epipolar_task(p: np.ndarray, q: np.ndarray, e_dir: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    r"""Priority task :math:`e_1` (N,) and its rotational Jacobian :math:`J_\omega` (N, 3).
+
+    Args:
+        p: (N, 3) unit current rays (camera frame).
+        q: (N, 3) unit desired rays (target camera frame).
+        e_dir: (3,) epipole direction in the current camera frame (either sign), or
+            ``None`` when the centres coincide (the task is then zero).
+
+    .. math:: e_{1,i} = p_i \cdot n_i,\quad n_i = \frac{\hat e \times q_i}{\lVert\hat e \times q_i\rVert},\quad
+       J_{\omega,i} = -\frac{((p_i \times \hat e) \times q_i)^T}{\lVert \hat e \times q_i \rVert}
+
+    (camera rotation :math:`\omega` turns :math:`p_i` and :math:`\hat e` alike,
+    :math:`\dot p = p \times \omega`, while the desired rays stay). Features whose
+    desired ray is parallel to the epipole carry no information: their rows are 0.
+    """
+    n = len(p)
+    if e_dir is None:
+        return np.zeros(n), np.zeros((n, 3))
+    eq = np.cross(e_dir, q)
+    norm = np.linalg.norm(eq, axis=1)
+    w = np.where(norm > 1e-9, 1.0 / np.where(norm > 1e-9, norm, 1.0), 0.0)
+    e1 = np.einsum("ij,ij->i", p, eq) * w
+    J = -np.cross(np.cross(p, e_dir), q) * w[:, None]
+    return e1, J
+
+
+def secondary_gradient(R: np.ndarray, c: np.ndarray, c_target: np.ndarray) -> np.ndarray:
+    r""":math:`\partial h_s/\partial X^T = (R^T (c - c^*), 0)` for :math:`h_s = \tfrac12\lVert c - c^*\rVert^2`, camera frame."""
+    return np.concatenate([R.T @ (c - c_target), np.zeros(3)])
+
+
+def hybrid_twist(
+    e1: np.ndarray,
+    J_omega: np.ndarray,
+    g: np.ndarray,
+    *,
+    beta: float,
+    gain: float,
+    secondary_gain: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Camera twist :math:`\tau = -\lambda\,(W^+ e_1 + \beta\kappa (I - W^+ W) g)` and the task vector.
+
+    ``W = [0 | J_omega]`` (N, 6). Returns ``(twist (6,), e (6,))``; twist is
+    ``(v, omega)`` in the camera frame.
+    """
+    W = np.zeros((len(e1), 6))
+    W[:, 3:] = J_omega
+    W_pinv = np.linalg.pinv(W, rcond=1e-6)
+    P = np.eye(6) - W_pinv @ W
+    e = W_pinv @ e1 + beta * secondary_gain * (P @ g)
+    return -gain * e, e
+
+
+def joint_velocities(
+    J: np.ndarray, twist_world: np.ndarray, *, damping: float = 0.05, threshold: float = 0.02
+) -> tuple[np.ndarray, float]:
+    r"""Damped least squares :math:`\dot q = J^T (J J^T + \mu^2 I)^{-1} \tau_w`; returns ``(qd, manipulability)``.
+
+    :math:`\mu^2 = \mu_0^2 (1 - (w / w_0)^2)` when the manipulability
+    :math:`w = \sqrt{\det J J^T}` is below ``threshold`` :math:`w_0`, else 0.
+    """
+    JJt = J @ J.T
+    w = math.sqrt(max(0.0, float(np.linalg.det(JJt))))
+    mu2 = damping**2 * (1.0 - (w / threshold) ** 2) if w < threshold else 0.0
+    qd = J.T @ np.linalg.solve(JJt + mu2 * np.eye(len(JJt)), twist_world)
+    return qd, w
+
+
+def step_joints(q: np.ndarray, qd: np.ndarray, dt: float, qlim: np.ndarray) -> tuple[np.ndarray, bool]:
+    """State update: ``q + dt qd`` clipped to the joint limits ``qlim`` (2, n); also whether a limit clipped."""
+    q_new = q + dt * qd
+    clipped = np.clip(q_new, qlim[0], qlim[1])
+    return clipped, bool(np.any(clipped != q_new))
+
+
+def rotation_angle(R: np.ndarray) -> float:
+    r"""Angle of a rotation matrix, accurate near 0: :math:`2 \arcsin(\lVert R - I\rVert_F / (2\sqrt2))`."""
+    return 2.0 * math.asin(min(1.0, float(np.linalg.norm(R - np.eye(3))) / (2.0 * math.sqrt(2.0))))
+
+
+# ---------------------------------------------------------------- simulation
+def _check_params(beta: float, noise_px: float, f_algorithm: int | None, steps: int, dt: float) -> None:
+    if not isinstance(beta, (int, float)) or not math.isfinite(beta) or beta < 0:
+        raise ValueError(f"beta: expected a finite number >= 0, got {beta!r}")
+    if not isinstance(noise_px, (int, float)) or not math.isfinite(noise_px) or noise_px < 0:
+        raise ValueError(f"noise_px: expected a finite number of pixels >= 0, got {noise_px!r}")
+    if f_algorithm not in ESTIMATORS and f_algorithm is not None:
+        raise ValueError(f"f_algorithm: expected None (true F), 1, 2 or 3, got {f_algorithm!r}")
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise ValueError(f"steps: expected a positive integer, got {steps!r}")
+    if not isinstance(dt, (int, float)) or not math.isfinite(dt) or dt <= 0:
+        raise ValueError(f"dt: expected a positive time step in seconds, got {dt!r}")
+
+
+def _solve_ik(T: np.ndarray, q_guess: np.ndarray) -> np.ndarray | None:
+    robot, ets = puma()
+    sol = ets.ikine_LM(T, q0=q_guess, ilimit=100, slimit=20, tol=1e-10, seed=0, joint_limits=True)
+    if not sol.success:
+        return None
+    q = np.asarray(sol.q, dtype=float)
+    if np.any(q < robot.qlim[0] - 1e-9) or np.any(q > robot.qlim[1] + 1e-9):
+        return None
+    return q
+
+
+def simulate_pinhole(
+    *,
+    seed: int = 0,
+    beta: float = 1.0,
+    noise_px: float = 0.0,
+    f_algorithm: int | None = None,
+    steps: int = 1000,
+    dt: float = 0.05,
+    gain: float = 3.0,
+    secondary_gain: float = 0.1,
+    damping: float = 0.05,
+    stop_px: float | None = None,
+    rotation_tol: float | None = None,
+    translation_tol: float | None = None,
+    points: npt.ArrayLike | None = None,
+    intrinsics: Intrinsics | None = None,
+    target_q: npt.ArrayLike | None = None,
+    target_pose: Pose | None = None,
+    start_pose: Pose | None = None,
+    q0: npt.ArrayLike | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> ServoResult:
+    """Simulate the Puma 560 pin-hole servo (module docstring); deterministic for a ``seed``.
+
+    Args:
+        seed: draws the start pose (:func:`draw_start_pose`: 20-60 degrees about a
+            random axis, 0.2-0.5 m away) and the image noise.
+        beta: weight of the secondary (translation) task; 0 servos the rotation only.
+        noise_px: standard deviation of the Gaussian image noise, pixels.
+        f_algorithm: ``None`` for F from the true poses, else 1 (linear 8-point),
+            2 (normalised 8-point) or 3 (Sampson) on the noisy features, every step.
+        steps: maximum number of steps; the run stops early once the features are
+            within ``stop_px`` of their goal (desired positions, or epipolar lines when
+            ``beta = 0``).
+        dt: time step, seconds.
+        gain: lambda of the task function (1/s).
+        secondary_gain: kappa, the weight of the translation task relative to the rotation.
+        damping: maximum damping mu_0 of the damped least squares.
+        stop_px: early-stop threshold in pixels; default 0.005 px without noise, no early stop with noise.
+        rotation_tol: convergence tolerance on the final rotation error (rad); default
+            1e-3, or 1e-2 with noise.
+        translation_tol: convergence tolerance on the final translation error (m); default
+            1e-3, or 1e-2 with noise.
+        points: (N, 3) world points; default :func:`default_scene`.
+        intrinsics: the camera; default :func:`default_intrinsics`.
+        target_q: target joint angles; default :data:`TARGET_Q`.
+        target_pose: target camera pose instead of ``target_q`` (solved by inverse kinematics).
+        start_pose: start camera pose instead of the drawn one (solved by inverse kinematics).
+        q0: start joint angles instead of a start pose.
+        progress: called as ``progress(step, steps)`` every 50 steps (for a progress bar).
+
+    Returns:
+        A :class:`ServoResult`; failures (unreachable pose, singular start, features
+        leaving the image, too few features for an estimated F) end the run with
+        ``converged=False`` and a ``reason``.
+
+    Raises:
+        ValueError: on invalid parameters (negative noise, NaN beta, unknown algorithm, ...).
+    """
+    _check_params(beta, noise_px, f_algorithm, steps, dt)
+    for name, value in (("gain", gain), ("secondary_gain", secondary_gain), ("damping", damping)):
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
+    wall0 = _time.perf_counter()
+    rng = np.random.default_rng(seed)
+    robot, ets = puma()
+    qlim = np.asarray(robot.qlim, dtype=float)
+    intr = intrinsics if intrinsics is not None else default_intrinsics()
+    K = intr.K
+    K_inv = np.linalg.inv(K)
+    W_img, H_img = intr.width, intr.height
+    noisy = noise_px > 0
+    stop_px = (0.0 if noisy else 0.005) if stop_px is None else float(stop_px)
+    rot_tol = (1e-2 if noisy else 1e-3) if rotation_tol is None else float(rotation_tol)
+    trans_tol = (1e-2 if noisy else 1e-3) if translation_tol is None else float(translation_tol)
+    params: dict[str, Any] = {
+        "seed": seed,
+        "beta": float(beta),
+        "noise_px": float(noise_px),
+        "estimator": ESTIMATOR_NAMES[f_algorithm],
+        "f_algorithm": f_algorithm,
+        "dt": float(dt),
+        "max_steps": int(steps),
+        "gain": float(gain),
+        "secondary_gain": float(secondary_gain),
+        "damping": float(damping),
+        "stop_px": stop_px,
+        "rotation_tol": rot_tol,
+        "translation_tol": trans_tol,
+        "K": K.tolist(),
+        "image_size": [W_img, H_img],
+        "camera_tool": CAMERA_TOOL.tolist(),
+    }
+
+    def failure(reason: str, pose0: Pose | None = None, goal: Pose | None = None) -> ServoResult:
+        r0 = rotation_angle(goal.R.T @ pose0.R) if pose0 is not None and goal is not None else float("nan")
+        t0 = float(np.linalg.norm(pose0.t - goal.t)) if pose0 is not None and goal is not None else float("nan")
+        H0 = pose0.matrix[None] if pose0 is not None else np.zeros((0, 4, 4))
+        return ServoResult(
+            demo="pinhole",
+            time=np.zeros(len(H0)),
+            camera_poses=H0,
+            features=np.zeros((len(H0), 0, 2)),
+            desired_features=np.zeros((0, 2)),
+            controls={"camera_twist": np.zeros((len(H0), 6)), "joint_velocities": np.zeros((len(H0), 6))},
+            errors={"rotation_error_rad": np.full(len(H0), r0), "translation_error": np.full(len(H0), t0)},
+            converged=False,
+            reason=reason,
+            initial_rotation_error_rad=r0,
+            initial_translation_error=t0,
+            final_rotation_error_rad=r0,
+            final_translation_error=t0,
+            steps=0,
+            sim_time_s=0.0,
+            wall_time_s=_time.perf_counter() - wall0,
+            translation_servoed=beta > 0,
+            params=params,
+        )
+
+    # --- target
+    if target_pose is not None:
+        q_goal = _solve_ik(target_pose.matrix, TARGET_Q if target_q is None else np.asarray(target_q, float))
+        if q_goal is None:
+            return failure("target unreachable: no inverse-kinematics solution within the joint limits")
+    else:
+        q_goal = TARGET_Q.copy() if target_q is None else np.asarray(target_q, dtype=float).reshape(6)
+    goal = Pose.from_matrix(ets.eval(q_goal))
+    X = default_scene(goal) if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
+    n_feat = len(X)
+    if f_algorithm is not None and n_feat < 8:
+        return failure(f"estimated F needs at least 8 features, got {n_feat}")
+    if n_feat < 3:
+        return failure(f"the epipolar task needs at least 3 features, got {n_feat}")
+
+    # --- start
+    if q0 is not None:
+        q = np.asarray(q0, dtype=float).reshape(6)
+        if np.any(q < qlim[0]) or np.any(q > qlim[1]):
+            return failure("start configuration outside the joint limits")
+    else:
+        pose_s = start_pose if start_pose is not None else draw_start_pose(rng, goal, X.mean(axis=0))
+        q = _solve_ik(pose_s.matrix, q_goal)
+        if q is None:
+            return failure("start pose unreachable: no inverse-kinematics solution within the joint limits", pose_s, goal)
+    start = Pose.from_matrix(ets.eval(q))
+    w0 = math.sqrt(max(0.0, float(np.linalg.det(ets.jacob0(q) @ ets.jacob0(q).T))))
+    if w0 < SINGULAR_MANIPULABILITY:
+        return failure(f"start configuration is singular (manipulability {w0:.2e})", start, goal)
+
+    # --- desired features (measured once, with noise)
+    Xg = (X - goal.t) @ goal.R
+    if np.any(Xg[:, 2] <= 0):
+        return failure("some scene points are behind the camera at the target pose", start, goal)
+    m_goal = (Xg @ K.T)[:, :2] / Xg[:, 2:3]
+    if np.any((m_goal < 0) | (m_goal > [W_img, H_img])):
+        return failure("some features are outside the image at the target pose", start, goal)
+    m_des = m_goal + (rng.normal(scale=noise_px, size=m_goal.shape) if noisy else 0.0)
+    q_rays = rays_from_pixels(m_des, K_inv)
+    c_goal, R_goal = goal.t, goal.R
+
+    estimator = None
+    if f_algorithm is not None:
+        from egtviz.geometry import estimation
+
+        estimator = getattr(estimation, ESTIMATORS[f_algorithm])
+
+    T_cap = steps + 1
+    rec = Recorder(
+        T_cap,
+        {
+            "poses": (4, 4),
+            "q": (6,),
+            "features": (n_feat, 2),
+            "features_true": (n_feat, 2),
+            "twist": (6,),
+            "qd": (6,),
+            "task": (),
+            "rot": (),
+            "trans": (),
+            "feat_err": (),
+            "epi_px": (n_feat,),
+            "epipole": (3,),
+            "manip": (),
+            "limit": (),
+        },
+    )
+    b = rec.buffers
+    reason = ""
+    e_dir_prev: np.ndarray | None = None
+    estimation_failures = 0
+    limit_hits = 0
+    I3 = np.eye(3)
+    k = 0
+    while True:
+        T = ets.eval(q)
+        R, c = T[:3, :3], T[:3, 3]
+        Xc = (X - c) @ R
+        z = Xc[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            m_true = (Xc @ K.T)[:, :2] / z[:, None]
+        visible = (z > 0) & (m_true[:, 0] >= 0) & (m_true[:, 0] <= W_img) & (m_true[:, 1] >= 0) & (m_true[:, 1] <= H_img)
+        m = m_true + (rng.normal(scale=noise_px, size=m_true.shape) if noisy else 0.0)
+        # control law
+        p_rays = rays_from_pixels(m, K_inv)
+        if estimator is None:
+            base = R.T @ (c_goal - c)
+            nb = float(np.linalg.norm(base))
+            e_dir = base / nb if nb > 1e-12 else None
+        else:
+            try:
+                F = estimator(m, m_des)
+                e_dir = epipole_direction(np.asarray(F, dtype=float), K_inv)
+            except (ValueError, np.linalg.LinAlgError):
+                e_dir = None
+            if e_dir is None:
+                estimation_failures += 1
+                e_dir = e_dir_prev
+            elif e_dir_prev is not None and e_dir @ e_dir_prev < 0:
+                e_dir = -e_dir  # the sign of a null vector is arbitrary; keep it continuous for the record
+            e_dir_prev = e_dir
+        e1, J_w = epipolar_task(p_rays, q_rays, e_dir)
+        g = secondary_gradient(R, c, c_goal)
+        twist, _ = hybrid_twist(e1, J_w, g, beta=beta, gain=gain, secondary_gain=secondary_gain)
+        J = ets.jacob0(q)
+        twist_w = np.concatenate([R @ twist[:3], R @ twist[3:]])
+        qd, manip = joint_velocities(J, twist_w, damping=damping)
+
+        # record
+        b["poses"][k] = T
+        b["q"][k] = q
+        b["features"][k] = m
+        b["features_true"][k] = m_true
+        b["twist"][k] = twist
+        b["qd"][k] = qd
+        b["task"][k] = float(np.linalg.norm(e1))
+        b["rot"][k] = rotation_angle(R_goal.T @ R)
+        b["trans"][k] = float(np.linalg.norm(c - c_goal))
+        feat_err = np.linalg.norm(m - m_des, axis=1)
+        b["feat_err"][k] = float(feat_err.mean())
+        if e_dir is not None:
+            e_px = K @ e_dir
+            lines = np.cross(e_px, np.column_stack([m_des, np.ones(n_feat)]))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                b["epi_px"][k] = (lines[:, :2] * m).sum(axis=1) + lines[:, 2]
+                b["epi_px"][k] /= np.hypot(lines[:, 0], lines[:, 1])
+            b["epipole"][k] = e_px / (e_px[2] if abs(e_px[2]) > 1e-12 * np.linalg.norm(e_px) else np.linalg.norm(e_px))
+        b["manip"][k] = manip
+        b["limit"][k] = 0.0
+        rec.count = k + 1
+
+        if not np.all(visible):
+            lost = np.flatnonzero(~visible)
+            reason = f"feature {int(lost[0])} left the image at t = {k * dt:.2f} s"
+            break
+        if manip < SINGULAR_MANIPULABILITY:
+            reason = f"the arm reached a singular configuration at t = {k * dt:.2f} s (manipulability {manip:.1e})"
+            break
+        goal_px = feat_err.max() if beta > 0 else float(np.nanmax(np.abs(b["epi_px"][k])))
+        if stop_px > 0 and goal_px < stop_px:
+            break
+        if k >= steps:
+            break
+        # state update
+        q, hit = step_joints(q, qd, dt, qlim)
+        if hit:
+            limit_hits += 1
+            b["limit"][k] = 1.0
+        k += 1
+        if progress is not None and k % 50 == 0:
+            progress(k, steps)
+    del I3
+    if progress is not None:
+        progress(k, steps)
+
+    data = rec.trim()
+    rot, trans = data["rot"], data["trans"]
+    final_rot, final_trans = float(rot[-1]), float(trans[-1])
+    if not reason:
+        if beta == 0:
+            reason = "translation not servoed (beta = 0): only the priority (rotation) task acts"
+            if final_rot >= rot_tol:
+                reason += f"; rotation error {final_rot:.2e} rad is above {rot_tol:g}"
+        elif final_rot >= rot_tol or final_trans >= trans_tol:
+            reason = (
+                f"not converged after {k} steps: rotation error {final_rot:.2e} rad (tol {rot_tol:g}), "
+                f"translation error {final_trans:.2e} m (tol {trans_tol:g})"
+            )
+            if limit_hits:
+                reason += f"; joint limits clipped the motion at {limit_hits} steps"
+    converged = not reason
+    params["estimation_failures"] = estimation_failures
+    params["joint_limit_steps"] = limit_hits
+    return ServoResult(
+        demo="pinhole",
+        time=np.arange(rec.count) * dt,
+        camera_poses=data["poses"],
+        features=data["features"],
+        desired_features=m_des,
+        controls={"camera_twist": data["twist"], "joint_velocities": data["qd"]},
+        errors={
+            "task_error_norm": data["task"],
+            "rotation_error_rad": rot,
+            "translation_error": trans,
+            "feature_error_px": data["feat_err"],
+            "max_epipolar_distance_px": np.nanmax(np.abs(data["epi_px"]), axis=1)
+            if np.any(np.isfinite(data["epi_px"]))
+            else np.full(rec.count, np.nan),
+        },
+        converged=converged,
+        reason=reason,
+        initial_rotation_error_rad=float(rot[0]),
+        initial_translation_error=float(trans[0]),
+        final_rotation_error_rad=final_rot,
+        final_translation_error=final_trans,
+        steps=k,
+        sim_time_s=k * dt,
+        wall_time_s=_time.perf_counter() - wall0,
+        translation_servoed=beta > 0,
+        joint_angles=data["q"],
+        extras={
+            "features_true": data["features_true"],
+            "epipolar_distances_px": data["epi_px"],
+            "epipole_px": data["epipole"],
+            "manipulability": data["manip"],
+            "joint_limit_clipped": data["limit"].astype(bool),
+            "scene_points": X,
+            "target_pose": goal.matrix,
+            "target_q": q_goal,
+        },
+        params=params,
+    )

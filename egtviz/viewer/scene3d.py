@@ -1,0 +1,334 @@
+"""The 3D half of a client's view: viser scene nodes drawn from a ``Scene`` and its ``Derived``.
+
+Nothing here computes geometry: positions, rays, planes, meshes and image
+content come from :func:`egtviz.scene.compute_derived`. This module only turns
+arrays into nodes, keeps the nodes between updates (so a drag re-sends only what
+changed: viser skips assignments of equal values) and wires the gizmos.
+
+Scene tree (per client)::
+
+    /egt/grid, /egt/world            ground grid (1 m cells) and world axes
+    /egt/cam_<k>                     a camera's gizmo; children move with it:
+        /frustum | /ccd, /axes, /label
+    /egt/mirror_<k>                  a panoramic camera's mirror (world coordinates)
+    /egt/img3d_<k>_pts, _lines       pin-hole image content on the frustum's image plane
+    /egt/rays_<k>                    projection rays of camera k
+    /egt/points, /egt/plabel_<i>     scene points and their numbers (1-based, like f_3Dwfenum)
+    /egt/pgizmo_<i>                  point gizmos
+    /egt/baseline, /egt/epiplane     the drawn pair's baseline, the selected point's epipolar plane
+    /egt/surfaces                    sampled surfaces
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import viser
+
+from ..scene.derived import IMAGE_PLANE_DEPTH
+from .palette import BASELINE_COLOUR, CAMERA_COLOURS, POINT_COLOURS, hex_to_rgb, point_rgb
+
+#: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
+MAX_POINT_GIZMOS = 16
+_POINT_RGB = np.array([hex_to_rgb(c) for c in POINT_COLOURS], dtype=np.uint8)
+
+
+def point_colours(n: int) -> np.ndarray:
+    """(n, 3) uint8 colours of points 0..n-1."""
+    return _POINT_RGB[np.arange(n) % len(_POINT_RGB)]
+
+
+def _segments(polylines: np.ndarray, colours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, k, 3) polylines -> (S, 2, 3) segments and (S, 2, 3) colours, without NaN segments."""
+    P = np.asarray(polylines, float)
+    if P.size == 0 or P.ndim != 3 or P.shape[1] < 2:
+        return np.zeros((0, 2, 3)), np.zeros((0, 2, 3), np.uint8)
+    seg = np.stack([P[:, :-1], P[:, 1:]], axis=2)  # (N, k-1, 2, 3)
+    col = np.broadcast_to(colours[:, None, None, :], seg.shape).astype(np.uint8)
+    seg = seg.reshape(-1, 2, 3)
+    col = col.reshape(-1, 2, 3)
+    ok = np.all(np.isfinite(seg), axis=(1, 2))
+    return seg[ok], col[ok]
+
+
+def _slug(k: int) -> str:
+    return f"/egt/cam_{k}"
+
+
+_EMPTY_SEG = np.zeros((1, 2, 3), np.float32)
+_EMPTY_PTS = np.zeros((1, 3), np.float32)
+
+
+class Scene3D:
+    """Owns one client's 3D nodes; :meth:`draw` brings them up to date with a scene snapshot."""
+
+    def __init__(
+        self,
+        api: viser.SceneApi,
+        on_camera_gizmo: Callable[[str, Any], None],
+        on_point_gizmo: Callable[[int, Any], None],
+    ) -> None:
+        self.api = api
+        self._on_camera_gizmo = on_camera_gizmo
+        self._on_point_gizmo = on_point_gizmo
+        self._cam_ids: dict[str, int] = {}
+        self._next_id = 0
+        self._cams: dict[str, dict[str, Any]] = {}
+        self._cam_sig: dict[str, tuple] = {}
+        self._point_gizmos: dict[int, Any] = {}
+        self._point_labels: list[Any] = []
+        self._rays: dict[str, Any] = {}
+        self._surf_key: Any = None
+        self._surf_pts = np.zeros((0, 3))
+        self._static()
+        self.points = api.add_point_cloud(
+            "/egt/points", _EMPTY_PTS, (0, 0, 0), point_size=0.14, point_shape="circle", visible=False
+        )
+        self.selected = api.add_icosphere("/egt/selected", radius=0.16, color=(0, 0, 0), opacity=0.35, visible=False)
+        self.baseline = api.add_line_segments(
+            "/egt/baseline", _EMPTY_SEG, hex_to_rgb(BASELINE_COLOUR), thickness=0.035, visible=False
+        )
+        self.epiplane = api.add_mesh_simple(
+            "/egt/epiplane", np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32),
+            color=(120, 120, 120), opacity=0.25, side="double", visible=False, cast_shadow=False, receive_shadow=False,
+        )
+        self.surfaces = api.add_point_cloud(
+            "/egt/surfaces", _EMPTY_PTS, (150, 150, 150), point_size=0.05, point_shape="circle", visible=False
+        )
+
+    # -- static scaffolding ------------------------------------------------------
+
+    def _static(self) -> None:
+        api = self.api
+        api.add_grid("/egt/grid", width=20.0, height=20.0, plane="xy", cell_size=1.0, section_size=5.0)
+        api.add_frame("/egt/world", axes_length=1.0, axes_radius=0.03, origin_radius=0.06)
+        api.add_label("/egt/world/x", "x", position=(1.15, 0.0, 0.0), font_screen_scale=0.9)
+        api.add_label("/egt/world/y", "y", position=(0.0, 1.15, 0.0), font_screen_scale=0.9)
+        api.add_label("/egt/world/z", "z", position=(0.0, 0.0, 1.15), font_screen_scale=0.9)
+        api.add_label("/egt/grid_units", "grid: 1 m squares (world frame, z up)", position=(-9.8, -9.8, 0.0),
+                      font_screen_scale=0.8)
+
+    # -- cameras ---------------------------------------------------------------
+
+    def _cam_id(self, name: str) -> int:
+        if name not in self._cam_ids:
+            self._cam_ids[name] = self._next_id
+            self._next_id += 1
+        return self._cam_ids[name]
+
+    def _build_camera(self, spec: Any, k: int, colour: tuple[int, int, int]) -> dict[str, Any]:
+        api = self.api
+        root = _slug(k)
+        gizmo = api.add_transform_controls(root, scale=1.4, line_width=2.0, depth_test=False, opacity=0.85)
+        name = spec.name
+
+        def _cb(event: viser.TransformControlsEvent, name: str = name) -> None:
+            self._on_camera_gizmo(name, event)
+
+        gizmo.on_update(_cb)
+        nodes: dict[str, Any] = {"gizmo": gizmo}
+        nodes["axes"] = api.add_frame(f"{root}/axes", axes_length=0.5, axes_radius=0.015, origin_radius=0.03)
+        nodes["label"] = api.add_label(f"{root}/label", name, position=(0.0, -0.35, 0.0), font_screen_scale=1.1,
+                                       anchor="bottom-center")
+        if spec.kind == "pinhole":
+            nodes["frustum"] = api.add_camera_frustum(f"{root}/frustum", fov=0.6, aspect=4 / 3, scale=0.3, color=colour,
+                                                      thickness=0.012)
+            nodes["img_pts"] = api.add_point_cloud(f"/egt/img3d_{k}_pts", _EMPTY_PTS, (0, 0, 0), point_size=0.03,
+                                                   point_shape="circle", visible=False)
+            nodes["img_lines"] = api.add_line_segments(f"/egt/img3d_{k}_lines", _EMPTY_SEG, (0, 0, 0),
+                                                       thickness=0.006, visible=False)
+        else:
+            nodes["ccd"] = api.add_camera_frustum(f"{root}/ccd", fov=0.5, aspect=4 / 3, scale=0.35, color=colour,
+                                                  thickness=0.015)
+            nodes["mirror"] = api.add_mesh_simple(
+                f"/egt/mirror_{k}", np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32),
+                color=(150, 190, 230), opacity=0.45, side="double", cast_shadow=False, receive_shadow=False,
+            )
+        self._rays[name] = api.add_line_segments(f"/egt/rays_{k}", _EMPTY_SEG, (0, 0, 0), thickness=0.008,
+                                                 visible=False)
+        return nodes
+
+    def _sync_cameras(self, scene: Any) -> None:
+        wanted = {spec.name: spec for spec in scene.cameras}
+        for name in list(self._cams):
+            if name not in wanted or self._cam_sig.get(name) != (wanted[name].kind,):
+                self._drop_camera(name)
+        for i, spec in enumerate(scene.cameras):
+            if spec.name not in self._cams:
+                k = self._cam_id(spec.name)
+                colour = hex_to_rgb(CAMERA_COLOURS[k % len(CAMERA_COLOURS)])
+                self._cams[spec.name] = self._build_camera(spec, k, colour)
+                self._cam_sig[spec.name] = (spec.kind,)
+
+    def _drop_camera(self, name: str) -> None:
+        nodes = self._cams.pop(name, {})
+        for key in ("img_pts", "img_lines", "mirror"):
+            if key in nodes:
+                nodes[key].remove()
+        if "gizmo" in nodes:
+            nodes["gizmo"].remove()  # removes its children
+        ray = self._rays.pop(name, None)
+        if ray is not None:
+            ray.remove()
+        self._cam_sig.pop(name, None)
+        self._cam_ids.pop(name, None)
+
+    # -- points ------------------------------------------------------------------
+
+    def _sync_points(self, scene: Any) -> None:
+        X = scene.points_array()
+        n = len(X)
+        opts = scene.options
+        if n:
+            self.points.points = X.astype(np.float32)
+            self.points.colors = point_colours(n)
+        self.points.visible = n > 0
+        # Labels: one per point, 1-based.
+        while len(self._point_labels) > n:
+            self._point_labels.pop().remove()
+        for i in range(len(self._point_labels), n):
+            self._point_labels.append(
+                self.api.add_label(f"/egt/plabel_{i}", str(i + 1), position=tuple(X[i]), font_screen_scale=1.0,
+                                   anchor="bottom-left")
+            )
+        for i, h in enumerate(self._point_labels):
+            h.position = X[i] + np.array([0.08, 0.0, 0.08])
+            h.visible = opts.show_labels
+        # Gizmos: every point while there are few, else only the selected one.
+        sel = scene.selected_point
+        want = set(range(n)) if n <= MAX_POINT_GIZMOS else ({sel} if sel is not None else set())
+        for i in list(self._point_gizmos):
+            if i not in want:
+                self._point_gizmos.pop(i).remove()
+        for i in sorted(want):
+            g = self._point_gizmos.get(i)
+            if g is None:
+                g = self.api.add_transform_controls(
+                    f"/egt/pgizmo_{i}", scale=0.55, line_width=1.5, disable_rotations=True, depth_test=False,
+                    opacity=0.7, position=tuple(X[i]),
+                )
+
+                def _cb(event: viser.TransformControlsEvent, i: int = i) -> None:
+                    self._on_point_gizmo(i, event)
+
+                g.on_update(_cb)
+                self._point_gizmos[i] = g
+            elif not np.allclose(g.position, X[i], atol=1e-9):
+                g.position = X[i]
+            locked = f"point:{i}" in scene.locked
+            g.disable_axes = locked
+            g.disable_sliders = locked
+        if sel is not None and sel < n:
+            self.selected.position = X[sel]
+            self.selected.color = point_rgb(sel)
+            self.selected.visible = True
+        else:
+            self.selected.visible = False
+
+    # -- everything ---------------------------------------------------------------
+
+    def draw(self, scene: Any, derived: Any, moving: str | None = None) -> None:
+        """Bring every node up to date. ``moving``: the camera whose gizmo the user is dragging (not re-posed)."""
+        opts = scene.options
+        self._sync_cameras(scene)
+        X = scene.points_array()
+        n = len(X)
+        colours = point_colours(n)
+        for spec in scene.cameras:
+            name = spec.name
+            nodes = self._cams[name]
+            wxyz, position = derived.poses[name]
+            gizmo = nodes["gizmo"]
+            if name != moving:
+                if not np.allclose(gizmo.position, position, atol=1e-9):
+                    gizmo.position = position
+                if not np.allclose(gizmo.wxyz, wxyz, atol=1e-9):
+                    gizmo.wxyz = wxyz
+            locked = name in scene.locked
+            gizmo.disable_axes = locked
+            gizmo.disable_sliders = locked
+            gizmo.disable_rotations = locked
+            nodes["axes"].visible = opts.show_frames
+            nodes["label"].visible = opts.show_labels
+            if spec.kind == "pinhole":
+                fr = derived.frustums[name]
+                fov, aspect = float(fr["fov"]), float(fr["aspect"])
+                y = np.tan(fov / 2.0)
+                x = y * aspect
+                # viser normalises the frustum to unit volume; undo that so the image plane sits at IMAGE_PLANE_DEPTH.
+                scale = IMAGE_PLANE_DEPTH * float(np.cbrt(x * y / 3.0))
+                fru = nodes["frustum"]
+                fru.fov = fov
+                fru.aspect = aspect
+                fru.scale = scale
+                content = derived.image_in_3d.get(name)
+                if content is not None:
+                    P = np.asarray(content["points"], float)
+                    ok = np.all(np.isfinite(P), axis=1) if len(P) else np.zeros(0, bool)
+                    if ok.any():
+                        nodes["img_pts"].points = P[ok].astype(np.float32)
+                        nodes["img_pts"].colors = colours[ok]
+                    nodes["img_pts"].visible = bool(ok.any())
+                    L = np.asarray(content["lines"], float)
+                    seg, col = _segments(L, colours) if len(L) else (np.zeros((0, 2, 3)), None)
+                    if len(seg):
+                        nodes["img_lines"].points = seg.astype(np.float32)
+                        nodes["img_lines"].colors = col
+                    nodes["img_lines"].visible = len(seg) > 0
+            else:
+                v, f = derived.mirror_meshes[name]
+                nodes["mirror"].vertices = np.asarray(v, np.float32)
+                nodes["mirror"].faces = np.asarray(f, np.uint32)
+                ccd = derived.ccd_centres.get(name)
+                if ccd is not None:
+                    # The CCD is drawn in the camera's frame: its offset below the focus along the mirror axis.
+                    off = float(np.linalg.norm(np.asarray(ccd) - np.asarray(position)))
+                    nodes["ccd"].position = (0.0, 0.0, -off)
+            rays = self._rays[name]
+            seg, col = _segments(derived.rays.get(name, np.zeros((0, 2, 3))), colours)
+            if len(seg):
+                rays.points = seg.astype(np.float32)
+                rays.colors = col
+            rays.visible = opts.show_rays and len(seg) > 0
+
+        self._sync_points(scene)
+
+        if derived.baseline is not None:
+            self.baseline.points = np.asarray(derived.baseline, np.float32)[None]
+            self.baseline.visible = True
+        else:
+            self.baseline.visible = False
+
+        plane = derived.epipolar_plane
+        if plane is not None and opts.show_planes:
+            V = np.asarray(plane, np.float32)
+            faces = np.array([[0, i, i + 1] for i in range(1, len(V) - 1)], np.uint32)
+            self.epiplane.vertices = V
+            self.epiplane.faces = faces
+            sel = scene.selected_point
+            self.epiplane.color = point_rgb(sel) if sel is not None else (120, 120, 120)
+            self.epiplane.visible = True
+        else:
+            self.epiplane.visible = False
+
+        if scene.surfaces and opts.show_surfaces:
+            if self._surf_key is not scene.surfaces:
+                self._surf_key, self._surf_pts = scene.surfaces, scene.surface_points()[0]
+            S = self._surf_pts
+            self.surfaces.points = np.asarray(S, np.float32)
+            self.surfaces.visible = len(S) > 0
+        else:
+            self.surfaces.visible = False
+
+    def remove_all(self) -> None:
+        """Remove every node (client teardown)."""
+        for name in list(self._cams):
+            self._drop_camera(name)
+        for g in self._point_gizmos.values():
+            g.remove()
+        self._point_gizmos.clear()
+        for h in self._point_labels:
+            h.remove()
+        self._point_labels.clear()

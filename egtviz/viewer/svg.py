@@ -1,0 +1,307 @@
+"""Image-plane panels as inline SVG: a pure function from an ``ImagePlane`` to a string.
+
+The SVG is in pixel units (``viewBox`` = the image, plus a margin for the axes'
+tick labels and for the arrows that point to epipoles outside the image). It
+draws only what the scene layer computed (:class:`egtviz.scene.ImagePlane`):
+points, epipoles, clipped epipolar lines, epipolar conics, the mirror rim.
+
+Testability contract (the browser tests rely on it):
+
+* the root ``<svg>`` carries ``data-egtviz="image-plane"`` and
+  ``data-camera="<camera name>"``;
+* drawn elements carry ``data-kind``: ``border``, ``point`` (with
+  ``data-index``, 0-based, one per point inside the image), ``epipole`` (with
+  ``data-label`` and ``data-where`` = ``inside`` | ``outside`` | ``infinity``),
+  ``epipolar-line`` (with ``data-index``, one per drawn line),
+  ``epipolar-conic`` (with ``data-index``; a conic may have several pieces),
+  ``rim``, ``message``, ``hidden-count``.
+
+Point labels are 1-based, like EGT's ``f_3Dwfenum``; ``data-index`` is 0-based.
+"""
+
+from __future__ import annotations
+
+import math
+from html import escape
+from typing import Any
+
+import numpy as np
+
+from .palette import EPIPOLE_COLOUR, RIM_COLOUR, point_colour
+
+__all__ = ["image_plane_svg", "empty_svg"]
+
+
+def _f(x: float) -> str:
+    """Compact coordinate formatting: five significant digits (images may be 2 px or 4000 px wide)."""
+    return f"{x:.5g}"
+
+
+def _nice_step(span: float) -> float:
+    """A 1-2-5 tick step giving about 5-8 ticks over ``span``."""
+    raw = span / 6.0
+    mag = 10.0 ** math.floor(math.log10(raw))
+    for m in (1.0, 2.0, 5.0, 10.0):
+        if raw <= m * mag:
+            return m * mag
+    return 10.0 * mag
+
+
+def _border_exit(w: float, h: float, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the segment from the image centre towards ``target`` leaves the image, and its unit direction.
+
+    Used only to place an arrow marker (layout, not geometry): the epipole itself
+    comes from the scene layer.
+    """
+    c = np.array([w / 2.0, h / 2.0])
+    d = np.asarray(target, float) - c
+    n = float(np.hypot(*d))
+    if n == 0.0 or not np.isfinite(n):
+        return c, np.array([1.0, 0.0])
+    d = d / n
+    ts = []
+    if abs(d[0]) > 1e-12:
+        ts.append(((w / 2.0 - inset) / abs(d[0])))
+    if abs(d[1]) > 1e-12:
+        ts.append(((h / 2.0 - inset) / abs(d[1])))
+    t = min(ts) if ts else 0.0
+    return c + t * d, d
+
+
+def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: float) -> str:
+    """An arrow whose head is at ``tip`` pointing along ``d``."""
+    tail = tip - d * length
+    head = length * 0.35
+    nrm = np.array([-d[1], d[0]])
+    p1 = tip - d * head + nrm * head * 0.5
+    p2 = tip - d * head - nrm * head * 0.5
+    return (
+        f'<line x1="{_f(tail[0])}" y1="{_f(tail[1])}" x2="{_f(tip[0])}" y2="{_f(tip[1])}" '
+        f'stroke="{colour}" stroke-width="{_f(width)}"/>'
+        f'<polygon points="{_f(tip[0])},{_f(tip[1])} {_f(p1[0])},{_f(p1[1])} {_f(p2[0])},{_f(p2[1])}" '
+        f'fill="{colour}"/>'
+    )
+
+
+def _polyline_points(P: np.ndarray) -> str:
+    return " ".join(f"{x:.5g},{y:.5g}" for x, y in P)
+
+
+def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
+    """Split a polyline at NaN rows into runs of at least two points."""
+    P = np.asarray(P, float)
+    if P.ndim != 2 or len(P) == 0:
+        return []
+    ok = np.all(np.isfinite(P), axis=1)
+    if ok.all():
+        return [P] if len(P) >= 2 else []
+    runs, start = [], None
+    for i, good in enumerate(ok):
+        if good and start is None:
+            start = i
+        elif not good and start is not None:
+            if i - start >= 2:
+                runs.append(P[start:i])
+            start = None
+    if start is not None and len(P) - start >= 2:
+        runs.append(P[start:])
+    return runs
+
+
+def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
+    """A blank image plane with a border and a message (before the first update)."""
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="image-plane" data-camera="{escape(camera)}" '
+        f'viewBox="0 0 {width} {height}" width="100%">'
+        f'<rect data-kind="border" x="0" y="0" width="{width}" height="{height}" fill="#fff" stroke="#333"/>'
+        f'<text data-kind="message" x="{width / 2}" y="{height / 2}" text-anchor="middle">{escape(message)}</text>'
+        "</svg>"
+    )
+
+
+def image_plane_svg(
+    plane: Any,
+    *,
+    selected_point: int | None = None,
+    highlighted: frozenset[int] | set[int] = frozenset(),
+    show_labels: bool = True,
+    revision: int | None = None,
+) -> str:
+    """Inline SVG of one camera's image plane, in pixel units.
+
+    Args:
+        plane: an :class:`egtviz.scene.ImagePlane` (read: ``camera``, ``kind``,
+            ``width``, ``height``, ``points``, ``in_image``, ``n_hidden``,
+            ``epipoles``, ``lines``, ``conics``, ``rim``, ``message``).
+        selected_point: 0-based index of the selected scene point: drawn with a
+            ring, its epipolar line/conic thicker.
+        highlighted: 0-based indices of highlighted points (a ring too).
+        show_labels: write the point numbers (1-based) next to the points.
+        revision: written as ``data-rev`` on the root (lets a browser test or
+            the benchmark recognise a given update).
+
+    Returns:
+        The ``<svg>`` element as a string (see the module docstring for the
+        ``data-*`` attributes).
+    """
+    w, h = float(plane.width), float(plane.height)
+    s = max(w, h)
+    font = s / 32.0
+    margin = font * 3.2
+    r_pt = s / 110.0
+    lw = s / 400.0
+    n_inf_total = sum(1 for ep in (plane.epipoles or ()) if ep.at_infinity or ep.xy is None)
+    bottom = margin * (0.45 + 0.55 * (n_inf_total + 1))
+    vb = f"{_f(-margin)} {_f(-margin)} {_f(w + 2 * margin)} {_f(h + margin + bottom)}"
+    rev = "" if revision is None else f' data-rev="{int(revision)}"'
+    out: list[str] = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="image-plane" data-camera="{escape(str(plane.camera))}" '
+        f'data-camera-kind="{escape(str(plane.kind))}"{rev} viewBox="{vb}" width="100%" '
+        f'style="display:block;font-family:sans-serif;background:#f4f4f4">',
+        f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#ffffff" '
+        f'stroke="#333" stroke-width="{_f(lw * 1.5)}"/>',
+    ]
+
+    # Axes with ticks: u along the top edge, v along the left edge (origin top-left).
+    step = _nice_step(s)
+    tick = font * 0.5
+    ticks: list[str] = []
+    u = 0.0
+    while u <= w + 1e-9:
+        ticks.append(f'<line x1="{_f(u)}" y1="0" x2="{_f(u)}" y2="{_f(-tick)}" stroke="#333" stroke-width="{_f(lw)}"/>')
+        ticks.append(
+            f'<text x="{_f(u)}" y="{_f(-tick * 1.4)}" font-size="{_f(font * 0.8)}" text-anchor="middle" '
+            f'fill="#333">{u:g}</text>'
+        )
+        u += step
+    v = 0.0
+    while v <= h + 1e-9:
+        ticks.append(f'<line x1="0" y1="{_f(v)}" x2="{_f(-tick)}" y2="{_f(v)}" stroke="#333" stroke-width="{_f(lw)}"/>')
+        ticks.append(
+            f'<text x="{_f(-tick * 1.4)}" y="{_f(v + font * 0.3)}" font-size="{_f(font * 0.8)}" text-anchor="end" '
+            f'fill="#333">{v:g}</text>'
+        )
+        v += step
+    out.append(f'<g data-kind="axes">{"".join(ticks)}'
+               f'<text x="{_f(w + tick)}" y="{_f(-tick * 1.4)}" font-size="{_f(font)}" font-style="italic">u</text>'
+               f'<text x="{_f(-tick * 1.4)}" y="{_f(h + font * 1.2)}" font-size="{_f(font)}" font-style="italic" '
+               f'text-anchor="end">v</text></g>')
+
+    # Clip everything drawn inside the image to the image rectangle.
+    clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in str(plane.camera))
+    out.append(f'<defs><clipPath id="{clip_id}"><rect x="0" y="0" width="{_f(w)}" height="{_f(h)}"/></clipPath></defs>')
+    out.append(f'<g clip-path="url(#{clip_id})">')
+
+    if plane.rim is not None:
+        for run in _finite_runs(plane.rim):
+            out.append(
+                f'<polyline data-kind="rim" points="{_polyline_points(run)}" fill="none" stroke="{RIM_COLOUR}" '
+                f'stroke-width="{_f(lw * 1.5)}" stroke-dasharray="{_f(lw * 6)} {_f(lw * 4)}"/>'
+            )
+
+    if plane.lines is not None:
+        L = np.asarray(plane.lines, float)
+        for i in range(len(L)):
+            seg = L[i]
+            if not np.all(np.isfinite(seg)):
+                continue
+            width = lw * (3.0 if i == selected_point else 1.2)
+            out.append(
+                f'<line data-kind="epipolar-line" data-index="{i}" x1="{_f(seg[0, 0])}" y1="{_f(seg[0, 1])}" '
+                f'x2="{_f(seg[1, 0])}" y2="{_f(seg[1, 1])}" stroke="{point_colour(i)}" stroke-width="{_f(width)}"/>'
+            )
+
+    if plane.conics is not None:
+        for i, pieces in enumerate(plane.conics):
+            width = lw * (3.0 if i == selected_point else 1.2)
+            for piece in pieces:
+                for run in _finite_runs(piece):
+                    out.append(
+                        f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{_polyline_points(run)}" '
+                        f'fill="none" stroke="{point_colour(i)}" stroke-width="{_f(width)}"/>'
+                    )
+
+    P = np.asarray(plane.points, float).reshape(-1, 2)
+    in_image = np.asarray(plane.in_image, bool).reshape(-1)
+    for i in np.flatnonzero(in_image):
+        x, y = P[i]
+        colour = point_colour(int(i))
+        mark = ""
+        if i == selected_point or int(i) in highlighted:
+            mark = (f'<circle cx="{_f(x)}" cy="{_f(y)}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
+                    f'stroke-width="{_f(lw * 2)}" data-selected="{"true" if i == selected_point else "false"}"/>')
+        label = (
+            f'<text x="{_f(x + r_pt * 1.4)}" y="{_f(y - r_pt * 1.4)}" font-size="{_f(font)}" fill="{colour}" '
+            f'font-weight="bold" paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 3)}">{i + 1}</text>'
+            if show_labels
+            else ""
+        )
+        out.append(
+            f'<g data-kind="point" data-index="{i}">{mark}<circle cx="{_f(x)}" cy="{_f(y)}" r="{_f(r_pt)}" '
+            f'fill="{colour}" stroke="#000" stroke-width="{_f(lw * 0.6)}"/>{label}</g>'
+        )
+    out.append("</g>")  # end of clipped group
+
+    # Epipoles: inside (a cross), outside (an arrow at the border), at infinity (an arrow and a label).
+    n_inf = 0
+    for ep in plane.epipoles or ():
+        label = escape(str(ep.label))
+        if ep.at_infinity or ep.xy is None:
+            d = np.asarray(ep.direction, float) if ep.direction is not None else np.array([1.0, 0.0])
+            target = np.array([w / 2.0, h / 2.0]) + d * s * 10.0
+            tip, dd = _border_exit(w, h, target, inset=-margin * 0.15)
+            ty = h + margin * (0.85 + 0.55 * n_inf)
+            n_inf += 1
+            out.append(
+                f'<g data-kind="epipole" data-label="{label}" data-where="infinity">'
+                f"{_arrow(tip, dd, margin * 0.7, EPIPOLE_COLOUR, lw * 2.5)}"
+                f'<text x="0" y="{_f(ty)}" font-size="{_f(font)}" fill="{EPIPOLE_COLOUR}">'
+                f"{label} at infinity, direction ({d[0]:.2f}, {d[1]:.2f})</text></g>"
+            )
+            continue
+        x, y = (float(c) for c in ep.xy)
+        if ep.inside:
+            a = r_pt * 1.8
+            out.append(
+                f'<g data-kind="epipole" data-label="{label}" data-where="inside">'
+                f'<line x1="{_f(x - a)}" y1="{_f(y - a)}" x2="{_f(x + a)}" y2="{_f(y + a)}" stroke="{EPIPOLE_COLOUR}" '
+                f'stroke-width="{_f(lw * 2.5)}"/>'
+                f'<line x1="{_f(x - a)}" y1="{_f(y + a)}" x2="{_f(x + a)}" y2="{_f(y - a)}" stroke="{EPIPOLE_COLOUR}" '
+                f'stroke-width="{_f(lw * 2.5)}"/>'
+                f'<text x="{_f(x + a)}" y="{_f(y + a + font)}" font-size="{_f(font)}" fill="{EPIPOLE_COLOUR}" '
+                f'font-style="italic" paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 3)}">{label}</text></g>'
+            )
+        else:
+            tip, dd = _border_exit(w, h, np.array([x, y]), inset=-margin * 0.15)
+            tx = min(max(tip[0] - dd[0] * margin * 0.9, font), w - font * 5)
+            ty = min(max(tip[1] - dd[1] * margin * 0.9, font), h - font * 0.5)
+            out.append(
+                f'<g data-kind="epipole" data-label="{label}" data-where="outside" data-x="{x:.5g}" data-y="{y:.5g}">'
+                f'<g data-kind="epipole-arrow">{_arrow(tip, dd, margin * 0.7, EPIPOLE_COLOUR, lw * 2.5)}</g>'
+                f'<text x="{_f(tx)}" y="{_f(ty)}" font-size="{_f(font * 0.85)}" fill="{EPIPOLE_COLOUR}" '
+                f'paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 3)}">'
+                f"{label} ({x:.4g}, {y:.4g})</text></g>"
+            )
+
+    # Status lines under the image: hidden points and messages.
+    n_points = len(P)
+    n_hidden = int(plane.n_hidden)
+    n_outside = int(n_points - n_hidden - int(in_image.sum()))
+    status = f"{int(in_image.sum())} of {n_points} points in the image"
+    if n_hidden:
+        why = "behind the camera" if plane.kind == "pinhole" else "in the blind cone"
+        status += f"; {n_hidden} hidden ({why})"
+    if n_outside > 0:
+        status += f"; {n_outside} outside the image"
+    ty = h + margin * (0.85 + 0.55 * n_inf)
+    out.append(
+        f'<text data-kind="hidden-count" data-hidden="{n_hidden}" x="{_f(w)}" y="{_f(ty)}" text-anchor="end" '
+        f'font-size="{_f(font * 0.85)}" fill="#333">{escape(status)}</text>'
+    )
+    if plane.message:
+        out.append(
+            f'<text data-kind="message" x="{_f(w / 2)}" y="{_f(h / 2)}" text-anchor="middle" font-size="{_f(font * 1.1)}" '
+            f'fill="#a00" paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 4)}">{escape(str(plane.message))}</text>'
+        )
+    out.append("</svg>")
+    return "".join(out)
