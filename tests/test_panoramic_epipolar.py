@@ -20,6 +20,7 @@ from egtviz.geometry.panoramic_epipolar import (
     panoramic_essential,
     sample_epipolar_conics,
     sample_plane_conic,
+    sample_plane_conics,
 )
 from egtviz.geometry.poses import Pose, rotx, roty, rotz
 
@@ -183,10 +184,18 @@ def test_sampled_arcs_are_real_visible_and_on_the_conic(seed, kind):
     n_samples = 200
     arcs = sample_plane_conic(cam, n, n=n_samples)
     C = conic_from_plane(cam, n)[0]
-    # The visible field of a mirror is {elevation below the rim's}: a great circle meets it in
-    # one arc (or the whole circle), wherever the sampling starts: no split, no phantom branch.
+    # The visible field of a mirror is {elevation below the rim's}: a great circle (elevations
+    # between -tilt and +tilt) meets it in one arc, the whole circle, or nothing, wherever the
+    # sampling starts: no split, no phantom branch.
+    tilt = np.arccos(abs(n[2]) / np.linalg.norm(n))
+    rim_el = np.arctan2(cam.mirror.rim_z, cam.mirror.rim_radius)
+    if -tilt > rim_el:
+        assert arcs == []
+        return
+    assume(-tilt < rim_el - 0.1 and abs(tilt - rim_el) > 1e-3)  # skip arcs shorter than a few samples
     assert len(arcs) == 1
     arc = arcs[0]
+    assert np.array_equal(arc[0], arc[-1]) == bool(tilt < rim_el)  # closed loop iff fully visible
     assert arc.ndim == 2 and arc.shape[1] == 2 and len(arc) >= 2
     m = homogeneous(arc)
     assert np.all(conic_residual(np.broadcast_to(C, (len(m), 3, 3)), m) < TOL)
@@ -194,23 +203,57 @@ def test_sampled_arcs_are_real_visible_and_on_the_conic(seed, kind):
     assert np.all(np.isfinite(d))
     d_mirror = d @ cam.pose.R
     np.testing.assert_allclose(d_mirror @ (n / np.linalg.norm(n)), 0.0, atol=1e-9)
-    # No jump segment: consecutive samples are one sampling step apart on the circle.
+    # No jump segment: consecutive samples are one sampling step apart on the circle
+    # (the refined end points of an open arc are at most one step from their neighbours).
     step = np.arccos(np.clip(np.sum(d_mirror[1:] * d_mirror[:-1], axis=1), -1, 1))
-    np.testing.assert_allclose(step, 2 * np.pi / n_samples, atol=1e-6)
+    closed = np.array_equal(arc[0], arc[-1])
+    inner = step if closed else step[1:-1]
+    np.testing.assert_allclose(inner, 2 * np.pi / n_samples, atol=1e-6)
+    assert np.all(step <= 2 * np.pi / n_samples + 1e-6)
+    if not closed:
+        # Open arcs end where the circle leaves the visible field: on the rim.
+        ends = d_mirror[[0, -1]] * cam.mirror.intersect(d_mirror[[0, -1]], rim_tol=1e-9).lam[:, None]
+        np.testing.assert_allclose(np.hypot(ends[:, 0], ends[:, 1]), cam.mirror.rim_radius, rtol=1e-6)
 
 
 def test_hyperbolic_arc_excludes_phantom_branch_and_wraps():
     """A near-vertical plane crosses the blind cone: one arc from rim to rim, even when sampling starts mid-arc."""
     cam = CatadioptricCamera(Pose(), HyperbolicMirror(3.0, 1.0), K_EGT)
-    for normal in ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.3], [-0.2, 1.0, 0.0]):
+    for normal in ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.3], [-0.2, 1.0, 0.0], [0.3, -1.0, 0.2]):
         arcs = sample_plane_conic(cam, normal, n=512)
         assert len(arcs) == 1
         arc = arcs[0]
         assert not np.allclose(arc[0], arc[-1])  # an open arc, not a closed loop
-        # Its ends are close to the rim's image (the arc is clipped there, not at a phantom branch).
+        # Its ends are on the rim's image (the arc is clipped there, not at a phantom branch),
+        # and every other sample is inside it.
         rim_r = np.linalg.norm(cam.rim_image(4)[0] - [320.0, 240.0])
-        ends = np.linalg.norm(arc[[0, -1]] - [320.0, 240.0], axis=1)
-        assert np.all(ends <= rim_r + 1e-9) and np.all(ends > 0.9 * rim_r)
+        radius = np.linalg.norm(arc - [320.0, 240.0], axis=1)
+        np.testing.assert_allclose(radius[[0, -1]], rim_r, rtol=1e-9)
+        assert np.all(radius <= rim_r * (1 + 1e-12))
+        # The algebraic conic also holds the phantom branch: unified images of in-plane rays
+        # beyond the asymptote satisfy m^T C m = 0, yet no sampled pixel comes near them.
+        # (Checked for tilted planes; a plane through the axis images as a line pair whose
+        # phantom part folds back onto the real segment through the image centre.)
+        if normal[2] == 0.0:
+            continue
+        C = conic_from_plane(cam, normal)
+        n_unit = np.asarray(normal) / np.linalg.norm(normal)
+        horizontal = np.cross(n_unit, [0.0, 0.0, 1.0])
+        up = np.cross(horizontal, n_unit)
+        up = up / np.linalg.norm(up) * np.sign(up[2])
+        horizontal /= np.linalg.norm(horizontal)
+        max_el = np.arcsin(up[2])
+        asym = np.arcsin(cam.mirror.a / cam.mirror.e)
+        assert max_el > asym
+        for el in np.linspace(asym, max_el, 7)[1:]:
+            # A unit in-plane direction with elevation el: cos(phi) horizontal + sin(phi) up.
+            phi = np.arcsin(np.sin(el) / up[2])
+            d = np.cos(phi) * horizontal + np.sin(phi) * up
+            assert not cam.project_directions(d).visible[0]
+            q = cam._unified_homogeneous(d[None, :])[0]
+            phantom = q[:2] / q[2]
+            assert conic_residual(C, homogeneous(phantom[None, :]))[0] < TOL
+            assert np.min(np.linalg.norm(arc - phantom, axis=1)) > 1.0
     # A horizontal plane is fully visible: one closed loop.
     loop = sample_plane_conic(cam, [0.0, 0.0, 1.0], n=64)
     assert len(loop) == 1 and loop[0].shape == (65, 2)
@@ -306,6 +349,51 @@ def test_egt_example4_like_configuration():
         assert conic_residual(C[p.visible], homogeneous(p.pixels[p.visible])).max() < TOL
         assert conic_residual(C, np.broadcast_to(e, (8, 3))).max() < TOL
         assert conic_residual(C, np.broadcast_to(ep_, (8, 3))).max() < TOL
+
+
+def test_sample_plane_conics_matches_single_plane_version():
+    rng = np.random.default_rng(7)
+    for mirror in (HyperbolicMirror(2.0, 1.0), ParabolicMirror(0.6)):
+        cam = CatadioptricCamera(Pose(rotz(0.4)), mirror, K_EGT)
+        normals = np.vstack([rng.normal(size=(6, 3)), np.zeros((1, 3))])
+        many = sample_plane_conics(cam, normals, n=96)
+        assert len(many) == 7 and many[-1] == []
+        for normal, arcs in zip(normals[:-1], many[:-1], strict=True):
+            single = sample_plane_conic(cam, normal, n=96)
+            assert len(single) == len(arcs)
+            for a, b in zip(single, arcs, strict=True):
+                np.testing.assert_allclose(a, b, rtol=1e-12)
+
+
+def test_epipoles_on_the_mirror_axis():
+    """Baseline along both axes: the nadir images at the principal point; the zenith is blind."""
+    K = K_EGT
+    hyp = CatadioptricCamera(Pose(np.eye(3), [0.0, 0.0, 0.0]), HyperbolicMirror(), K)
+    par = CatadioptricCamera(Pose(np.eye(3), [0.0, 0.0, 5.0]), ParabolicMirror(), K)
+    ep = panoramic_epipoles(hyp, par)
+    # Image 1 (hyperbolic, other focus straight up): e1 is the phantom image of the zenith,
+    # the principal point too (s_z + xi = xi - 1 != 0), not visible; e1p is the nadir.
+    np.testing.assert_allclose(ep.e1, [320.0, 240.0, 1.0])
+    np.testing.assert_allclose(ep.e1p, [320.0, 240.0, 1.0])
+    assert not ep.e1_visible and ep.e1p_visible
+    # Image 2 (parabolic, other focus straight down): e2 is the nadir; the zenith is the
+    # projection centre of the stereographic model, so e2p is undefined (NaN).
+    np.testing.assert_allclose(ep.e2, [320.0, 240.0, 1.0])
+    assert ep.e2_visible and not ep.e2p_visible
+    assert np.all(np.isnan(ep.e2p)) and np.all(np.isnan(ep.e2p_mirror))
+    np.testing.assert_allclose(ep.e1p_mirror, [0.0, 0.0, HyperbolicMirror().apex_z], atol=1e-12)
+
+
+def test_epipole_at_infinity_is_unit_norm():
+    """A hyperbola whose baseline ray has d_z = xi images it at infinity: last coordinate 0."""
+    mirror = HyperbolicMirror(3.0, 1.0)
+    el = np.arcsin(mirror.xi)
+    cam1 = CatadioptricCamera(Pose(), mirror, K_EGT)
+    cam2 = CatadioptricCamera(Pose(np.eye(3), 10.0 * np.array([np.cos(el), 0.0, np.sin(el)])), mirror, K_EGT)
+    ep = panoramic_epipoles(cam1, cam2)
+    assert ep.e1[2] == 0.0 and np.linalg.norm(ep.e1) == pytest.approx(1.0)
+    np.testing.assert_allclose(np.abs(ep.e1), [1.0, 0.0, 0.0], atol=1e-6)
+    assert not ep.e1_visible
 
 
 # --------------------------------------------------------------------------- errors

@@ -72,7 +72,7 @@ def as_positive(value: float, name: str) -> float:
 def as_rotation(value: npt.ArrayLike, name: str, *, tol: float = 1e-6) -> np.ndarray:
     """A 3x3 proper rotation (orthonormal, determinant +1) within ``tol``."""
     R = as_matrix(value, name, (3, 3))
-    if not np.allclose(R.T @ R, np.eye(3), atol=tol) or np.linalg.det(R) <= 0:
+    if np.abs(R.T @ R - np.eye(3)).max() > tol or np.linalg.det(R) <= 0:
         raise GeometryError(f"{name}: expected a 3x3 rotation matrix (R^T R = I, det R = +1)")
     return R
 

@@ -158,9 +158,15 @@ class CatadioptricCamera:
             P = Xh + np.array([0.0, 0.0, self.mirror.ccd_offset])
         else:
             P = np.column_stack([Xh[:, 0], Xh[:, 1], np.ones(len(Xh))])
-        m = P @ self.K.T
-        pixels = m[:, :2] / m[:, 2:3]
+        pixels = self._pixels(P)
         return PanoramicProjection(pixels, Xh, visible, visible & self._inside(pixels))
+
+    def _pixels(self, P: np.ndarray) -> np.ndarray:
+        """Pixels of CCD-frame points ``P`` (N, 3): ``K P`` dehomogenised (element-wise, no BLAS)."""
+        x = P[:, 0] / P[:, 2]
+        y = P[:, 1] / P[:, 2]
+        K = self.K
+        return np.column_stack([K[0, 0] * x + K[0, 1] * y + K[0, 2], K[1, 0] * x + K[1, 1] * y + K[1, 2]])
 
     def _inside(self, pixels: np.ndarray) -> np.ndarray:
         with np.errstate(invalid="ignore"):
@@ -228,7 +234,8 @@ class CatadioptricCamera:
         s = np.column_stack([eta * x, eta * y, eta - xi])
         d = s @ UNIFIED_FLIP.T
         d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        _, hit = self.mirror.intersect(d)
+        # A pixel of the rim's image may round to just outside the rim: allow 1e-9.
+        _, hit = self.mirror.intersect(d, rim_tol=1e-9)
         d[~hit] = np.nan
         return d @ self.pose.R.T
 
@@ -239,5 +246,4 @@ class CatadioptricCamera:
             P = P + np.array([0.0, 0.0, self.mirror.ccd_offset])
         else:
             P = np.column_stack([P[:, 0], P[:, 1], np.ones(len(P))])
-        m = P @ self.K.T
-        return m[:, :2] / m[:, 2:3]
+        return self._pixels(P)

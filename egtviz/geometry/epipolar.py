@@ -49,19 +49,45 @@ def essential_from_poses(pose1: Pose, pose2: Pose) -> np.ndarray:
     return unit_frobenius(skew(t) @ R)
 
 
-def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
-    r""":math:`F = K_2^{-T} E K_1^{-1}` (H&Z 9.6), unit Frobenius norm."""
-    E = as_matrix(E, "E", (3, 3))
-    K1 = as_calibration(K1, "K1")
-    K2 = as_calibration(K2, "K2")
-    F = np.linalg.solve(K2.T, E) @ np.linalg.inv(K1)
-    return unit_frobenius(F)
-
-
 def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
-    r""":math:`E = K_2^T F K_1` (H&Z 9.12), unit Frobenius norm."""
+    r"""Essential matrix from ``F`` and the calibrations (H&Z 2nd ed., eq. 9.12).
+
+    .. math:: E = K_2^T F K_1
+
+    Returned with unit Frobenius norm (positive rescaling only: the sign of
+    ``F`` is kept).
+
+    Args:
+        F: ``(3, 3)`` fundamental matrix, ``m2^T F m1 = 0``.
+        K1: ``(3, 3)`` calibration of camera 1.
+        K2: ``(3, 3)`` calibration of camera 2.
+    """
     F = as_matrix(F, "F", (3, 3))
-    return unit_frobenius(as_calibration(K2, "K2").T @ F @ as_calibration(K1, "K1"))
+    E = as_calibration(K2, "K2").T @ F @ as_calibration(K1, "K1")
+    n = np.linalg.norm(E)
+    if n == 0:
+        raise GeometryError("F: expected a nonzero matrix")
+    return E / n
+
+
+def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
+    r"""Fundamental matrix from ``E`` and the calibrations (H&Z 2nd ed., eq. 9.12).
+
+    .. math:: F = K_2^{-T} E K_1^{-1}
+
+    Returned with unit Frobenius norm (positive rescaling only).
+
+    Args:
+        E: ``(3, 3)`` essential matrix, ``x2^T E x1 = 0`` in normalised coordinates.
+        K1: ``(3, 3)`` calibration of camera 1.
+        K2: ``(3, 3)`` calibration of camera 2.
+    """
+    E = as_matrix(E, "E", (3, 3))
+    F = np.linalg.inv(as_calibration(K2, "K2")).T @ E @ np.linalg.inv(as_calibration(K1, "K1"))
+    n = np.linalg.norm(F)
+    if n == 0:
+        raise GeometryError("E: expected a nonzero matrix")
+    return F / n
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,7 +121,7 @@ def epipolar_pair(cam1: PinholeCamera, cam2: PinholeCamera) -> EpipolarPair:
     """
     check_distinct_centres(cam1.center, cam2.center)
     E = essential_from_poses(cam1.pose, cam2.pose)
-    F = fundamental_from_essential(E, cam1.K, cam2.K)
+    F = unit_frobenius(fundamental_from_essential(E, cam1.K, cam2.K))
     e1, e1_in_front = epipole_of_centre(cam1, cam2.center)
     e2, e2_in_front = epipole_of_centre(cam2, cam1.center)
     return EpipolarPair(

@@ -11,10 +11,11 @@ has them and the robust estimators and error measures a lesson needs:
   (H&Z section 11.4.3), started from the normalised 8-point estimate.
 * :func:`fundamental_7point`: the minimal 7-point solver (H&Z section 11.1.2).
 * :func:`fundamental_ransac`, :func:`fundamental_lmeds`: robust estimation
-  from 7-point samples (H&Z section 11.6, Algorithm 4.6).
+  from 7-point samples (H&Z section 11.6, Algorithm 11.4; adaptive
+  sampling, Algorithm 4.5).
 
-Essential matrices (H&Z section 9.6): :func:`essential_from_fundamental`,
-:func:`fundamental_from_essential`, :func:`decompose_essential`,
+Essential matrices (H&Z section 9.6; the E <-> F conversions live in
+:mod:`egtviz.geometry.epipolar`): :func:`decompose_essential`,
 :func:`pose_from_essential`.
 
 Conventions (``docs/conventions.md``): points are rows, pixels ``(N, 2)``;
@@ -31,12 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from scipy.linalg import lapack as _lapack
 from scipy.optimize import least_squares
 
 from ._validate import (
     DegenerateConfigurationError,
     GeometryError,
-    as_calibration,
     as_matrix,
     as_points,
 )
@@ -44,10 +45,8 @@ from ._validate import (
 __all__ = [
     "RobustEstimate",
     "decompose_essential",
-    "essential_from_fundamental",
     "fundamental_7point",
     "fundamental_8point",
-    "fundamental_from_essential",
     "fundamental_lmeds",
     "fundamental_normalized_8point",
     "fundamental_ransac",
@@ -65,8 +64,15 @@ _RANK_TOL_EIG = 1e-13
 _RANK_TOL_SV = 1e-10
 # Inliers needed before a robust estimate can be refitted with the 8-point algorithm.
 _MIN_REFIT = 8
-# Hypotheses drawn per batch by the robust estimators.
-_BATCH = 48
+# Samples per batch of the robust estimators: the first batch, then what the
+# adaptive bound still asks for, within [_BATCH_MIN, _BATCH_MAX]. Batches
+# amortise numpy's per-call overhead.
+_BATCH_FIRST = 100
+_BATCH_MIN = 16
+_BATCH_MAX = 256
+# Pre-emptive scoring: subset size, and hypotheses per batch scored on all points.
+_SUBSET = 100
+_KEEP = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,24 +101,34 @@ def _pair(U1: npt.ArrayLike, U2: npt.ArrayLike, min_count: int) -> tuple[np.ndar
     return u1, u2
 
 
-def _hartley(u: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray, float]:
-    r"""Hartley's isotropic normalisation (H&Z section 4.4.4).
+def _hartley(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, np.ndarray, np.ndarray, float]:
+    r"""Hartley's isotropic normalisation of both images (H&Z section 4.4.4).
 
-    Returns ``T`` (3, 3), the normalised homogeneous points ``(N, 3)`` and the
-    scale ``s``: the centroid moves to the origin and the mean distance from it
-    becomes :math:`\sqrt 2`.
+    For each image returns ``T`` (3, 3), the normalised homogeneous points as
+    rows ``(3, N)`` (x, y, 1) and the scale ``s``: the centroid moves to the
+    origin and the mean distance from it becomes :math:`\sqrt 2`,
+    :math:`\hat m = T m`. Written with few, contiguous numpy operations: it
+    is a large part of the cost of the normalised 8-point algorithm.
     """
-    c = u.mean(axis=0)
-    d = u - c
-    mean_dist = float(np.sqrt(np.einsum("ij,ij->i", d, d)).mean())
-    if not mean_dist > 1e-9 * max(1.0, float(np.abs(c).max())):
-        raise DegenerateConfigurationError(f"{name}: all points coincide, F is undefined")
-    s = math.sqrt(2.0) / mean_dist
-    T = np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
-    h = np.empty((u.shape[0], 3))
-    h[:, :2] = d * s
-    h[:, 2] = 1.0
-    return T, h, s
+    n = u1.shape[0]
+    H = np.empty((2, 3, n))
+    H[0, :2] = u1.T
+    H[1, :2] = u2.T
+    H[:, 2] = 1.0
+    P = H[:, :2]  # (2 images, xy, N)
+    c = (np.add.reduce(P, axis=2) / n).ravel()  # cx1, cy1, cx2, cy2
+    P -= c.reshape(2, 2, 1)
+    sq = P * P
+    mean_dist = np.add.reduce(np.sqrt(sq[:, 0] + sq[:, 1]), axis=1) / n
+    for k, name in enumerate(("U1", "U2")):
+        if not mean_dist[k] > 1e-9 * max(1.0, abs(c[2 * k]), abs(c[2 * k + 1])):
+            raise DegenerateConfigurationError(f"{name}: all points coincide, F is undefined")
+    s1, s2 = math.sqrt(2.0) / mean_dist
+    P[0] *= s1
+    P[1] *= s2
+    T1 = np.array([[s1, 0.0, -s1 * c[0]], [0.0, s1, -s1 * c[1]], [0.0, 0.0, 1.0]])
+    T2 = np.array([[s2, 0.0, -s2 * c[2]], [0.0, s2, -s2 * c[3]], [0.0, 0.0, 1.0]])
+    return T1, H[0], float(s1), T2, H[1], float(s2)
 
 
 def _homogeneous(u: np.ndarray) -> np.ndarray:
@@ -123,13 +139,22 @@ def _homogeneous(u: np.ndarray) -> np.ndarray:
 
 
 def _design(h1: np.ndarray, h2: np.ndarray) -> np.ndarray:
-    r"""Design matrix ``(N, 9)``: row :math:`m_2^T \otimes m_1^T`, so ``A f = m2^T F m1`` with ``f = F.ravel()``."""
-    return (h2[:, :, None] * h1[:, None, :]).reshape(h1.shape[0], 9)
+    r"""Transposed design matrix ``(9, N)`` from homogeneous points as rows ``(3, N)``.
+
+    Column ``n`` is :math:`m_2 \otimes m_1`, so ``f @ At = m2^T F m1`` with
+    ``f = F.ravel()``. Rows 6-8 are :math:`m_1` and rows 2, 5, 8 are :math:`m_2`.
+    (Kept transposed: every row is contiguous, which makes the products fast.)
+    """
+    return (h2[:, None, :] * h1[None, :, :]).reshape(9, h1.shape[1])
 
 
-def _null_vector_normal(A: np.ndarray) -> np.ndarray:
+def _null_vector_normal(At: np.ndarray) -> np.ndarray:
     """Unit ``f`` minimising ``|A f|`` from the 9x9 normal matrix; raise if ``rank A < 8``."""
-    w, v = np.linalg.eigh(A.T @ A)
+    M = At @ At.T
+    # LAPACK directly: numpy.linalg's wrapper costs more than a 9x9 eigenproblem.
+    w, v, info = _lapack.dsyevd(M)
+    if info != 0:  # pragma: no cover - LAPACK failure
+        w, v = np.linalg.eigh(M)
     if w[1] <= _RANK_TOL_EIG * w[-1]:
         raise DegenerateConfigurationError(
             "U1, U2: degenerate configuration, the design matrix has rank < 8 "
@@ -140,7 +165,9 @@ def _null_vector_normal(A: np.ndarray) -> np.ndarray:
 
 def _rank2(F: np.ndarray) -> np.ndarray:
     """Closest rank-2 matrix in Frobenius norm (H&Z section 11.1.1)."""
-    U, S, Vt = np.linalg.svd(F)
+    U, S, Vt, info = _lapack.dgesvd(F)
+    if info != 0:  # pragma: no cover - LAPACK failure
+        U, S, Vt = np.linalg.svd(F)
     return (U[:, :2] * S[:2]) @ Vt[:2]
 
 
@@ -160,23 +187,43 @@ def _denormalize(Fn: np.ndarray, T1: np.ndarray, T2: np.ndarray) -> np.ndarray:
     return T2.T @ Fn @ T1
 
 
-def _sampson_normalized(
-    Fs: np.ndarray, h1: np.ndarray, h2: np.ndarray, s1: float, s2: float
-) -> np.ndarray:
+# OpenBLAS runs a GEMM multithreaded above m*n*k = 4 * 65536; on a busy
+# machine that is far slower than one thread, so the scorer stays below it.
+_GEMM_CHUNK = 4 * 65536
+
+
+def _linear_forms(Fs: np.ndarray) -> np.ndarray:
+    """``(M, 5, 9)``: rows giving, from a design row, ``m2^T F m1``, ``(F m1)_1,2`` and ``(F^T m2)_1,2``."""
+    M = Fs.shape[0]
+    G = np.zeros((M, 5, 9))
+    G[:, 0] = Fs.reshape(M, 9)
+    G[:, 1, 6:9] = Fs[:, 0, :]
+    G[:, 2, 6:9] = Fs[:, 1, :]
+    G[:, 3, 2::3] = Fs[:, :, 0]
+    G[:, 4, 2::3] = Fs[:, :, 1]
+    return G
+
+
+def _sampson_normalized(Fs: np.ndarray, At: np.ndarray, s1: float, s2: float) -> np.ndarray:
     r"""Pixel Sampson distances ``(M, N)`` of ``M`` candidates ``Fs`` given in normalised coordinates.
 
     With :math:`F = T_2^T F_n T_1` the algebraic error is unchanged and the
     first two coordinates of the epipolar lines scale by :math:`s_2` (image 2)
-    and :math:`s_1` (image 1), so no candidate needs denormalising.
+    and :math:`s_1` (image 1), so no candidate needs denormalising. All the
+    quantities are linear in the design row, hence one (chunked) GEMM.
     """
-    M, N = Fs.shape[0], h1.shape[0]
-    e = Fs.reshape(M, 9) @ _design(h1, h2).T
-    l2 = (Fs[:, :2, :].reshape(2 * M, 3) @ h1.T).reshape(M, 2, N)
-    l1 = (Fs.transpose(0, 2, 1)[:, :2, :].reshape(2 * M, 3) @ h2.T).reshape(M, 2, N)
-    den = (s2 * s2) * np.einsum("mkn,mkn->mn", l2, l2) + (s1 * s1) * np.einsum("mkn,mkn->mn", l1, l1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d = e * e / den
-    return np.where(np.isfinite(d), d, np.inf)
+    M, N = Fs.shape[0], At.shape[1]
+    G = _linear_forms(Fs).reshape(5 * M, 9)
+    V = np.empty((5 * M, N))
+    step = max(1, _GEMM_CHUNK // (9 * N))
+    for i in range(0, 5 * M, step):
+        np.matmul(G[i : i + step], At, out=V[i : i + step])
+    Q = V.reshape(M, 5, N)
+    np.multiply(Q, Q, out=Q)
+    den = np.einsum("mkn,k->mn", Q[:, 1:], np.array([s2 * s2, s2 * s2, s1 * s1, s1 * s1]))
+    np.maximum(den, 1e-300, out=den)
+    d = np.divide(Q[:, 0], den, out=den)
+    return d
 
 
 def _det3(M: np.ndarray) -> np.ndarray:
@@ -188,16 +235,48 @@ def _det3(M: np.ndarray) -> np.ndarray:
     )
 
 
-def _cubic_solutions(F1: np.ndarray, F2: np.ndarray, imag_tol: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
+def _real_cubic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Real roots of the monic cubics :math:`x^3 + a x^2 + b x + c` (arrays ``(K,)``).
+
+    Cardano's formula for one real root, the trigonometric form for three,
+    each polished by two Newton steps. Returns roots ``(K, 3)`` and a ``(K, 3)``
+    mask of the valid ones (one or three per cubic).
+    """
+    p = b - a * a / 3.0
+    q = 2.0 * a**3 / 27.0 - a * b / 3.0 + c
+    disc = (q / 2.0) ** 2 + (p / 3.0) ** 3
+    one = disc > 0.0
+    sq = np.sqrt(np.where(one, disc, 0.0))
+    y1 = np.cbrt(-q / 2.0 + sq) + np.cbrt(-q / 2.0 - sq)
+    pn = np.where(one | (p >= 0.0), -1.0, p)  # p < 0 whenever there are three real roots
+    m = 2.0 * np.sqrt(-pn / 3.0)
+    arg = np.clip(3.0 * q / (pn * m), -1.0, 1.0)
+    phi = np.arccos(arg) / 3.0
+    k = np.arange(3) * (2.0 * np.pi / 3.0)
+    y3 = m[:, None] * np.cos(phi[:, None] - k)
+    y3 = np.where((p >= 0.0)[:, None], 0.0, y3)  # triple root
+    y = np.where(one[:, None], y1[:, None], y3)
+    x = y - (a / 3.0)[:, None]
+    for _ in range(2):
+        f = ((x + a[:, None]) * x + b[:, None]) * x + c[:, None]
+        df = (3.0 * x + 2.0 * a[:, None]) * x + b[:, None]
+        step = np.where(df != 0.0, f / np.where(df != 0.0, df, 1.0), 0.0)
+        x = np.where(np.isfinite(step), x - step, x)
+    valid = np.ones(x.shape, bool)
+    valid[:, 1:] = ~one[:, None]
+    return x, valid
+
+
+def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r"""Rank-2 members of the pencils :math:`a F_1 + b F_2` (stacks ``(K, 3, 3)``).
 
     :math:`\det(a F_1 + b F_2)` is a homogeneous cubic
     :math:`k_3 a^3 + k_2 a^2 b + k_1 a b^2 + k_0 b^3`; it is solved for
     :math:`a/b` or :math:`b/a`, whichever end coefficient is larger, so the
-    companion matrix never divides by a vanishing leading coefficient.
+    solver never divides by a vanishing leading coefficient.
 
     Returns candidates ``(K, 3, 3, 3)`` and a ``(K, 3)`` mask of the real roots
-    (at least one per pencil).
+    (one or three per pencil).
     """
     k3 = _det3(F1)
     k0 = _det3(F2)
@@ -207,28 +286,16 @@ def _cubic_solutions(F1: np.ndarray, F2: np.ndarray, imag_tol: float = 1e-7) -> 
     k1 = 0.5 * (pp + pm) - k3
     first = np.abs(k3) >= np.abs(k0)  # solve for r = a / b
     lead = np.where(first, k3, k0)
-    c2 = np.where(first, k2, k1)
-    c1 = np.where(first, k1, k2)
-    c0 = np.where(first, k0, k3)
     lead = np.where(lead == 0.0, 1e-300, lead)
-    K = F1.shape[0]
-    comp = np.zeros((K, 3, 3))
-    comp[:, 0, 0] = -c2 / lead
-    comp[:, 0, 1] = -c1 / lead
-    comp[:, 0, 2] = -c0 / lead
-    comp[:, 1, 0] = 1.0
-    comp[:, 2, 1] = 1.0
-    comp = np.where(np.isfinite(comp), comp, 0.0)
-    roots = np.linalg.eigvals(comp)
-    re = roots.real
-    im = np.abs(roots.imag)
-    real = im <= imag_tol * (1.0 + np.abs(re))
-    real[np.arange(K), np.argmin(im, axis=1)] = True
-    r = re[:, :, None, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        roots, real = _real_cubic_roots(
+            np.where(first, k2, k1) / lead, np.where(first, k1, k2) / lead, np.where(first, k0, k3) / lead
+        )
+    r = roots[:, :, None, None]
     cand = np.where(
         first[:, None, None, None], r * F1[:, None] + F2[:, None], F1[:, None] + r * F2[:, None]
     )
-    return cand, real
+    return cand, real & np.isfinite(roots)
 
 
 # --------------------------------------------------------------------------- linear solvers
@@ -263,11 +330,10 @@ def fundamental_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.ndarray:
     """
     u1, u2 = _pair(U1, U2, 8)
     # The rank test is done in normalised coordinates, where it is meaningful.
-    _, n1, _ = _hartley(u1, "U1")
-    _, n2, _ = _hartley(u2, "U2")
+    _, n1, _, _, n2, _ = _hartley(u1, u2)
     _null_vector_normal(_design(n1, n2))
-    A = _design(_homogeneous(u1), _homogeneous(u2))
-    f = np.linalg.svd(A, full_matrices=False)[2][-1]
+    A = _design(_homogeneous(u1).T, _homogeneous(u2).T).T
+    f = np.linalg.svd(A, full_matrices=A.shape[0] < 9)[2][-1]  # (9, 9) V^T when N = 8
     return _finalize(f.reshape(3, 3))
 
 
@@ -293,8 +359,7 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
         DegenerateConfigurationError: coincident points or rank-deficient data.
     """
     u1, u2 = _pair(U1, U2, 8)
-    T1, n1, _ = _hartley(u1, "U1")
-    T2, n2, _ = _hartley(u2, "U2")
+    T1, n1, _, T2, n2, _ = _hartley(u1, u2)
     Fn = _rank2(_null_vector_normal(_design(n1, n2)).reshape(3, 3))
     return _canonical(_denormalize(Fn, T1, T2))
 
@@ -326,9 +391,8 @@ def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]
     u1, u2 = _pair(U1, U2, 7)
     if u1.shape[0] != 7:
         raise GeometryError(f"U1: the 7-point algorithm needs exactly 7 points, got {u1.shape[0]}")
-    T1, n1, _ = _hartley(u1, "U1")
-    T2, n2, _ = _hartley(u2, "U2")
-    _, s, vt = np.linalg.svd(_design(n1, n2))
+    T1, n1, _, T2, n2, _ = _hartley(u1, u2)
+    _, s, vt = np.linalg.svd(_design(n1, n2).T)
     if s[6] <= _RANK_TOL_SV * s[0]:
         raise DegenerateConfigurationError(
             "U1, U2: degenerate configuration, the 7x9 design matrix has rank < 7"
@@ -343,80 +407,113 @@ def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]
 # --------------------------------------------------------------------------- Sampson refinement
 
 
-def _rodrigues(w: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(K, 3, 3)`` from rotation vectors ``(K, 3)``."""
-    th = np.linalg.norm(w, axis=1)
-    small = th < 1e-12
-    ths = np.where(small, 1.0, th)
-    a = np.where(small, 1.0 - th**2 / 6.0, np.sin(ths) / ths)
-    b = np.where(small, 0.5 - th**2 / 24.0, (1.0 - np.cos(ths)) / ths**2)
-    W = np.zeros((w.shape[0], 3, 3))
-    W[:, 0, 1], W[:, 0, 2], W[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
-    W[:, 1, 0], W[:, 2, 0], W[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
-    return np.eye(3) + a[:, None, None] * W + b[:, None, None] * (W @ W)
+def _skew_stack(c: np.ndarray) -> np.ndarray:
+    """Cross-product matrices ``(K, 3, 3)`` of vectors ``(K, 3)``."""
+    W = np.zeros((c.shape[0], 3, 3))
+    W[:, 0, 1], W[:, 0, 2], W[:, 1, 2] = -c[:, 2], c[:, 1], -c[:, 0]
+    W[:, 1, 0], W[:, 2, 0], W[:, 2, 1] = c[:, 2], -c[:, 1], c[:, 0]
+    return W
 
 
-def _refine_sampson(Fn0: np.ndarray, h1: np.ndarray, h2: np.ndarray, s1: float, s2: float) -> np.ndarray:
-    r"""Minimise the pixel Sampson distance over rank-2 ``F`` in normalised coordinates.
+def _rodrigues_jr(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Rotation :math:`R(\omega)` and right Jacobian :math:`J_r(\omega)`.
 
-    Parameterisation (7 parameters, exactly rank 2):
-    :math:`F = U_0 R(\omega_1)\,\mathrm{diag}(1, \sigma, 0)\,R(\omega_2)^T V_0^T`.
+    :math:`R(\omega + \delta) \approx R(\omega) \exp([J_r(\omega) \delta]_\times)`.
     """
-    U0, S, V0t = np.linalg.svd(Fn0)
-    p0 = np.zeros(7)
-    p0[6] = S[1] / S[0]
-    V0 = V0t.T
-    e2 = s2 * s2
-    e1 = s1 * s1
-    kron = _design(h1, h2)
-    mask2 = np.array([1.0, 1.0, 0.0])
+    th = float(np.linalg.norm(w))
+    W = _skew_stack(w[None])[0]
+    W2 = W @ W
+    if th < 1e-8:
+        return np.eye(3) + W + 0.5 * W2, np.eye(3) - 0.5 * W + W2 / 6.0
+    a = math.sin(th) / th
+    b = (1.0 - math.cos(th)) / th**2
+    c = (th - math.sin(th)) / th**3
+    return np.eye(3) + a * W + b * W2, np.eye(3) - b * W + c * W2
 
-    def f_of(P: np.ndarray) -> np.ndarray:
-        R1 = _rodrigues(P[:, :3])
-        R2 = _rodrigues(P[:, 3:6])
-        D = np.zeros((P.shape[0], 3, 3))
-        D[:, 0, 0] = 1.0
-        D[:, 1, 1] = P[:, 6]
-        return U0 @ R1 @ D @ R2.transpose(0, 2, 1) @ V0.T
 
-    def parts(p: np.ndarray):
-        F = f_of(p[None])[0]
-        l2 = h1 @ F.T  # F m1, lines in image 2 (normalised)
-        l1 = h2 @ F  # F^T m2, lines in image 1
-        e = kron @ F.ravel()
-        den = e2 * (l2[:, 0] ** 2 + l2[:, 1] ** 2) + e1 * (l1[:, 0] ** 2 + l1[:, 1] ** 2)
-        den = np.maximum(den, 1e-300)
-        return F, l1, l2, e, den
+class _SampsonProblem:
+    r"""Sampson residuals over the rank-2 parameterisation used by :func:`fundamental_sampson`.
 
-    def fun(p: np.ndarray) -> np.ndarray:
-        _, _, _, e, den = parts(p)
-        return e / np.sqrt(den)
+    :math:`F = U_0 R(\omega_1)\,\mathrm{diag}(1, \sigma, 0)\,R(\omega_2)^T V_0^T`, ``p = (w1, w2, sigma)``,
+    in Hartley-normalised coordinates; the residuals are pixel Sampson distances
+    (see :func:`_sampson_normalized`), optionally weighted.
+    """
 
-    def jac(p: np.ndarray) -> np.ndarray:
-        _, l1, l2, e, den = parts(p)
+    def __init__(
+        self, Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, weights: np.ndarray | None = None
+    ) -> None:
+        U0, S, V0t = np.linalg.svd(Fn0)
+        self.sw = None if weights is None else np.sqrt(weights)
+        self.U0, self.V0t = U0, V0t
+        self.p0 = np.zeros(7)
+        self.p0[6] = S[1] / S[0]
+        self.At = At
+        self.h1 = At[6:9]  # m1 as rows (3, N)
+        self.h2 = np.ascontiguousarray(At[2::3])  # m2 as rows (3, N)
+        self.q1, self.q2 = s1 * s1, s2 * s2
+        self._key: bytes | None = None
+
+    def F(self, p: np.ndarray) -> np.ndarray:
+        return self._eval(p)[0]
+
+    def _eval(self, p: np.ndarray):
+        key = p.tobytes()
+        if key != self._key:
+            R1, J1 = _rodrigues_jr(p[:3])
+            R2, J2 = _rodrigues_jr(p[3:6])
+            L = self.U0 @ R1
+            Rt = R2.T @ self.V0t
+            F = (L[:, :2] * np.array([1.0, p[6]])) @ Rt[:2]
+            l2 = F[:2] @ self.h1  # (F m1)_{1,2}: lines in image 2, (2, N)
+            l1 = F[:, :2].T @ self.h2  # (F^T m2)_{1,2}: lines in image 1
+            e = F.ravel() @ self.At
+            den = self.q2 * (l2[0] ** 2 + l2[1] ** 2) + self.q1 * (l1[0] ** 2 + l1[1] ** 2)
+            np.maximum(den, 1e-300, out=den)
+            self._cache = (F, l1, l2, e, den, L, Rt, J1, J2)
+            self._key = key
+        return self._cache
+
+    def residuals(self, p: np.ndarray) -> np.ndarray:
+        e, den = self._eval(p)[3:5]
+        r = e / np.sqrt(den)
+        return r if self.sw is None else r * self.sw
+
+    def jacobian(self, p: np.ndarray) -> np.ndarray:
+        _, l1, l2, e, den, L, Rt, J1, J2 = self._eval(p)
+        dF = np.empty((7, 3, 3))
+        D = np.diag([1.0, p[6], 0.0])
+        dF[0:3] = L @ _skew_stack(J1.T) @ (D @ Rt)
+        dF[3:6] = -((L @ D) @ _skew_stack(J2.T) @ Rt)
+        dF[6] = np.outer(L[:, 1], Rt[1])
+        # r = e / sqrt(den): dr = de / sqrt(den) - e / (2 den^1.5) d(den), with
+        # de = m2^T dF m1, d(den) = 2 q2 (F m1)_i (dF m1)_i + 2 q1 (F^T m2)_j (dF^T m2)_j (i, j < 2).
+        N = e.shape[0]
+        de = dF.reshape(7, 9) @ self.At
+        P = (dF[:, :2, :].reshape(14, 3) @ self.h1).reshape(7, 2, N)
+        Q = (dF[:, :, :2].transpose(0, 2, 1).reshape(14, 3) @ self.h2).reshape(7, 2, N)
+        dden = self.q2 * (P[:, 0] * l2[0] + P[:, 1] * l2[1]) + self.q1 * (Q[:, 0] * l1[0] + Q[:, 1] * l1[1])
         rs = 1.0 / np.sqrt(den)
-        a = (e2 * mask2) * l2  # d den / dF_ij = 2 (a_i m1_j + m2_i b_j)
-        b = (e1 * mask2) * l1
         g = e * rs / den
-        JF = kron * rs[:, None] - g[:, None] * (
-            (a[:, :, None] * h1[:, None, :]).reshape(-1, 9) + (h2[:, :, None] * b[:, None, :]).reshape(-1, 9)
-        )
-        h = 1e-6
-        P = np.repeat(p[None], 14, axis=0)
-        idx = np.arange(7)
-        P[idx, idx] += h
-        P[7 + idx, idx] -= h
-        Fs = f_of(P).reshape(14, 9)
-        dF = (Fs[:7] - Fs[7:]).T / (2.0 * h)  # (9, 7)
-        return JF @ dF
+        J = de * rs - dden * g
+        if self.sw is not None:
+            J *= self.sw
+        return J.T
 
-    r0 = fun(p0)
+
+def _refine_sampson(
+    Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, weights: np.ndarray | None = None
+) -> np.ndarray:
+    """Minimise the (weighted) pixel Sampson distance over rank-2 ``F`` in normalised coordinates."""
+    prob = _SampsonProblem(Fn0, At, s1, s2, weights)
+    r0 = prob.residuals(prob.p0)
     cost0 = float(r0 @ r0)
-    res = least_squares(fun, p0, jac=jac, method="lm", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=60)
-    F = f_of(res.x[None])[0]
+    res = least_squares(
+        prob.residuals, prob.p0, jac=prob.jacobian, method="lm", xtol=1e-10, ftol=1e-10, gtol=1e-12, max_nfev=50
+    )
+    F = prob.F(res.x)
     if not (np.all(np.isfinite(F)) and 2.0 * res.cost <= cost0):
         return Fn0
-    return F
+    return F / np.linalg.norm(F)
 
 
 def fundamental_sampson(
@@ -450,10 +547,10 @@ def fundamental_sampson(
         DegenerateConfigurationError: coincident points or rank-deficient data.
     """
     u1, u2 = _pair(U1, U2, 8)
-    T1, n1, s1 = _hartley(u1, "U1")
-    T2, n2, s2 = _hartley(u2, "U2")
+    T1, n1, s1, T2, n2, s2 = _hartley(u1, u2)
+    At = _design(n1, n2)
     if F0 is None:
-        Fn0 = _rank2(_null_vector_normal(_design(n1, n2)).reshape(3, 3))
+        Fn0 = _rank2(_null_vector_normal(At).reshape(3, 3))
     else:
         F0 = as_matrix(F0, "F0", (3, 3))
         Fn0 = np.linalg.inv(T2).T @ F0 @ np.linalg.inv(T1)
@@ -462,7 +559,7 @@ def fundamental_sampson(
             raise GeometryError("F0: expected a matrix of rank 2, got rank < 2")
         Fn0 = _rank2(Fn0)
     Fn0 = Fn0 / np.linalg.norm(Fn0)
-    return _canonical(_denormalize(_refine_sampson(Fn0, n1, n2, s1, s2), T1, T2))
+    return _canonical(_denormalize(_refine_sampson(Fn0, At, s1, s2), T1, T2))
 
 
 # --------------------------------------------------------------------------- robust estimation
@@ -520,19 +617,25 @@ def _seven_point_batch(A7: np.ndarray) -> np.ndarray:
     return cand / np.where(norms > 0, norms, 1.0)[:, None, None]
 
 
-def _refit(
-    inl: np.ndarray, n1: np.ndarray, n2: np.ndarray, s1: float, s2: float, Fn_best: np.ndarray
-) -> np.ndarray:
-    """Normalised 8-point then Sampson refinement on the inliers (normalised coordinates)."""
-    if inl.sum() < _MIN_REFIT:
-        return Fn_best
-    h1, h2 = n1[inl], n2[inl]
-    try:
-        Fn = _rank2(_null_vector_normal(_design(h1, h2)).reshape(3, 3))
-    except DegenerateConfigurationError:
-        Fn = _rank2(Fn_best)
-    Fn = Fn / np.linalg.norm(Fn)
-    return _refine_sampson(Fn, h1, h2, s1, s2)
+class _Scorer:
+    """Cost and inlier rule of RANSAC (truncated quadratic, MSAC) or LMedS (median)."""
+
+    def __init__(self, mode: str, th2: float, n: int) -> None:
+        self.mode = mode
+        self.th2 = th2
+        # LMedS: inlier if d <= (2.5 sigma)^2, sigma = 1.4826 (1 + 5 / (N - 7)) sqrt(median d).
+        self.lmeds_scale = (2.5 * 1.4826 * (1.0 + 5.0 / max(n - 7, 1))) ** 2
+
+    def cost(self, d: np.ndarray) -> np.ndarray:
+        if self.mode == "ransac":
+            return np.minimum(d, self.th2).sum(axis=-1)
+        k = d.shape[-1] // 2
+        return np.partition(d, k, axis=-1)[..., k]
+
+    def inliers(self, d: np.ndarray, cost: float) -> np.ndarray:
+        if self.mode == "ransac":
+            return d < self.th2
+        return d <= self.lmeds_scale * max(cost, 1e-24)
 
 
 def _robust(
@@ -548,59 +651,92 @@ def _robust(
     u1, u2 = _pair(U1, U2, _MIN_REFIT)
     _check_robust_args(confidence, max_iterations)
     N = u1.shape[0]
-    T1, n1, s1 = _hartley(u1, "U1")
-    T2, n2, s2 = _hartley(u2, "U2")
-    A = _design(n1, n2)
+    T1, n1, s1, T2, n2, s2 = _hartley(u1, u2)
+    At = _design(n1, n2)
+    A = At.T  # rows of the design matrix, for gathering samples
     rng = np.random.default_rng(seed)
-    th2 = threshold * threshold
-    kth = N // 2
-    lmeds_scale = (1.4826 * (1.0 + 5.0 / (N - 7))) ** 2 * 2.5**2
+    scorer = _Scorer(mode, threshold * threshold, N)
+    # Pre-emptive scoring: every hypothesis is scored on a fixed random subset,
+    # only the best few of each batch on all the points.
+    sub = np.sort(rng.choice(N, _SUBSET, replace=False)) if N > 2 * _SUBSET else None
+    At_sub = At[:, sub] if sub is not None else At
+    # Refits use the correspondences within 1.5 times the RANSAC threshold
+    # (LMedS's 2.5 sigma band is wide already): refitting only on d < threshold^2
+    # would favour the hypothesis that chose them (truncation bias).
+    widen = 1.5 if mode == "ransac" else 1.0
     best_cost = math.inf
     best_F: np.ndarray | None = None
     bound = math.inf
     done = 0
     while done < min(bound, max_iterations):
-        k = int(min(_BATCH, max_iterations - done))
+        want = _BATCH_FIRST if done == 0 else min(max(bound - done, _BATCH_MIN), _BATCH_MAX)
+        k = int(min(want, max_iterations - done))
         cand = _seven_point_batch(A[_sample(rng, N, k)])
         done += k
         if cand.shape[0] == 0:
             continue
-        d = _sampson_normalized(cand, n1, n2, s1, s2)
-        if mode == "ransac":
-            cost = np.minimum(d, th2).sum(axis=1)
-        else:
-            cost = np.partition(d, kth, axis=1)[:, kth]
+        if sub is not None:
+            c_sub = scorer.cost(_sampson_normalized(cand, At_sub, s1, s2))
+            cand = cand[np.argsort(c_sub, kind="stable")[:_KEEP]]
+        d = _sampson_normalized(cand, At, s1, s2)
+        cost = scorer.cost(d)
         j = int(np.argmin(cost))
-        if cost[j] < best_cost:
-            best_cost = float(cost[j])
-            best_F = cand[j]
-            if mode == "ransac":
-                w = float((d[j] < th2).mean())
-            else:
-                w = float((d[j] <= lmeds_scale * max(best_cost, 1e-24)).mean())
-            bound = _iteration_bound(w, confidence)
+        if cost[j] >= best_cost:
+            continue
+        best_cost, best_F, best_d = float(cost[j]), cand[j], d[j]
+        # Local optimisation (LO-RANSAC): linear refits on the (widened) support of a new best.
+        for _ in range(4):
+            inl = scorer.inliers(best_d / widen**2, best_cost)
+            if inl.sum() < _MIN_REFIT:
+                break
+            try:
+                F_lo = _rank2(_null_vector_normal(At[:, inl]).reshape(3, 3))
+            except DegenerateConfigurationError:
+                break
+            F_lo /= np.linalg.norm(F_lo)
+            d_lo = _sampson_normalized(F_lo[None], At, s1, s2)[0]
+            c_lo = float(scorer.cost(d_lo))
+            if c_lo >= best_cost:
+                break
+            best_cost, best_F, best_d = c_lo, F_lo, d_lo
+        bound = _iteration_bound(float(scorer.inliers(best_d, best_cost).mean()), confidence)
     if best_F is None:
         raise DegenerateConfigurationError("U1, U2: no 7-point sample gave a fundamental matrix")
 
-    def classify(Fn: np.ndarray) -> np.ndarray:
-        d = _sampson_normalized(Fn[None], n1, n2, s1, s2)[0]
-        if mode == "ransac":
-            return d < th2
-        return d <= lmeds_scale * max(float(np.median(d)), 1e-24)
+    def support(Fn: np.ndarray, widen: float) -> tuple[np.ndarray, np.ndarray]:
+        d = _sampson_normalized(Fn[None], At, s1, s2)[0]
+        return scorer.inliers(d / widen**2, float(scorer.cost(d))), d
 
-    inl = classify(best_F)
-    if inl.sum() < _MIN_REFIT:
-        raise DegenerateConfigurationError(
-            f"U1, U2: the best model has only {int(inl.sum())} inliers, at least {_MIN_REFIT} are needed"
-        )
     Fn = best_F
-    for _ in range(3):
-        Fn = _refit(inl, n1, n2, s1, s2, Fn)
-        new = classify(Fn)
-        if np.array_equal(new, inl) or new.sum() < _MIN_REFIT:
+    sel, d = support(Fn, widen)
+    for _ in range(3):  # linear refits until the support is stable
+        if sel.sum() < _MIN_REFIT:
             break
-        inl = new
-    inl = classify(Fn)
+        try:
+            F_lin = _rank2(_null_vector_normal(At[:, sel]).reshape(3, 3))
+        except DegenerateConfigurationError:
+            break
+        Fn = F_lin / np.linalg.norm(F_lin)
+        new, d = support(Fn, widen)
+        if np.array_equal(new, sel):
+            break
+        sel = new
+    if sel.sum() < _MIN_REFIT:
+        raise DegenerateConfigurationError(
+            f"U1, U2: the best model has only {int(sel.sum())} inliers, at least {_MIN_REFIT} are needed"
+        )
+    # Sampson refinement, made robust by reweighting passes (one for RANSAC,
+    # two for LMedS, whose band is looser) with Cauchy weights
+    # 1 / (1 + d / c^2), c = 2 threshold (RANSAC) or 2 sigma (LMedS). Tighter
+    # weights tie the fit to the starting F (the same bias as truncation).
+    c2 = 4.0 * threshold**2 if mode == "ransac" else 4.0 * scorer.lmeds_scale / 2.5**2 * float(scorer.cost(d))
+    for _ in range(1 if mode == "ransac" else 2):
+        Fn = _refine_sampson(Fn, At[:, sel], s1, s2, 1.0 / (1.0 + d[sel] / max(c2, 1e-24)))
+        new, d = support(Fn, widen)
+        if new.sum() < _MIN_REFIT:
+            break
+        sel = new
+    inl = support(Fn, 1.0)[0]
     F = _canonical(_denormalize(Fn, T1, T2))
     return RobustEstimate(F=F, inliers=inl, iterations=int(done))
 
@@ -624,10 +760,15 @@ def fundamental_ransac(
               N_{\text{iter}} = \frac{\log(1 - p)}{\log(1 - w^7)},
 
     with the number of samples adapted to the inlier ratio :math:`w` of the
-    best hypothesis so far and the confidence :math:`p`. The best hypothesis's
-    inliers (:math:`d_i < \tau^2`) are refitted with the normalised 8-point
-    algorithm and a Sampson refinement; the inlier set is updated and refitted
-    until it is stable (at most three times).
+    best hypothesis so far and the confidence :math:`p`. Samples are drawn in
+    batches; each batch is scored on a fixed random subset of 100
+    correspondences and its best few hypotheses on all of them. A new best
+    hypothesis is improved at once by linear refits on its support (LO-RANSAC).
+    The final model is refitted on the correspondences with
+    :math:`d_i < (1.5\tau)^2` (a wider band than the inlier test, against the
+    truncation bias) by the normalised 8-point algorithm and a Sampson
+    refinement with Cauchy weights :math:`1 / (1 + d_i / (2\tau)^2)`. Inliers
+    are :math:`d_i < \tau^2` under the final ``F``.
 
     Args:
         U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
@@ -671,8 +812,10 @@ def fundamental_lmeds(
 
     classifies inliers as :math:`d_i \le (2.5 \hat\sigma)^2`; their fraction
     :math:`w` sets the adaptive number of samples as in :func:`fundamental_ransac`.
-    The inliers are refitted with the normalised 8-point algorithm and a Sampson
-    refinement. LMedS breaks down with more than 50% outliers.
+    The inliers are refitted with the normalised 8-point algorithm and two
+    passes of Sampson refinement with Cauchy weights
+    :math:`1 / (1 + d_i / (2\hat\sigma)^2)`. LMedS breaks down with more than
+    50% outliers.
 
     Args:
         U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
@@ -777,20 +920,31 @@ def reprojection_error(
 
     Returns:
         ``(N,)`` errors in pixels; NaN for a point on a camera's principal
-        plane (no image).
+        plane (no image) and for a NaN row of ``X`` (a point at infinity from
+        :func:`~egtviz.geometry.triangulation.triangulate_linear`).
     """
     P1 = as_matrix(P1, "P1", (3, 4))
     P2 = as_matrix(P2, "P2", (3, 4))
-    Xw = as_points(X, "X", 3, min_count=1)
+    try:
+        Xw = np.asarray(X, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise GeometryError(f"X: expected a numeric array, got {type(X).__name__}") from exc
+    if Xw.ndim == 1 and Xw.shape[0] == 3:
+        Xw = Xw[None]
+    if Xw.ndim != 2 or Xw.shape[1] != 3:
+        raise GeometryError(f"X: expected shape (N, 3), got {Xw.shape}")
     u1, u2 = _pair(U1, U2, 1)
     if Xw.shape[0] != u1.shape[0]:
         raise GeometryError(f"X, U1: expected the same number of points, got {Xw.shape[0]} and {u1.shape[0]}")
-    Xh = _homogeneous(Xw)
+    Xh = np.empty((Xw.shape[0], 4))
+    Xh[:, :3] = Xw
+    Xh[:, 3] = 1.0
     total = np.zeros(Xw.shape[0])
     for P, u in ((P1, u1), (P2, u2)):
         x = Xh @ P.T
         w = x[:, 2]
-        ok = np.abs(w) > 1e-12 * np.linalg.norm(x, axis=1)
+        with np.errstate(invalid="ignore"):
+            ok = np.abs(w) > 1e-12 * np.linalg.norm(x, axis=1)
         wsafe = np.where(ok, w, 1.0)
         px = x[:, :2] / wsafe[:, None]
         total += np.where(ok, np.sum((px - u) ** 2, axis=1), np.nan)
@@ -798,47 +952,6 @@ def reprojection_error(
 
 
 # --------------------------------------------------------------------------- essential matrix
-
-
-def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
-    r"""Essential matrix from ``F`` and the calibrations (H&Z 2nd ed., eq. 9.12).
-
-    .. math:: E = K_2^T F K_1
-
-    Returned with unit Frobenius norm (positive rescaling only: the sign of
-    ``F`` is kept).
-
-    Args:
-        F: ``(3, 3)`` fundamental matrix, ``m2^T F m1 = 0``.
-        K1: ``(3, 3)`` calibration of camera 1.
-        K2: ``(3, 3)`` calibration of camera 2.
-    """
-    F = as_matrix(F, "F", (3, 3))
-    E = as_calibration(K2, "K2").T @ F @ as_calibration(K1, "K1")
-    n = np.linalg.norm(E)
-    if n == 0:
-        raise GeometryError("F: expected a nonzero matrix")
-    return E / n
-
-
-def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
-    r"""Fundamental matrix from ``E`` and the calibrations (H&Z 2nd ed., eq. 9.12).
-
-    .. math:: F = K_2^{-T} E K_1^{-1}
-
-    Returned with unit Frobenius norm (positive rescaling only).
-
-    Args:
-        E: ``(3, 3)`` essential matrix, ``x2^T E x1 = 0`` in normalised coordinates.
-        K1: ``(3, 3)`` calibration of camera 1.
-        K2: ``(3, 3)`` calibration of camera 2.
-    """
-    E = as_matrix(E, "E", (3, 3))
-    F = np.linalg.inv(as_calibration(K2, "K2")).T @ E @ np.linalg.inv(as_calibration(K1, "K1"))
-    n = np.linalg.norm(F)
-    if n == 0:
-        raise GeometryError("E: expected a nonzero matrix")
-    return F / n
 
 
 def decompose_essential(E: npt.ArrayLike) -> list[tuple[np.ndarray, np.ndarray]]:

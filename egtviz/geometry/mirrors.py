@@ -174,7 +174,7 @@ class HyperbolicMirror:
         X = as_points(X, "X", 3)
         return (X[:, 2] + self.e) ** 2 / self.a**2 - (X[:, 0] ** 2 + X[:, 1] ** 2) / self.b**2 - 1.0
 
-    def intersect(self, directions: npt.ArrayLike) -> MirrorHit:
+    def intersect(self, directions: npt.ArrayLike, *, rim_tol: float = 1e-12) -> MirrorHit:
         r"""Where rays from the focus meet the visible sheet, in closed form.
 
         Substituting :math:`X = \lambda d` in the quadric and multiplying by
@@ -196,6 +196,8 @@ class HyperbolicMirror:
 
         Args:
             directions: (N, 3) ray directions in the mirror frame (any length).
+            rim_tol: relative tolerance on the rim radius (rays hitting up to
+                ``rim_radius * (1 + rim_tol)`` from the axis count as hits).
 
         Returns:
             :class:`MirrorHit` ``(lam, hit)``: (N,) ``lam`` with :math:`X_h = \lambda d`, NaN where
@@ -210,7 +212,7 @@ class HyperbolicMirror:
         ok = (norm > 0) & (denom > 0)
         with np.errstate(divide="ignore", invalid="ignore"):
             lam = np.where(ok, self.b**2 / np.where(ok, denom, 1.0), np.nan)
-        hit = ok & (lam * rho <= self.rim_radius * (1.0 + 1e-12))
+        hit = ok & (lam * rho <= self.rim_radius * (1.0 + rim_tol))
         lam = np.where(hit, lam, np.nan)
         return MirrorHit(lam, hit)
 
@@ -309,7 +311,7 @@ class ParabolicMirror:
         X = as_points(X, "X", 3)
         return (X[:, 0] ** 2 + X[:, 1] ** 2 - self.h**2) / (2.0 * self.h) - X[:, 2]
 
-    def intersect(self, directions: npt.ArrayLike) -> MirrorHit:
+    def intersect(self, directions: npt.ArrayLike, *, rim_tol: float = 1e-12) -> MirrorHit:
         r"""Where rays from the focus meet the paraboloid, in closed form.
 
         Substituting :math:`X = \lambda d` gives
@@ -324,6 +326,7 @@ class ParabolicMirror:
 
         Args:
             directions: (N, 3) ray directions in the mirror frame (any length).
+            rim_tol: relative tolerance on the rim radius.
 
         Returns:
             ``(lam, hit)`` as for :meth:`HyperbolicMirror.intersect`: ``lam`` NaN
@@ -337,7 +340,7 @@ class ParabolicMirror:
             denom = np.where(d[:, 2] > 0, rho2 / (norm + d[:, 2]), norm - d[:, 2])
             ok = (norm > 0) & (denom > 0)
             lam = np.where(ok, self.h / np.where(ok, denom, 1.0), np.nan)
-        hit = ok & (lam * np.sqrt(rho2) <= self.rim_radius * (1.0 + 1e-12))
+        hit = ok & (lam * np.sqrt(rho2) <= self.rim_radius * (1.0 + rim_tol))
         lam = np.where(hit, lam, np.nan)
         return MirrorHit(lam, hit)
 

@@ -45,6 +45,7 @@ __all__ = [
     "panoramic_essential",
     "sample_epipolar_conics",
     "sample_plane_conic",
+    "sample_plane_conics",
 ]
 
 _DEGENERATE_REL = 1e-10
@@ -66,8 +67,10 @@ def _baseline(cam1: CatadioptricCamera, cam2: CatadioptricCamera) -> np.ndarray:
 
 
 def _homogeneous(m: np.ndarray) -> np.ndarray:
-    """Scale a homogeneous 3-vector: last coordinate 1, or unit norm if at infinity."""
+    """Scale a homogeneous 3-vector: last coordinate 1, or unit norm if at infinity; NaN if zero."""
     norm = np.linalg.norm(m)
+    if not norm > 0:
+        return np.full(3, np.nan)
     if abs(m[2]) < 1e-12 * norm:
         out = m / norm
         out[2] = 0.0
@@ -111,7 +114,10 @@ class PanoramicEpipoles:
     common points of all epipolar conics of the image, so they are given even
     when the corresponding ray misses the mirror (a blind-cone ray's *phantom*
     image); the ``*_visible`` flags say whether the mirror really shows them,
-    and the ``*_mirror`` points are NaN when it does not.
+    and the ``*_mirror`` points are NaN when it does not. One case has no
+    epipole at all: for a parabolic mirror, the ray straight up its axis is
+    the unified model's projection centre (every epipolar conic then contains
+    the whole line at infinity); that epipole is NaN and not visible.
     """
 
     e1: np.ndarray
@@ -279,46 +285,87 @@ def biconic(camera: CatadioptricCamera, d_current: npt.ArrayLike, d_desired: npt
     return _conics_from_normals(camera, n)
 
 
-def _great_circle_directions(normals: np.ndarray, n: int) -> np.ndarray:
-    """(N, n, 3) unit directions evenly spaced on the great circles with the given unit normals."""
+def _circle_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal ``(u, v)`` (each (N, 3)) spanning the planes with unit ``normals``."""
     helper = np.where(np.abs(normals[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     u = np.cross(normals, helper)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(normals, u)
-    theta = 2.0 * np.pi * np.arange(n) / n
-    return np.cos(theta)[None, :, None] * u[:, None, :] + np.sin(theta)[None, :, None] * v[:, None, :]
+    return u, np.cross(normals, u)
 
 
-def _split_runs(pixels: np.ndarray, visible: np.ndarray) -> list[np.ndarray]:
-    """Contiguous visible runs of a closed, evenly sampled curve as polylines."""
-    if not visible.any():
-        return []
-    if visible.all():
-        return [np.vstack([pixels, pixels[:1]])]  # closed loop
-    start = int(np.argmin(visible))  # first invisible sample: no run wraps past index 0 after rolling
-    vis = np.roll(visible, -start)
-    pix = np.roll(pixels, -start, axis=0)
-    edges = np.diff(np.concatenate([[0], vis.astype(np.int8), [0]]))
-    begins = np.flatnonzero(edges == 1)
-    ends = np.flatnonzero(edges == -1)
-    return [pix[b:e].copy() for b, e in zip(begins, ends, strict=True) if e - b >= 2]
+def _on_circle(u: np.ndarray, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    return np.cos(theta)[..., None] * u + np.sin(theta)[..., None] * v
+
+
+_BISECTIONS = 40
+
+
+def _visible_runs(visible: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """Runs of a partly visible closed sampling: ``(shift, begins, ends)`` in the order rolled by ``shift``.
+
+    Rolling by the index of the first invisible sample makes every run contiguous
+    (none straddles the start of the circle).
+    """
+    shift = int(np.argmin(visible))
+    vis = np.roll(visible, -shift).astype(np.int8)
+    edges = np.diff(np.concatenate([[0], vis, [0]]))
+    return shift, np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
 def _sample_circles(camera: CatadioptricCamera, normals: np.ndarray, n: int) -> list[list[np.ndarray]]:
+    """Visible arcs of the images of great circles, one list of polylines per normal.
+
+    Each arc's two ends are refined by bisection onto the boundary of the
+    visible field (the rim; a hyperbola's rim is always below its asymptote), so
+    arcs end on the rim's image instead of one sampling step short of it.
+    """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
         raise GeometryError(f"n: expected an integer >= 3, got {n!r}")
+    n = int(n)
     norm = np.linalg.norm(normals, axis=1)
-    good = np.isfinite(norm) & (norm > 0)
+    good = np.flatnonzero(np.isfinite(norm) & (norm > 0))
     out: list[list[np.ndarray]] = [[] for _ in range(len(normals))]
-    if not good.any():
+    if len(good) == 0:
         return out
-    unit = normals[good] / norm[good, None]
-    dirs = _great_circle_directions(unit, int(n))
-    proj = camera.project_directions(dirs.reshape(-1, 3))
-    pixels = proj.pixels.reshape(len(unit), int(n), 2)
-    visible = proj.visible.reshape(len(unit), int(n))
-    for k, row in enumerate(np.flatnonzero(good)):
-        out[row] = _split_runs(pixels[k], visible[k])
+    u, v = _circle_basis(normals[good] / norm[good, None])
+    step = 2.0 * np.pi / n
+    theta = step * np.arange(n)
+    proj = camera.project_directions(_on_circle(u[:, None, :], v[:, None, :], theta[None, :]).reshape(-1, 3))
+    pixels = proj.pixels.reshape(len(good), n, 2)
+    visible = proj.visible.reshape(len(good), n)
+
+    # Pass 1: runs, and the (visible, invisible) angle pairs around their ends.
+    runs: list[tuple[int, np.ndarray]] = []  # (circle, original sample indices of the run)
+    circle, th_in, th_out = [], [], []
+    for k in range(len(good)):
+        if visible[k].all():
+            out[good[k]] = [np.vstack([pixels[k], pixels[k, :1]])]  # closed loop
+            continue
+        if not visible[k].any():
+            continue
+        shift, begins, ends = _visible_runs(visible[k])
+        for b, e in zip(begins, ends, strict=True):
+            idx = (np.arange(b, e) + shift) % n
+            runs.append((k, idx))
+            circle += [k, k]
+            th_in += [theta[idx[0]], theta[idx[-1]]]
+            th_out += [theta[idx[0]] - step, theta[idx[-1]] + step]
+    if not runs:
+        return out
+
+    # Pass 2: bisect all run ends at once (visible side kept).
+    ci = np.asarray(circle)
+    lo, hi = np.asarray(th_in), np.asarray(th_out)
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        hit = camera.mirror.intersect(_on_circle(u[ci], v[ci], mid)).hit
+        lo = np.where(hit, mid, lo)
+        hi = np.where(hit, hi, mid)
+    ends_px = camera.project_directions(_on_circle(u[ci], v[ci], lo)).pixels
+
+    for j, (k, idx) in enumerate(runs):
+        poly = np.vstack([ends_px[2 * j], pixels[k, idx], ends_px[2 * j + 1]])
+        out[good[k]].append(poly)
     return out
 
 
@@ -329,9 +376,11 @@ def sample_plane_conic(camera: CatadioptricCamera, n_mirror: npt.ArrayLike, n: i
     whose ray meets the mirror (inside the rim, outside the blind cone),
     projects them, and splits them into contiguous runs. The sampling is
     rotated so that no run straddles the circle's start, so there is neither a
-    phantom branch nor a jump segment. A fully visible circle is returned as
-    one closed polyline (first point repeated at the end). Pixels may lie
-    outside the image rectangle; viewers clip them.
+    phantom branch nor a jump segment. Each arc is extended at both ends by the
+    point where the circle leaves the visible field (found by bisection), so it
+    ends on the rim's image. A fully visible circle is returned as one closed
+    polyline (first point repeated at the end). Pixels may lie outside the
+    image rectangle; viewers clip them.
 
     Args:
         camera: the catadioptric camera.
@@ -339,7 +388,7 @@ def sample_plane_conic(camera: CatadioptricCamera, n_mirror: npt.ArrayLike, n: i
         n: number of samples on the full circle (>= 3).
 
     Returns:
-        A list of (k, 2) pixel polylines, ``k >= 2``; empty if nothing is visible.
+        A list of (k, 2) pixel polylines, ``k >= 3``; empty if nothing is visible.
 
     Raises:
         GeometryError: on a zero normal.
@@ -349,6 +398,24 @@ def sample_plane_conic(camera: CatadioptricCamera, n_mirror: npt.ArrayLike, n: i
     if np.linalg.norm(normal) == 0.0:
         raise GeometryError("n_mirror: a zero normal defines no plane")
     return _sample_circles(camera, normal[None, :], n)[0]
+
+
+def sample_plane_conics(
+    camera: CatadioptricCamera, n_mirror: npt.ArrayLike, n: int = 256
+) -> list[list[np.ndarray]]:
+    """:func:`sample_plane_conic` for many planes at once (one vectorised projection).
+
+    Args:
+        camera: the catadioptric camera.
+        n_mirror: (N, 3) plane normals in the mirror frame.
+        n: number of samples on each full circle (>= 3).
+
+    Returns:
+        For each normal, its list of (k, 2) pixel polylines; an empty list for
+        a zero normal or a plane that misses the visible mirror.
+    """
+    camera = _check_camera(camera, "camera")
+    return _sample_circles(camera, as_points(n_mirror, "n_mirror", 3), n)
 
 
 def sample_epipolar_conics(

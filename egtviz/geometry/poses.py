@@ -9,6 +9,7 @@ in world coordinates, so a world point maps into the frame as
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -132,7 +133,7 @@ class Pose:
         """The same position with a new orientation."""
         return Pose(R, self.t)
 
-    @property
+    @cached_property
     def quat_wxyz(self) -> np.ndarray:
         """Orientation as a unit quaternion ``(w, x, y, z)`` (viser's order)."""
         return quat_wxyz_from_matrix(self.R)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -90,6 +91,11 @@ class PinholeSpec:
         return Pose.from_egt(egt_rotation_from_ypr(yaw, pitch, roll), self.position)
 
     def camera(self) -> PinholeCamera:
+        return self._camera
+
+    @cached_property
+    def _camera(self) -> PinholeCamera:
+        # Specs are immutable, so the core camera is built once per spec.
         return PinholeCamera(self.pose, self.intrinsics)
 
     @staticmethod
@@ -154,6 +160,10 @@ class PanoramicSpec:
         return ParabolicMirror(self.a)
 
     def camera(self):
+        return self._camera
+
+    @cached_property
+    def _camera(self):
         from ..geometry.catadioptric import CatadioptricCamera
 
         for name in ("focal_pixels", "a", "b"):

@@ -383,11 +383,19 @@ class ClientView:
             self._render(self.model.scene, change)
 
     def _render(self, scene: Scene, change: Any) -> None:
-        derived = compute_derived(scene)
+        t0 = time.perf_counter()
+        try:
+            derived = compute_derived(scene)
+        except Exception as exc:  # noqa: BLE001 - a bug below must not take the tab down
+            self._render_failure(scene, exc)
+            return
+        t1 = time.perf_counter()
         self.revision += 1
         with self.client.atomic():
             self._sync_panels(scene)
             self.scene3d.draw(scene, derived, moving=self._moving)
+            t2 = time.perf_counter()
+            highlighted = {int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")}
             for spec in scene.cameras:
                 plane = derived.image_planes.get(spec.name)
                 if plane is None:
@@ -395,20 +403,43 @@ class ClientView:
                 svg = image_plane_svg(
                     plane,
                     selected_point=scene.selected_point,
-                    highlighted={int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")},
+                    highlighted=highlighted,
                     show_labels=scene.options.show_labels,
                     revision=self.revision,
                 )
                 self.svgs[spec.name] = svg
                 self._html[spec.name].content = svg
+            t3 = time.perf_counter()
             self.readout = pair_markdown(derived)
             self.readout_md.content = self.readout
             self._sync_fields(scene)
+            t4 = time.perf_counter()
+        t5 = time.perf_counter()
         self.last_update_wall = time.time()
+        #: Seconds spent in each part of the last update (benchmark, docs/viewer.md).
+        self.breakdown = {"derived": t1 - t0, "scene3d": t2 - t1, "svg": t3 - t2, "fields": t4 - t3, "flush": t5 - t4}
         t_event = getattr(self, "_t_event", None)
         if t_event is not None:
-            self.timings.append(time.perf_counter() - t_event)
+            self.timings.append(t5 - t_event)
             self._t_event = None
+
+    def _render_failure(self, scene: Scene, exc: BaseException) -> None:
+        """Show what failed in every panel and as a notification; fields still follow the model."""
+        import traceback
+
+        traceback.print_exception(exc)
+        self.revision += 1
+        msg = f"cannot draw this scene: {type(exc).__name__}: {exc}"
+        with self.client.atomic():
+            self._sync_panels(scene)
+            for spec in scene.cameras:
+                svg = empty_svg(spec.name, spec.width, spec.height, msg)
+                self.svgs[spec.name] = svg
+                self._html[spec.name].content = svg
+            self.readout = f"**{msg}**"
+            self.readout_md.content = self.readout
+            self._sync_fields(scene)
+        self._notify_error(exc)
 
     def _sync_panels(self, scene: Scene) -> None:
         """(Re)build camera folders and image panels when the set of cameras changes."""
@@ -522,8 +553,22 @@ class EgtvizApp:
         self.views: dict[int, ClientView] = {}
         self._lock = threading.Lock()
         self._gone: set[int] = set()
+        self._frame_view(self.initial_scene)
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
+
+    def _frame_view(self, scene: Scene) -> None:
+        """Start the browser's view camera where it sees every camera and point (view layout only)."""
+        pts = [np.asarray(c.position, float) for c in scene.cameras]
+        if scene.points:
+            pts.append(scene.points_array().mean(axis=0))
+        centre = np.mean(pts, axis=0) if pts else np.zeros(3)
+        extent = max(6.0, max((float(np.linalg.norm(p - centre)) for p in pts), default=6.0))
+        cam = self.server.initial_camera
+        cam.look_at = tuple(centre)
+        cam.position = tuple(centre + extent * np.array([0.3, -1.45, 0.9]))
+        cam.up = (0.0, 0.0, 1.0)
+        cam.fov = float(np.radians(60.0))
 
     def _connect(self, client: viser.ClientHandle) -> None:
         model = SceneModel(self.initial_scene)

@@ -53,6 +53,30 @@ def _segments(polylines: np.ndarray, colours: np.ndarray) -> tuple[np.ndarray, n
     return seg[ok], col[ok]
 
 
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.shape == b.shape and bool(np.array_equal(a, b))
+    return a == b
+
+
+def _put(handle: Any, prop: str, value: Any) -> None:
+    """Assign a node property unless it already holds ``value``.
+
+    viser would skip an equal value too, but only after casting it (tens of
+    microseconds per property); this cache makes an unchanged node free.
+    """
+    cache = handle.__dict__.setdefault("_egt_cache", {})
+    if prop in cache and _same(cache[prop], value):
+        return
+    setattr(handle, prop, value)
+    cache[prop] = value.copy() if isinstance(value, np.ndarray) else value
+
+
+def _moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
+    return float(np.max(np.abs(np.asarray(current, float) - np.asarray(new, float)))) > tol
+
+
 def _slug(k: int) -> str:
     return f"/egt/cam_{k}"
 
@@ -81,10 +105,12 @@ class Scene3D:
         self._point_labels: list[Any] = []
         self._rays: dict[str, Any] = {}
         self._surf_key: Any = None
+        self._points_key: Any = None
+        self._points_prev = np.zeros((0, 3))
         self._surf_pts = np.zeros((0, 3))
         self._static()
         self.points = api.add_point_cloud(
-            "/egt/points", _EMPTY_PTS, (0, 0, 0), point_size=0.14, point_shape="circle", visible=False
+            "/egt/points", _EMPTY_PTS, (0, 0, 0), point_size=0.12, point_shape="circle", visible=False
         )
         self.selected = api.add_icosphere("/egt/selected", radius=0.16, color=(0, 0, 0), opacity=0.35, visible=False)
         self.baseline = api.add_line_segments(
@@ -121,7 +147,7 @@ class Scene3D:
     def _build_camera(self, spec: Any, k: int, colour: tuple[int, int, int]) -> dict[str, Any]:
         api = self.api
         root = _slug(k)
-        gizmo = api.add_transform_controls(root, scale=1.4, line_width=2.0, depth_test=False, opacity=0.85)
+        gizmo = api.add_transform_controls(root, scale=1.0, line_width=2.0, depth_test=False, opacity=0.85)
         name = spec.name
 
         def _cb(event: viser.TransformControlsEvent, name: str = name) -> None:
@@ -181,10 +207,16 @@ class Scene3D:
         X = scene.points_array()
         n = len(X)
         opts = scene.options
+        key = (X.tobytes(), opts.show_labels, scene.selected_point,
+               frozenset(k for k in scene.locked if k.startswith("point:")))
+        if key == self._points_key:
+            return  # a camera moved: nothing about the points changed
+        prev = self._points_prev
+        self._points_key, self._points_prev = key, X
         if n:
-            self.points.points = X.astype(np.float32)
-            self.points.colors = point_colours(n)
-        self.points.visible = n > 0
+            _put(self.points, "points", X.astype(np.float32))
+            _put(self.points, "colors", point_colours(n))
+        _put(self.points, "visible", n > 0)
         # Labels: one per point, 1-based.
         while len(self._point_labels) > n:
             self._point_labels.pop().remove()
@@ -194,8 +226,9 @@ class Scene3D:
                                    anchor="bottom-left")
             )
         for i, h in enumerate(self._point_labels):
-            h.position = X[i] + np.array([0.08, 0.0, 0.08])
-            h.visible = opts.show_labels
+            if i >= len(prev) or not np.array_equal(prev[i], X[i]):
+                _put(h, "position", X[i] + np.array([0.08, 0.0, 0.08]))
+            _put(h, "visible", opts.show_labels)
         # Gizmos: every point while there are few, else only the selected one.
         sel = scene.selected_point
         want = set(range(n)) if n <= MAX_POINT_GIZMOS else ({sel} if sel is not None else set())
@@ -206,7 +239,7 @@ class Scene3D:
             g = self._point_gizmos.get(i)
             if g is None:
                 g = self.api.add_transform_controls(
-                    f"/egt/pgizmo_{i}", scale=0.55, line_width=1.5, disable_rotations=True, depth_test=False,
+                    f"/egt/pgizmo_{i}", scale=0.35, line_width=1.5, disable_rotations=True, depth_test=False,
                     opacity=0.7, position=tuple(X[i]),
                 )
 
@@ -215,17 +248,17 @@ class Scene3D:
 
                 g.on_update(_cb)
                 self._point_gizmos[i] = g
-            elif not np.allclose(g.position, X[i], atol=1e-9):
+            elif _moved(g.position, X[i]):
                 g.position = X[i]
             locked = f"point:{i}" in scene.locked
-            g.disable_axes = locked
-            g.disable_sliders = locked
+            _put(g, "disable_axes", locked)
+            _put(g, "disable_sliders", locked)
         if sel is not None and sel < n:
-            self.selected.position = X[sel]
-            self.selected.color = point_rgb(sel)
-            self.selected.visible = True
+            _put(self.selected, "position", X[sel])
+            _put(self.selected, "color", point_rgb(sel))
+            _put(self.selected, "visible", True)
         else:
-            self.selected.visible = False
+            _put(self.selected, "visible", False)
 
     # -- everything ---------------------------------------------------------------
 
@@ -242,16 +275,17 @@ class Scene3D:
             wxyz, position = derived.poses[name]
             gizmo = nodes["gizmo"]
             if name != moving:
-                if not np.allclose(gizmo.position, position, atol=1e-9):
+                # Compare with the gizmo's live pose (a drag changes it), never with a cache.
+                if _moved(gizmo.position, position):
                     gizmo.position = position
-                if not np.allclose(gizmo.wxyz, wxyz, atol=1e-9):
+                if _moved(gizmo.wxyz, wxyz) and _moved(gizmo.wxyz, -np.asarray(wxyz)):
                     gizmo.wxyz = wxyz
             locked = name in scene.locked
-            gizmo.disable_axes = locked
-            gizmo.disable_sliders = locked
-            gizmo.disable_rotations = locked
-            nodes["axes"].visible = opts.show_frames
-            nodes["label"].visible = opts.show_labels
+            _put(gizmo, "disable_axes", locked)
+            _put(gizmo, "disable_sliders", locked)
+            _put(gizmo, "disable_rotations", locked)
+            _put(nodes["axes"], "visible", opts.show_frames)
+            _put(nodes["label"], "visible", opts.show_labels)
             if spec.kind == "pinhole":
                 fr = derived.frustums[name]
                 fov, aspect = float(fr["fov"]), float(fr["aspect"])
@@ -260,67 +294,67 @@ class Scene3D:
                 # viser normalises the frustum to unit volume; undo that so the image plane sits at IMAGE_PLANE_DEPTH.
                 scale = IMAGE_PLANE_DEPTH * float(np.cbrt(x * y / 3.0))
                 fru = nodes["frustum"]
-                fru.fov = fov
-                fru.aspect = aspect
-                fru.scale = scale
+                _put(fru, "fov", fov)
+                _put(fru, "aspect", aspect)
+                _put(fru, "scale", scale)
                 content = derived.image_in_3d.get(name)
                 if content is not None:
                     P = np.asarray(content["points"], float)
                     ok = np.all(np.isfinite(P), axis=1) if len(P) else np.zeros(0, bool)
                     if ok.any():
-                        nodes["img_pts"].points = P[ok].astype(np.float32)
-                        nodes["img_pts"].colors = colours[ok]
-                    nodes["img_pts"].visible = bool(ok.any())
+                        _put(nodes["img_pts"], "points", P[ok].astype(np.float32))
+                        _put(nodes["img_pts"], "colors", colours[ok])
+                    _put(nodes["img_pts"], "visible", bool(ok.any()))
                     L = np.asarray(content["lines"], float)
                     seg, col = _segments(L, colours) if len(L) else (np.zeros((0, 2, 3)), None)
                     if len(seg):
-                        nodes["img_lines"].points = seg.astype(np.float32)
-                        nodes["img_lines"].colors = col
-                    nodes["img_lines"].visible = len(seg) > 0
+                        _put(nodes["img_lines"], "points", seg.astype(np.float32))
+                        _put(nodes["img_lines"], "colors", col)
+                    _put(nodes["img_lines"], "visible", len(seg) > 0)
             else:
                 v, f = derived.mirror_meshes[name]
-                nodes["mirror"].vertices = np.asarray(v, np.float32)
-                nodes["mirror"].faces = np.asarray(f, np.uint32)
+                _put(nodes["mirror"], "vertices", np.asarray(v, np.float32))
+                _put(nodes["mirror"], "faces", np.asarray(f, np.uint32))
                 ccd = derived.ccd_centres.get(name)
                 if ccd is not None:
                     # The CCD is drawn in the camera's frame: its offset below the focus along the mirror axis.
                     off = float(np.linalg.norm(np.asarray(ccd) - np.asarray(position)))
-                    nodes["ccd"].position = (0.0, 0.0, -off)
+                    _put(nodes["ccd"], "position", (0.0, 0.0, -off))
             rays = self._rays[name]
             seg, col = _segments(derived.rays.get(name, np.zeros((0, 2, 3))), colours)
             if len(seg):
-                rays.points = seg.astype(np.float32)
-                rays.colors = col
-            rays.visible = opts.show_rays and len(seg) > 0
+                _put(rays, "points", seg.astype(np.float32))
+                _put(rays, "colors", col)
+            _put(rays, "visible", opts.show_rays and len(seg) > 0)
 
         self._sync_points(scene)
 
         if derived.baseline is not None:
-            self.baseline.points = np.asarray(derived.baseline, np.float32)[None]
-            self.baseline.visible = True
+            _put(self.baseline, "points", np.asarray(derived.baseline, np.float32)[None])
+            _put(self.baseline, "visible", True)
         else:
-            self.baseline.visible = False
+            _put(self.baseline, "visible", False)
 
         plane = derived.epipolar_plane
         if plane is not None and opts.show_planes:
             V = np.asarray(plane, np.float32)
             faces = np.array([[0, i, i + 1] for i in range(1, len(V) - 1)], np.uint32)
-            self.epiplane.vertices = V
-            self.epiplane.faces = faces
+            _put(self.epiplane, "vertices", V)
+            _put(self.epiplane, "faces", faces)
             sel = scene.selected_point
-            self.epiplane.color = point_rgb(sel) if sel is not None else (120, 120, 120)
-            self.epiplane.visible = True
+            _put(self.epiplane, "color", point_rgb(sel) if sel is not None else (120, 120, 120))
+            _put(self.epiplane, "visible", True)
         else:
-            self.epiplane.visible = False
+            _put(self.epiplane, "visible", False)
 
         if scene.surfaces and opts.show_surfaces:
             if self._surf_key is not scene.surfaces:
                 self._surf_key, self._surf_pts = scene.surfaces, scene.surface_points()[0]
             S = self._surf_pts
-            self.surfaces.points = np.asarray(S, np.float32)
-            self.surfaces.visible = len(S) > 0
+            _put(self.surfaces, "points", np.asarray(S, np.float32))
+            _put(self.surfaces, "visible", len(S) > 0)
         else:
-            self.surfaces.visible = False
+            _put(self.surfaces, "visible", False)
 
     def remove_all(self) -> None:
         """Remove every node (client teardown)."""

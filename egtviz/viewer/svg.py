@@ -199,47 +199,55 @@ def image_plane_svg(
                 f'stroke-width="{_f(lw * 1.5)}" stroke-dasharray="{_f(lw * 6)} {_f(lw * 4)}"/>'
             )
 
+    # Bulk formatting: one %-template per element kind (a 200-point panel in about a millisecond).
+    dp = min(6, max(1, 3 - math.floor(math.log10(s))))
+    c = f"%.{dp}f"
     if plane.lines is not None:
-        L = np.asarray(plane.lines, float)
-        for i in range(len(L)):
-            seg = L[i]
-            if not np.all(np.isfinite(seg)):
-                continue
-            width = lw * (3.0 if i == selected_point else 1.2)
-            out.append(
-                f'<line data-kind="epipolar-line" data-index="{i}" x1="{_f(seg[0, 0])}" y1="{_f(seg[0, 1])}" '
-                f'x2="{_f(seg[1, 0])}" y2="{_f(seg[1, 1])}" stroke="{point_colour(i)}" stroke-width="{_f(width)}"/>'
-            )
+        L = np.asarray(plane.lines, float).reshape(-1, 4)
+        ok = np.all(np.isfinite(L), axis=1)
+        tpl = (f'<line data-kind="epipolar-line" data-index="%d" x1="{c}" y1="{c}" x2="{c}" y2="{c}" '
+               f'stroke="%s"%s/>')
+        thick = f' stroke-width="{_f(lw * 3.0)}"'
+        body = [
+            tpl % (i, x1, y1, x2, y2, point_colour(i), thick if i == selected_point else "")
+            for i, (x1, y1, x2, y2) in zip(np.flatnonzero(ok).tolist(), L[ok].tolist())
+        ]
+        out.append(f'<g stroke-width="{_f(lw * 1.2)}">{"".join(body)}</g>')
 
     if plane.conics is not None:
+        body = []
         for i, pieces in enumerate(plane.conics):
-            width = lw * (3.0 if i == selected_point else 1.2)
+            extra = f' stroke-width="{_f(lw * 3.0)}"' if i == selected_point else ""
             for piece in pieces:
                 for run in _finite_runs(piece):
-                    out.append(
-                        f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{_polyline_points(run)}" '
-                        f'fill="none" stroke="{point_colour(i)}" stroke-width="{_f(width)}"/>'
+                    pts = ((c + "," + c + " ") * len(run)) % tuple(run.ravel().tolist())
+                    body.append(
+                        f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{pts[:-1]}" '
+                        f'stroke="{point_colour(i)}"{extra}/>'
                     )
+        out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{"".join(body)}</g>')
 
     P = np.asarray(plane.points, float).reshape(-1, 2)
     in_image = np.asarray(plane.in_image, bool).reshape(-1)
-    for i in np.flatnonzero(in_image):
-        x, y = P[i]
-        colour = point_colour(int(i))
+    idx = np.flatnonzero(in_image).tolist()
+    xy = P[in_image].tolist()
+    dl = r_pt * 1.4
+    ring_tpl = (f'<circle cx="{c}" cy="{c}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
+                f'stroke-width="{_f(lw * 2)}" data-selected="%s"/>')
+    pt_tpl = f'<g data-kind="point" data-index="%d">%s<circle cx="{c}" cy="{c}" r="{_f(r_pt)}" fill="%s"/>%s</g>'
+    lab_tpl = f'<text x="{c}" y="{c}" fill="%s" stroke="#fff" stroke-width="{_f(lw * 3)}">%d</text>'
+    body = []
+    for i, (x, y) in zip(idx, xy):
+        colour = point_colour(i)
         mark = ""
-        if i == selected_point or int(i) in highlighted:
-            mark = (f'<circle cx="{_f(x)}" cy="{_f(y)}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
-                    f'stroke-width="{_f(lw * 2)}" data-selected="{"true" if i == selected_point else "false"}"/>')
-        label = (
-            f'<text x="{_f(x + r_pt * 1.4)}" y="{_f(y - r_pt * 1.4)}" font-size="{_f(font)}" fill="{colour}" '
-            f'font-weight="bold" paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 3)}">{i + 1}</text>'
-            if show_labels
-            else ""
-        )
-        out.append(
-            f'<g data-kind="point" data-index="{i}">{mark}<circle cx="{_f(x)}" cy="{_f(y)}" r="{_f(r_pt)}" '
-            f'fill="{colour}" stroke="#000" stroke-width="{_f(lw * 0.6)}"/>{label}</g>'
-        )
+        if i == selected_point or i in highlighted:
+            mark = ring_tpl % (x, y, "true" if i == selected_point else "false")
+        label = lab_tpl % (x + dl, y - dl, colour, i + 1) if show_labels else ""
+        body.append(pt_tpl % (i, mark, x, y, colour, label))
+    out.append(
+        f'<g stroke="#000" stroke-width="{_f(lw * 0.6)}" font-size="{_f(font)}" font-weight="bold" '
+        f'paint-order="stroke">{"".join(body)}</g>'
+    )
     out.append("</g>")  # end of clipped group
 
     # Epipoles: inside (a cross), outside (an arrow at the border), at infinity (an arrow and a label).

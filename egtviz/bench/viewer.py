@@ -1,0 +1,175 @@
+"""Viewer latency: server time per gizmo event, and browser time from the update to the changed SVG.
+
+Method (also in ``docs/viewer.md``):
+
+* **Server.** A real :class:`viser.ViserServer` on a free local port, the app,
+  and one connected tab (a websocket client that drains messages, so viser
+  really serialises and sends every update). Each event moves camera 1's gizmo
+  by 1 cm exactly as viser does before it runs our callback (the handle's
+  pose and timestamp are set, then ``on_update`` fires); the time is measured
+  from the callback's entry to the exit of the ``client.atomic()`` block that
+  carries the 3D scene, both panels, the read-out and the fields. 200 events,
+  5 ms apart; p50 and p99.
+* **Browser.** The same with headless Chromium as the tab. Each update gives
+  the SVGs a new ``data-rev``; a ``MutationObserver`` in the page records
+  ``performance.timeOrigin + performance.now()`` when an SVG with a new
+  revision enters the DOM. The server records ``time.time()`` at the end of
+  the atomic update for that revision. Both clocks are the same machine's
+  wall clock, so the difference is the time from the end of the server update
+  to the changed SVG in the page (websocket, decoding, React). 60 events,
+  150 ms apart so that each update is rendered on its own; median.
+"""
+
+from __future__ import annotations
+
+import time
+import types
+from typing import Any
+
+import numpy as np
+
+EVENTS = 200
+BROWSER_EVENTS = 60
+
+_OBSERVER_JS = """() => {
+  window.__egtRev = {};
+  const seen = new Set();
+  const scan = () => {
+    const now = performance.timeOrigin + performance.now();
+    for (const s of document.querySelectorAll('svg[data-egtviz="image-plane"]')) {
+      const key = s.dataset.camera + '@' + s.dataset.rev;
+      if (!seen.has(key)) { seen.add(key); window.__egtRev[key] = now; }
+    }
+  };
+  scan();
+  new MutationObserver(scan).observe(document.body, {subtree: true, childList: true, attributes: true});
+}"""
+
+
+def _scenes(n_points: int) -> dict[str, Any]:
+    from ..scene import SceneModel, default_scene, panoramic_scene
+
+    out = {}
+    for label, factory in (("pin-hole", default_scene), ("panoramic", panoramic_scene)):
+        model = SceneModel(factory())
+        X = model.scene.points_array()
+        model.randomize_points(n_points, seed=0, center=tuple(X.mean(axis=0)), extent=2.0)
+        out[label] = model.scene
+    return out
+
+
+def _drag_event(gizmo: Any, position: np.ndarray) -> Any:
+    """What viser does on a TransformControlsUpdateMessage before calling our callback."""
+    gizmo._impl.position = np.asarray(position, float)
+    gizmo._impl_aux.last_updated = time.time()
+    return types.SimpleNamespace(target=gizmo, phase="update", client=None, client_id=None)
+
+
+def _drive(view: Any, name: str, n: int, spacing: float) -> list[float]:
+    gizmo = view.scene3d._cams[name]["gizmo"]
+    start = np.array(gizmo.position, float)
+    view.timings.clear()
+    revs = []
+    for k in range(n):
+        view._camera_gizmo_event(name, _drag_event(gizmo, start + np.array([0.01 * (k % 50), 0.0, 0.0])))
+        revs.append((view.revision, view.last_update_wall))
+        time.sleep(spacing)
+    return revs
+
+
+def server_latency(scene: Any, n: int = EVENTS) -> dict[str, float]:
+    """p50 / p99 (ms) from a gizmo event to the end of the atomic update, and the median breakdown."""
+    from ..viewer.headless import start_headless
+
+    server, app, fakes, views = start_headless(scene)
+    try:
+        view = views[0]
+        name = scene.cameras[0].name
+        breakdown: list[dict] = []
+        gizmo = view.scene3d._cams[name]["gizmo"]
+        start = np.array(gizmo.position, float)
+        view.timings.clear()
+        for k in range(n):
+            view._camera_gizmo_event(name, _drag_event(gizmo, start + np.array([0.01 * (k % 50), 0.0, 0.0])))
+            breakdown.append(dict(view.breakdown))
+            time.sleep(0.005)
+        t = np.array(view.timings) * 1e3
+        parts = {k: float(np.median([b[k] for b in breakdown]) * 1e3) for k in breakdown[0]}
+        return {"p50": float(np.percentile(t, 50)), "p99": float(np.percentile(t, 99)), **parts}
+    finally:
+        for f in fakes:
+            f.close()
+        server.stop()
+
+
+def browser_latency(scene: Any, n: int = BROWSER_EVENTS, *, width: int = 1600, height: int = 900,
+                    spacing: float = 0.15) -> float | None:
+    """Median ms from the end of the server update to the changed SVG in headless Chromium (None: no browser)."""
+    import viser
+
+    from ..viewer.app import EgtvizApp
+    from ..viewer.browser import chromium, chromium_available, open_viewer
+
+    if not chromium_available():
+        return None
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        app = EgtvizApp(server, scene)
+        with chromium() as browser:
+            page = open_viewer(browser, f"http://127.0.0.1:{server.get_port()}", n_panels=len(scene.cameras),
+                               width=width, height=height)
+            view = app.wait_for_view()[0]
+            page.evaluate(_OBSERVER_JS)
+            time.sleep(1.0)
+            name = scene.cameras[0].name
+            revs = _drive(view, name, n, spacing=spacing)
+            time.sleep(1.0)
+            seen = page.evaluate("() => window.__egtRev")
+            page.close()
+        lat = []
+        for rev, t_server in revs:
+            key = f"{name}@{rev}"
+            if key in seen:
+                lat.append(seen[key] - t_server * 1e3)
+        return float(np.median(lat)) if lat else float("nan")
+    finally:
+        server.stop()
+
+
+def run_viewer_bench(events: int = EVENTS, browser: bool = True) -> list[dict]:
+    """Rows ``{case, ours_ms, opencv_ms: None, ratio: None, note}`` for the pin-hole and panoramic pairs."""
+    rows: list[dict] = []
+    for n_points in (8, 200):
+        for label, scene in _scenes(n_points).items():
+            try:
+                s = server_latency(scene, events)
+            except Exception as exc:  # noqa: BLE001 - report, do not hide the other rows
+                rows.append({"case": f"viewer server, {label} pair, {n_points} points", "ours_ms": float("nan"),
+                             "opencv_ms": None, "ratio": None, "note": f"failed: {type(exc).__name__}: {exc}"})
+                continue
+            note = (f"median parts: derived {s['derived']:.2f}, 3D {s['scene3d']:.2f}, SVG {s['svg']:.2f}, "
+                    f"fields {s['fields']:.2f}, flush {s['flush']:.2f} ms")
+            for q in ("p50", "p99"):
+                rows.append({"case": f"viewer server, {label} pair, {n_points} points, gizmo event ({q})",
+                             "ours_ms": s[q], "opencv_ms": None, "ratio": None, "note": note})
+            if browser:
+                try:
+                    b = browser_latency(scene)
+                    note = "update -> changed SVG in headless Chromium (MutationObserver)"
+                except Exception as exc:  # noqa: BLE001
+                    b, note = float("nan"), f"failed: {type(exc).__name__}: {exc}"
+                if b is not None:
+                    rows.append({"case": f"viewer browser, {label} pair, {n_points} points (median)",
+                                 "ours_ms": b, "opencv_ms": None, "ratio": None, "note": note})
+    return rows
+
+
+def main() -> int:
+    from .runner import format_table
+
+    print(format_table(run_viewer_bench()))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,521 @@
+r"""Panoramic camera on a holonomic mobile robot: the auto-epipolar servo (EGT reference, section 7).
+
+The robot's state is :math:`(x, y, \theta)` and its inputs are the body-frame
+velocities :math:`(v_x, v_y, \omega)`. A central catadioptric camera (hyperbolic
+mirror, axis vertical, focus :data:`CAMERA_HEIGHT` above the ground) rides on it,
+its mirror frame equal to the robot frame. Only the image drives the controller:
+current and desired pixels are back-projected to unit rays :math:`d_i`,
+:math:`d^*_i` in the mirror frame (the camera's model, not its pose).
+
+**Bi-conics.** For each pair, the *bi-conic* is the image of the plane through
+the focus containing both rays (:func:`egtviz.geometry.panoramic_epipolar.biconic`),
+with normal :math:`n_i = d_i \times d^*_i`. If the two views had the same
+orientation, every such plane would contain the baseline: all bi-conics would meet
+in the same two points (the epipoles) and the stack :math:`N = [n_1; \dots; n_N]`
+would have rank 2. Its smallest eigenvalue
+:math:`\sigma(\alpha) = \lambda_{\min}(\sum_i n_i(\alpha) n_i(\alpha)^T)`, with the
+desired rays turned by :math:`\alpha` about the axis,
+:math:`n_i(\alpha) = d_i \times R_z(\alpha) d^*_i`, is an image-only measure of the
+orientation disagreement; it vanishes at :math:`\alpha = \theta^* - \theta`.
+
+**Step 1** (rotation): :math:`\hat\alpha = \arg\min_\alpha \sigma(\alpha)` (a
+vectorised grid search refined around its minimum) and
+:math:`\omega = k_\omega \hat\alpha`, :math:`v = 0`, until
+:math:`|\hat\alpha|` is below ``switch_rad``.
+
+**Step 2** (translation): while the rays still show parallax (mean angle above
+``freeze_angle``) the baseline is the common line of the planes, the
+eigenvector :math:`b` of :math:`\lambda_{\min}` at :math:`\hat\alpha`; its sign is
+chosen so that the scene points lie in front of both views (cheirality vote). The
+robot translates along it, :math:`(v_x, v_y) = k_v\, s_\angle(t)\, b_{xy}`, with
+:math:`s_\angle` the mean angle between the current and (derotated) desired rays,
+while :math:`\omega = k_\omega \hat\alpha` keeps the orientation. The run ends when
+the feature distance :math:`s(t)` (mean pixel distance between current and
+desired features) is below ``stop_px``. Closer than that, the planes' common
+line drowns in the image noise, so the last centimetres follow the ray-alignment
+gradient :math:`-\sum_i (I - d_i d_i^T)(d_i - \tilde d^*_i)` instead (it points
+along the baseline too, and averages the noise out).
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from egtviz.geometry.catadioptric import CatadioptricCamera
+from egtviz.geometry.mirrors import HyperbolicMirror
+from egtviz.geometry.panoramic_epipolar import biconic
+from egtviz.geometry.poses import Pose
+
+from .result import Recorder, ServoResult
+
+__all__ = [
+    "CAMERA_HEIGHT",
+    "default_camera",
+    "default_scene",
+    "draw_start_state",
+    "mirror_pose",
+    "rotation_measure",
+    "estimate_rotation",
+    "baseline_direction",
+    "control_law",
+    "step_state",
+    "simulate_panoramic",
+]
+
+#: Height of the mirror focus above the ground, metres.
+CAMERA_HEIGHT = 0.5
+
+
+def default_camera() -> CatadioptricCamera:
+    """EGT's default hyperbolic mirror (a = 3, b = 1) scaled to a robot: a = 3 cm, b = 1 cm, rim 2 cm.
+
+    The CCD (f = 1100 px) images the rim as a circle of about 223 px around (320, 240),
+    so the whole mirror fits the 640 x 480 image. Field of view: from straight down
+    to about 60 degrees above the horizon. The pose is the identity: this is the
+    controller's model of the camera (rays come out in the mirror frame).
+    """
+    K = np.array([[1100.0, 0.0, 320.0], [0.0, 1100.0, 240.0], [0.0, 0.0, 1.0]])
+    return CatadioptricCamera(Pose(), HyperbolicMirror(0.03, 0.01), K, 640, 480)
+
+
+def default_scene(n_points: int = 10) -> np.ndarray:
+    """(n, 3) world points on a ring 4.5-6 m around the target, 0-2.5 m high (fixed generator).
+
+    The spread in height matters: the rotation about the vertical axis is seen by
+    the bi-conics through the rays' elevations.
+    """
+    rng = np.random.default_rng(10_000)
+    ang = rng.uniform(-np.pi, np.pi, n_points)
+    r = rng.uniform(4.5, 6.0, n_points)
+    z = rng.uniform(0.0, 2.5, n_points)
+    return np.column_stack([r * np.cos(ang), r * np.sin(ang), z])
+
+
+def mirror_pose(state: npt.ArrayLike) -> Pose:
+    r"""Mirror frame of the robot at ``(x, y, theta)``: :math:`R_z(\theta)`, focus at ``(x, y, CAMERA_HEIGHT)``."""
+    x, y, th = (float(v) for v in state)
+    c, s = math.cos(th), math.sin(th)
+    return Pose(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), [x, y, CAMERA_HEIGHT])
+
+
+def draw_start_state(
+    rng: np.random.Generator,
+    target: npt.ArrayLike = (0.0, 0.0, 0.0),
+    heading_range: tuple[float, float] = (np.radians(30.0), np.radians(120.0)),
+    distance_range: tuple[float, float] = (1.0, 3.0),
+) -> np.ndarray:
+    """Start ``(x, y, theta)``: heading ``heading_range`` off (either sign), ``distance_range`` away in a random direction."""
+    tx, ty, tth = (float(v) for v in target)
+    dth = rng.uniform(*heading_range) * rng.choice([-1.0, 1.0])
+    d = rng.uniform(*distance_range)
+    phi = rng.uniform(-np.pi, np.pi)
+    return np.array([tx + d * math.cos(phi), ty + d * math.sin(phi), _wrap(tth + dth)])
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+# ---------------------------------------------------------------- control law (pure functions)
+def _rotz_rows(d: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """``R_z(alpha) d`` for every alpha (A,) and row d (N, 3): (A, N, 3)."""
+    c, s = np.cos(alpha)[:, None], np.sin(alpha)[:, None]
+    x, y, z = d[:, 0][None], d[:, 1][None], d[:, 2][None]
+    return np.stack([c * x - s * y, s * x + c * y, np.broadcast_to(z, (len(alpha), d.shape[0]))], axis=-1)
+
+
+def _normal_scatter(d: np.ndarray, d_star: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    r""":math:`\sum_i n_i n_i^T` (A, 3, 3) with :math:`n_i = d_i \times R_z(\alpha) d^*_i`."""
+    r = _rotz_rows(d_star, alpha)
+    a0, a1, a2 = d[:, 0], d[:, 1], d[:, 2]
+    n = np.stack([a1 * r[..., 2] - a2 * r[..., 1], a2 * r[..., 0] - a0 * r[..., 2], a0 * r[..., 1] - a1 * r[..., 0]], -1)
+    return np.einsum("ani,anj->aij", n, n)
+
+
+def _min_eig_sym3(M: np.ndarray) -> np.ndarray:
+    """Smallest eigenvalue of symmetric 3x3 matrices (A, 3, 3), closed form (Smith 1961), vectorised."""
+    a00, a11, a22 = M[:, 0, 0], M[:, 1, 1], M[:, 2, 2]
+    a01, a02, a12 = M[:, 0, 1], M[:, 0, 2], M[:, 1, 2]
+    q = (a00 + a11 + a22) / 3.0
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    b00, b11, b22 = a00 - q, a11 - q, a22 - q
+    p = np.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1) / 6.0)
+    ps = np.where(p > 0, p, 1.0)
+    det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02) + a02 * (a01 * a12 - b11 * a02)
+    r = np.clip(det / (2.0 * ps**3), -1.0, 1.0)
+    phi = np.arccos(r) / 3.0
+    return np.where(p > 0, q + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0), q)
+
+
+def rotation_measure(d: np.ndarray, d_star: np.ndarray, alpha: npt.ArrayLike = 0.0) -> np.ndarray:
+    r"""The bi-conic measure :math:`\sigma(\alpha) = \lambda_{\min}(\sum_i n_i n_i^T)`; zero when the orientations agree.
+
+    Args:
+        d: (N, 3) current unit rays (mirror frame).
+        d_star: (N, 3) desired unit rays (desired mirror frame).
+        alpha: trial rotation(s) of the desired rays about the mirror axis.
+    """
+    a = np.atleast_1d(np.asarray(alpha, dtype=float))
+    out = _min_eig_sym3(_normal_scatter(d, d_star, a))
+    return out if np.ndim(alpha) else out[:1].reshape(())
+
+
+def estimate_rotation(
+    d: np.ndarray, d_star: np.ndarray, n_grid: int = 180, refine: int = 3, near: float | None = None
+) -> float:
+    r"""The orientation offset :math:`\hat\alpha = \arg\min \sigma(\alpha)` in :math:`(-\pi, \pi]`: the desired
+    frame turned by :math:`\hat\alpha` about the axis has the current orientation (:math:`\hat\alpha = \theta^* - \theta`).
+
+    A grid of ``n_grid`` angles (or 21 angles within 0.2 rad of ``near``, the previous
+    step's estimate, once the robot turns slowly), then ``refine`` rounds of a 21-point grid shrinking
+    around the best, then a parabola through the last three samples.
+    """
+    if near is None:
+        alpha = np.linspace(-np.pi, np.pi, n_grid, endpoint=False)
+        half = 2.0 * np.pi / n_grid
+    else:  # warm start: a local grid of +-0.2 rad around the previous estimate
+        alpha = near + np.linspace(-0.2, 0.2, 21)
+        half = 0.02
+    f = rotation_measure(d, d_star, alpha)
+    best = float(alpha[int(np.argmin(f))])
+    for _ in range(refine):
+        a = best + np.linspace(-half, half, 21)
+        f = rotation_measure(d, d_star, a)
+        i = int(np.argmin(f))
+        best = float(a[i])
+        half = 2.0 * half / 20.0
+    a = best + np.array([-half, 0.0, half])
+    f = rotation_measure(d, d_star, a)
+    den = f[0] - 2.0 * f[1] + f[2]
+    if den > 0:
+        best += 0.5 * half * (f[0] - f[2]) / den
+    return _wrap(best)
+
+
+def baseline_direction(d: np.ndarray, d_star_aligned: np.ndarray) -> np.ndarray | None:
+    r"""Unit baseline (current focus to desired focus, current frame): the common line of the bi-conic planes.
+
+    :math:`b` is the eigenvector of the smallest eigenvalue of :math:`\sum n_i n_i^T`
+    (:math:`n_i = d_i \times \tilde d^*_i`, desired rays already derotated); its sign
+    makes the points lie in front of both views: :math:`\rho d_i = s b + \rho^* \tilde d^*_i`
+    with :math:`\rho^* > 0` gives :math:`s\,(d_i \times b)\cdot(d_i \times \tilde d^*_i) < 0`.
+    ``None`` when the rays all coincide (the views coincide).
+    """
+    n = np.cross(d, d_star_aligned)
+    M = n.T @ n
+    if np.trace(M) < 1e-24:
+        return None
+    w, v = np.linalg.eigh(M)
+    b = v[:, 0]
+    vote = float(np.einsum("ij,ij->", np.cross(d, b[None, :]), n))
+    return -b if vote > 0 else b
+
+
+def control_law(
+    d: np.ndarray,
+    d_star: np.ndarray,
+    *,
+    phase: int,
+    k_omega: float,
+    k_v: float,
+    switch_rad: float,
+    freeze_angle: float = 0.02,
+    alpha_prev: float | None = None,
+) -> tuple[np.ndarray, int, dict[str, float]]:
+    r"""One step of the two-phase law from the image rays only.
+
+    Returns ``(u, phase, info)``: ``u = (v_x, v_y, omega)`` in the robot frame, the
+    (possibly advanced) phase 1 or 2, and the measures ``alpha_hat``,
+    ``biconic_measure`` (:math:`\sigma(0)`) and ``s_angle``. In step 2 the rotation is
+    only corrected while the mean ray angle exceeds ``freeze_angle``: with little
+    parallax every plane through the (short) baseline fits and the orientation is no
+    longer observable from the bi-conics. The measures are
+    """
+    alpha = estimate_rotation(d, d_star, near=alpha_prev)
+    aligned = _rotz_rows(d_star, np.array([alpha]))[0]
+    s_angle = float(np.mean(np.arccos(np.clip(np.einsum("ij,ij->i", d, aligned), -1.0, 1.0))))
+    if phase == 1 and abs(alpha) < switch_rad:
+        phase = 2
+    # Near the goal the planes' common line (and with it the rotation measure) is lost in the
+    # parallax-free rays: keep the orientation reached and only translate.
+    u = np.array([0.0, 0.0, k_omega * alpha if (phase == 1 or s_angle > freeze_angle) else 0.0])
+    if phase == 2 and s_angle <= freeze_angle:
+        aligned = d_star  # orientation compensated; alpha_hat is no longer observable here
+    if phase == 2:
+        b = baseline_direction(d, aligned) if s_angle > freeze_angle else None
+        if b is not None:
+            bxy = b[:2] / max(np.linalg.norm(b[:2]), 1e-12)
+            u[:2] = k_v * s_angle * bxy
+        else:
+            # Close to the goal: the ray-alignment gradient (spherical IBVS with equal depths),
+            # +sum_i (I - d_i d_i^T)(d_i - d*_i) (rays move by -(I - d d^T) v / rho); noise averages out instead of turning b around.
+            diff = d - aligned
+            g = diff - d * np.einsum("ij,ij->i", d, diff)[:, None]
+            u[:2] = 2.0 * k_v * g[:, :2].mean(axis=0)
+    info = {"alpha_hat": alpha, "biconic_measure": float(rotation_measure(d, d_star)), "s_angle": s_angle}
+    return u, phase, info
+
+
+def step_state(state: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
+    r"""State update: body velocities ``u = (v_x, v_y, omega)`` held for ``dt``, integrated exactly on SE(2)."""
+    x, y, th = state
+    vx, vy, w = u
+    wt = w * dt
+    if abs(wt) < 1e-9:
+        a, b = 1.0 - wt * wt / 6.0, wt / 2.0
+    else:
+        a, b = math.sin(wt) / wt, (1.0 - math.cos(wt)) / wt
+    dx_body = (a * vx - b * vy) * dt
+    dy_body = (b * vx + a * vy) * dt
+    c, s = math.cos(th), math.sin(th)
+    return np.array([x + c * dx_body - s * dy_body, y + s * dx_body + c * dy_body, _wrap(th + wt)])
+
+
+# ---------------------------------------------------------------- simulation
+def simulate_panoramic(
+    *,
+    seed: int = 0,
+    noise_px: float = 0.0,
+    steps: int = 1500,
+    dt: float = 0.05,
+    k_omega: float = 2.0,
+    k_v: float = 3.0,
+    switch_rad: float = 5e-3,
+    freeze_angle: float = 0.02,
+    stop_px: float | None = None,
+    rotation_tol: float | None = None,
+    translation_tol: float | None = None,
+    conic_every: int = 10,
+    points: npt.ArrayLike | None = None,
+    camera: CatadioptricCamera | None = None,
+    target: npt.ArrayLike = (0.0, 0.0, 0.0),
+    start: npt.ArrayLike | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> ServoResult:
+    """Simulate the panoramic holonomic-robot servo (module docstring); deterministic for a ``seed``.
+
+    Args:
+        seed: draws the start (:func:`draw_start_state`: heading 30-120 degrees off,
+            1-3 m away) and the image noise.
+        noise_px: standard deviation of the Gaussian pixel noise.
+        steps: maximum number of steps (the run stops once ``s(t) < stop_px`` in step 2).
+        dt: time step, seconds.
+        k_omega: rotation gain (1/s).
+        k_v: translation gain (m/s per radian of mean ray angle).
+        switch_rad: step 1 ends when the estimated orientation offset is below this.
+        freeze_angle: in step 2 the rotation is corrected only while the mean ray angle
+            (radians) exceeds this (see :func:`control_law`).
+        stop_px: early-stop threshold on ``s(t)``; default 5e-4 px without noise, none with noise.
+        rotation_tol: convergence tolerance (rad); default 1e-3, or 1e-2 with noise.
+        translation_tol: convergence tolerance (m); default 1e-3, or 1e-2 with noise.
+        conic_every: store the bi-conics every this many steps (and at the first and last).
+        points: (N, 3) scene points; default :func:`default_scene`.
+        camera: the catadioptric camera model (its pose is ignored); default :func:`default_camera`.
+        target: target state ``(x, y, theta)``.
+        start: start state instead of the drawn one.
+        progress: called as ``progress(step, steps)`` every 50 steps.
+
+    Returns:
+        A :class:`ServoResult` with ``states`` (T, 3), controls ``robot_velocity``
+        (T, 3) = (v_x, v_y, omega), errors and extras ``s_px`` (= s(t)),
+        ``alpha_hat``, ``biconic_measure``, ``phase``, ``biconics`` (S, N, 3, 3)
+        at ``biconic_steps`` (S,). Features leaving the mirror's field of view end
+        the run with ``converged=False`` and a reason.
+
+    Raises:
+        ValueError: on invalid parameters.
+    """
+    if not isinstance(noise_px, (int, float)) or not math.isfinite(noise_px) or noise_px < 0:
+        raise ValueError(f"noise_px: expected a finite number of pixels >= 0, got {noise_px!r}")
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise ValueError(f"steps: expected a positive integer, got {steps!r}")
+    for name, value in (("dt", dt), ("k_omega", k_omega), ("k_v", k_v), ("switch_rad", switch_rad)):
+        if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
+    if isinstance(conic_every, bool) or not isinstance(conic_every, (int, np.integer)) or conic_every < 1:
+        raise ValueError(f"conic_every: expected a positive integer, got {conic_every!r}")
+    wall0 = _time.perf_counter()
+    rng = np.random.default_rng(seed)
+    cam = camera if camera is not None else default_camera()
+    cam0 = cam.moved(Pose())
+    X = default_scene() if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
+    n_feat = len(X)
+    noisy = noise_px > 0
+    stop_px = (0.0 if noisy else 5e-4) if stop_px is None else float(stop_px)
+    rot_tol = (1e-2 if noisy else 1e-3) if rotation_tol is None else float(rotation_tol)
+    trans_tol = (1e-2 if noisy else 1e-3) if translation_tol is None else float(translation_tol)
+    target = np.asarray(target, dtype=float).reshape(3)
+    state = draw_start_state(rng, target) if start is None else np.asarray(start, dtype=float).reshape(3).copy()
+    params: dict[str, Any] = {
+        "seed": seed,
+        "noise_px": float(noise_px),
+        "dt": float(dt),
+        "max_steps": int(steps),
+        "k_omega": float(k_omega),
+        "k_v": float(k_v),
+        "switch_rad": float(switch_rad),
+        "freeze_angle": float(freeze_angle),
+        "stop_px": stop_px,
+        "rotation_tol": rot_tol,
+        "translation_tol": trans_tol,
+        "K": np.asarray(cam.K).tolist(),
+        "mirror": {"kind": cam.mirror.kind, "a": getattr(cam.mirror, "a", None), "b": getattr(cam.mirror, "b", None)},
+        "camera_height": CAMERA_HEIGHT,
+        "target": target.tolist(),
+    }
+
+    def errors_of(st: np.ndarray) -> tuple[float, float]:
+        return abs(_wrap(st[2] - target[2])), float(np.hypot(st[0] - target[0], st[1] - target[1]))
+
+    def failure(reason: str) -> ServoResult:
+        r0, t0 = errors_of(state)
+        return ServoResult(
+            demo="panoramic",
+            time=np.zeros(1),
+            camera_poses=mirror_pose(state).matrix[None],
+            features=np.full((1, n_feat, 2), np.nan),
+            desired_features=np.full((n_feat, 2), np.nan),
+            controls={"robot_velocity": np.zeros((1, 3))},
+            errors={"rotation_error_rad": np.array([r0]), "translation_error": np.array([t0])},
+            converged=False,
+            reason=reason,
+            initial_rotation_error_rad=r0,
+            initial_translation_error=t0,
+            final_rotation_error_rad=r0,
+            final_translation_error=t0,
+            steps=0,
+            sim_time_s=0.0,
+            wall_time_s=_time.perf_counter() - wall0,
+            states=state[None].copy(),
+            params=params,
+        )
+
+    if n_feat < 4:
+        return failure(f"the bi-conic test needs at least 4 features, got {n_feat}")
+    goal_proj = cam.moved(mirror_pose(target)).project(X)
+    if not np.all(goal_proj.in_image):
+        i = int(np.flatnonzero(~goal_proj.in_image)[0])
+        return failure(f"feature {i} is outside the mirror's field of view at the target")
+    m_des = goal_proj.pixels + (rng.normal(scale=noise_px, size=(n_feat, 2)) if noisy else 0.0)
+    d_star = cam0.back_project(m_des)
+    if not np.all(np.isfinite(d_star)):
+        return failure("a desired feature does not back-project to a ray of the mirror")
+
+    T_cap = steps + 1
+    rec = Recorder(
+        T_cap,
+        {
+            "state": (3,),
+            "features": (n_feat, 2),
+            "u": (3,),
+            "rot": (),
+            "trans": (),
+            "s_px": (),
+            "s_ang": (),
+            "alpha": (),
+            "measure": (),
+            "phase": (),
+        },
+    )
+    b = rec.buffers
+    conics: list[np.ndarray] = []
+    conic_steps: list[int] = []
+    phase = 1
+    alpha_prev: float | None = None
+    reason = ""
+    k = 0
+    while True:
+        c_th, s_th = math.cos(state[2]), math.sin(state[2])
+        rel = X - np.array([state[0], state[1], CAMERA_HEIGHT])
+        local = np.column_stack([c_th * rel[:, 0] + s_th * rel[:, 1], -s_th * rel[:, 0] + c_th * rel[:, 1], rel[:, 2]])
+        proj = cam0.project_directions(local)  # == cam.moved(mirror_pose(state)).project(X)
+        m = proj.pixels + (rng.normal(scale=noise_px, size=(n_feat, 2)) if noisy else 0.0)
+        b["state"][k] = state
+        b["features"][k] = m
+        b["rot"][k], b["trans"][k] = errors_of(state)
+        rec.count = k + 1
+        if not np.all(proj.in_image):
+            i = int(np.flatnonzero(~proj.in_image)[0])
+            reason = f"feature {i} left the mirror's field of view at t = {k * dt:.2f} s"
+            break
+        d = cam0.back_project(m)
+        if not np.all(np.isfinite(d)):
+            reason = f"a feature does not back-project to a mirror ray at t = {k * dt:.2f} s"
+            break
+        u, phase, info = control_law(
+            d, d_star, phase=phase, k_omega=k_omega, k_v=k_v, switch_rad=switch_rad, freeze_angle=freeze_angle,
+            alpha_prev=alpha_prev,
+        )
+        # warm start the next search once the turn per step is small (the global grid otherwise)
+        alpha_prev = info["alpha_hat"] if abs(u[2]) * dt < 0.05 else None
+        s_px = float(np.mean(np.linalg.norm(m - m_des, axis=1)))
+        b["u"][k] = u
+        b["s_px"][k] = s_px
+        b["s_ang"][k] = info["s_angle"]
+        b["alpha"][k] = info["alpha_hat"]
+        b["measure"][k] = info["biconic_measure"]
+        b["phase"][k] = phase
+        done = phase == 2 and stop_px > 0 and s_px < stop_px
+        if k % conic_every == 0 or done or k >= steps:
+            conics.append(biconic(cam0, d, d_star))
+            conic_steps.append(k)
+        if done or k >= steps:
+            break
+        state = step_state(state, u, dt)
+        k += 1
+        if progress is not None and k % 50 == 0:
+            progress(k, steps)
+    if progress is not None:
+        progress(k, steps)
+
+    data = rec.trim()
+    rot, trans = data["rot"], data["trans"]
+    final_rot, final_trans = float(rot[-1]), float(trans[-1])
+    if not reason and (final_rot >= rot_tol or final_trans >= trans_tol):
+        reason = (
+            f"not converged after {k} steps (phase {phase}): rotation error {final_rot:.2e} rad "
+            f"(tol {rot_tol:g}), translation error {final_trans:.2e} m (tol {trans_tol:g})"
+        )
+    poses = np.stack([mirror_pose(s).matrix for s in data["state"]])
+    return ServoResult(
+        demo="panoramic",
+        time=np.arange(rec.count) * dt,
+        camera_poses=poses,
+        features=data["features"],
+        desired_features=m_des,
+        controls={"robot_velocity": data["u"]},
+        errors={
+            "task_error_norm": np.hypot(data["alpha"], data["s_ang"]),
+            "rotation_error_rad": rot,
+            "translation_error": trans,
+            "feature_error_px": data["s_px"],
+        },
+        converged=not reason,
+        reason=reason,
+        initial_rotation_error_rad=float(rot[0]),
+        initial_translation_error=float(trans[0]),
+        final_rotation_error_rad=final_rot,
+        final_translation_error=final_trans,
+        steps=k,
+        sim_time_s=k * dt,
+        wall_time_s=_time.perf_counter() - wall0,
+        states=data["state"],
+        extras={
+            "s_px": data["s_px"],
+            "s_angle_rad": data["s_ang"],
+            "alpha_hat": data["alpha"],
+            "biconic_measure": data["measure"],
+            "phase": data["phase"],
+            "biconics": np.stack(conics) if conics else np.zeros((0, n_feat, 3, 3)),
+            "biconic_steps": np.asarray(conic_steps, dtype=int),
+            "scene_points": X,
+            "target_state": target,
+        },
+        params=params,
+    )

@@ -1,0 +1,377 @@
+"""Tests of egtviz.geometry.estimation and egtviz.geometry.triangulation.
+
+Every scene comes from ``_twoview.make_two_view`` with an explicit
+``np.random.default_rng(seed)``; the true ``F`` is built by the fixture from its
+own ``R``, ``t``, ``K`` (``F = K2^-T [t]_x R K1^-1``), not by the code under test.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from egtviz.geometry._validate import DegenerateConfigurationError, GeometryError
+from egtviz.geometry.epipolar import essential_from_fundamental, fundamental_from_essential
+from egtviz.geometry.estimation import (
+    RobustEstimate,
+    decompose_essential,
+    fundamental_7point,
+    fundamental_8point,
+    fundamental_lmeds,
+    fundamental_normalized_8point,
+    fundamental_ransac,
+    fundamental_sampson,
+    pose_from_essential,
+    reprojection_error,
+    sampson_distance,
+    symmetric_epipolar_distance,
+)
+from egtviz.geometry.poses import skew
+from egtviz.geometry.triangulation import (
+    correct_correspondences,
+    fundamental_from_projections,
+    triangulate_linear,
+    triangulate_optimal,
+)
+
+try:
+    from tests._twoview import f_distance, make_two_view, transfer_error, true_sampson, true_symmetric
+except ImportError:  # tests/ run as a plain directory
+    from _twoview import f_distance, make_two_view, transfer_error, true_sampson, true_symmetric
+
+LINEAR = [fundamental_8point, fundamental_normalized_8point, fundamental_sampson]
+seeds = st.integers(min_value=0, max_value=2**32 - 1)
+
+
+def assert_canonical_rank2(F: np.ndarray) -> None:
+    assert F.shape == (3, 3)
+    s = np.linalg.svd(F, compute_uv=False)
+    assert s[2] <= 1e-12 * s[0]
+    assert s[1] > 1e-9 * s[0]
+    assert np.linalg.norm(F) == pytest.approx(1.0, abs=1e-12)
+    assert F.flat[np.argmax(np.abs(F))] > 0
+
+
+def normalized_residual(F: np.ndarray, U1: np.ndarray, U2: np.ndarray) -> np.ndarray:
+    """|m2^T F m1| / (|m1| |F| |m2|): the scale-free algebraic error."""
+    h1 = np.c_[U1, np.ones(len(U1))]
+    h2 = np.c_[U2, np.ones(len(U2))]
+    e = np.abs(np.sum(h2 * (h1 @ F.T), axis=1))
+    return e / (np.linalg.norm(h1, axis=1) * np.linalg.norm(h2, axis=1) * np.linalg.norm(F))
+
+
+# --------------------------------------------------------------------------- noise-free properties
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=seeds, n=st.integers(min_value=8, max_value=60), algo=st.sampled_from(LINEAR))
+def test_linear_estimators_exact_on_noise_free_data(seed: int, n: int, algo) -> None:
+    scene = make_two_view(np.random.default_rng(seed), n)
+    F = algo(scene.U1, scene.U2)
+    assert_canonical_rank2(F)
+    assert np.max(normalized_residual(F, scene.U1, scene.U2)) < 1e-10
+    assert np.max(sampson_distance(F, scene.U1, scene.U2)) < 1e-10
+    # Canonical sign and scale: equal to the true F, not just proportional.
+    assert np.allclose(F, scene.F, atol=1e-6)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=seeds)
+def test_7point_has_the_true_solution(seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 7)
+    sols = fundamental_7point(scene.U1, scene.U2)
+    assert len(sols) in (1, 3)
+    for F in sols:
+        assert_canonical_rank2(F)
+        assert np.max(normalized_residual(F, scene.U1, scene.U2)) < 1e-9
+    assert min(f_distance(F, scene.F) for F in sols) < 1e-7
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=seeds)
+def test_robust_estimators_exact_on_noise_free_inliers(seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 120, outlier_ratio=0.25)
+    for est in (fundamental_ransac(scene.U1, scene.U2), fundamental_lmeds(scene.U1, scene.U2)):
+        assert_canonical_rank2(est.F)
+        assert f_distance(est.F, scene.F) < 1e-6
+        assert np.array_equal(est.inliers, scene.inliers)
+
+
+# --------------------------------------------------------------------------- noisy data
+
+
+def test_normalization_helps_on_average() -> None:
+    errs_raw, errs_norm = [], []
+    for seed in range(20):
+        scene = make_two_view(np.random.default_rng(seed), 40, noise=1.0)
+        errs_raw.append(transfer_error(fundamental_8point(scene.U1, scene.U2), scene))
+        errs_norm.append(transfer_error(fundamental_normalized_8point(scene.U1, scene.U2), scene))
+    assert np.mean(errs_norm) <= np.mean(errs_raw)
+    assert np.mean(errs_norm) < 2.0
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_sampson_refinement_does_not_increase_the_cost(seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 60, noise=1.0)
+    F8 = fundamental_normalized_8point(scene.U1, scene.U2)
+    Fs = fundamental_sampson(scene.U1, scene.U2)
+    assert_canonical_rank2(Fs)
+    c8 = true_sampson(F8, scene.U1, scene.U2).sum()
+    cs = true_sampson(Fs, scene.U1, scene.U2).sum()
+    assert cs <= c8 * (1 + 1e-12)
+    # From a poor start (the unnormalised estimate) too.
+    Fr = fundamental_8point(scene.U1, scene.U2)
+    Fr2 = fundamental_sampson(scene.U1, scene.U2, F0=Fr)
+    assert true_sampson(Fr2, scene.U1, scene.U2).sum() <= true_sampson(Fr, scene.U1, scene.U2).sum() * (1 + 1e-12)
+    assert_canonical_rank2(Fr2)
+
+
+def test_sampson_refinement_improves_on_average() -> None:
+    gain = []
+    for seed in range(10):
+        scene = make_two_view(np.random.default_rng(100 + seed), 30, noise=1.0)
+        c8 = sampson_distance(fundamental_normalized_8point(scene.U1, scene.U2), scene.U1, scene.U2).sum()
+        cs = sampson_distance(fundamental_sampson(scene.U1, scene.U2), scene.U1, scene.U2).sum()
+        gain.append(c8 - cs)
+    assert np.all(np.array(gain) >= 0) and np.mean(gain) > 0
+
+
+# --------------------------------------------------------------------------- robust estimation
+
+
+@pytest.mark.parametrize("method", ["ransac", "lmeds"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_robust_recovers_inliers_with_30_percent_outliers(method: str, seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 400, noise=0.3, outlier_ratio=0.3)
+    fn = fundamental_ransac if method == "ransac" else fundamental_lmeds
+    est = fn(scene.U1, scene.U2, seed=7)
+    assert isinstance(est, RobustEstimate)
+    assert est.inliers.shape == (400,) and est.inliers.dtype == bool
+    true_in = scene.inliers
+    recall = (est.inliers & true_in).sum() / true_in.sum()
+    false_in = (est.inliers & ~true_in).sum()
+    assert recall >= 0.95
+    assert false_in <= 0.02 * (~true_in).sum()
+    assert transfer_error(est.F, scene) < 0.3
+    assert 0 < est.iterations <= 2000
+    # Deterministic for a seed.
+    again = fn(scene.U1, scene.U2, seed=7)
+    assert np.array_equal(again.F, est.F) and np.array_equal(again.inliers, est.inliers)
+    assert again.iterations == est.iterations
+
+
+def test_ransac_adaptive_bound_stops_early() -> None:
+    scene = make_two_view(np.random.default_rng(5), 300, noise=0.3, outlier_ratio=0.1)
+    est = fundamental_ransac(scene.U1, scene.U2)
+    assert est.iterations < 200  # w ~ 0.9: a few dozen samples suffice
+    capped = fundamental_ransac(scene.U1, scene.U2, max_iterations=10)
+    assert capped.iterations == 10
+
+
+def test_robust_result_is_frozen() -> None:
+    scene = make_two_view(np.random.default_rng(0), 50)
+    est = fundamental_ransac(scene.U1, scene.U2)
+    with pytest.raises(AttributeError):
+        est.F = np.eye(3)  # type: ignore[misc]
+
+
+# --------------------------------------------------------------------------- error measures
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=seeds)
+def test_error_measures_match_reference(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    scene = make_two_view(rng, 30, noise=2.0)
+    F = scene.F * rng.uniform(0.1, 10.0) * rng.choice([-1.0, 1.0])  # scale-free
+    ds = sampson_distance(F, scene.U1, scene.U2)
+    dsym = symmetric_epipolar_distance(F, scene.U1, scene.U2)
+    assert ds.shape == dsym.shape == (30,)
+    assert np.allclose(ds, true_sampson(scene.F, scene.U1, scene.U2), rtol=1e-9)
+    assert np.allclose(dsym, true_symmetric(scene.F, scene.U1, scene.U2), rtol=1e-9)
+    # (1/a + 1/b)(a + b) >= 4: the symmetric distance bounds four Sampson distances.
+    assert np.all(dsym >= 4 * ds * (1 - 1e-12))
+    assert np.allclose(sampson_distance(F, scene.U1_true, scene.U2_true), 0.0, atol=1e-16)
+
+
+def test_reprojection_error() -> None:
+    scene = make_two_view(np.random.default_rng(3), 20)
+    r = reprojection_error(scene.P1, scene.P2, scene.X, scene.U1, scene.U2)
+    assert r.shape == (20,) and np.max(r) < 1e-9
+    shifted = scene.U1 + np.array([3.0, 4.0])
+    r = reprojection_error(scene.P1, scene.P2, scene.X, shifted, scene.U2)
+    assert np.allclose(r, np.sqrt(25.0 / 2.0))
+
+
+# --------------------------------------------------------------------------- essential matrix
+
+
+def test_essential_fundamental_round_trip() -> None:
+    scene = make_two_view(np.random.default_rng(11), 10)
+    E = essential_from_fundamental(scene.F, scene.K1, scene.K2)
+    assert f_distance(E, scene.E) < 1e-9
+    s = np.linalg.svd(E, compute_uv=False)
+    assert s[0] == pytest.approx(s[1], rel=1e-9) and s[2] < 1e-12
+    F = fundamental_from_essential(E, scene.K1, scene.K2)
+    assert f_distance(F, scene.F) < 1e-12
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=seeds)
+def test_decompose_essential_and_cheirality(seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 30)
+    t_unit = scene.t / np.linalg.norm(scene.t)
+    sols = decompose_essential(3.7 * scene.E)
+    assert len(sols) == 4
+    for R, t in sols:
+        assert np.allclose(R @ R.T, np.eye(3), atol=1e-12) and np.linalg.det(R) == pytest.approx(1.0)
+        assert np.linalg.norm(t) == pytest.approx(1.0)
+        assert f_distance(skew(t) @ R, scene.E) < 1e-9
+    matches = [np.allclose(R, scene.R, atol=1e-9) and np.allclose(t, t_unit, atol=1e-9) for R, t in sols]
+    assert sum(matches) == 1
+    x1n = (np.c_[scene.U1, np.ones(30)] @ np.linalg.inv(scene.K1).T)[:, :2]
+    x2n = (np.c_[scene.U2, np.ones(30)] @ np.linalg.inv(scene.K2).T)[:, :2]
+    for sign in (1.0, -1.0):  # E and -E describe the same geometry
+        R, t, mask = pose_from_essential(sign * scene.E, x1n, x2n)
+        assert np.allclose(R, scene.R, atol=1e-9)
+        assert np.allclose(t, t_unit, atol=1e-9)
+        assert mask.all()
+
+
+# --------------------------------------------------------------------------- triangulation
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=seeds)
+def test_triangulation_exact_on_noise_free_data(seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 40)
+    for tri in (triangulate_linear, triangulate_optimal):
+        X = tri(scene.P1, scene.P2, scene.U1, scene.U2)
+        assert X.shape == (40, 3)
+        assert np.allclose(X, scene.X, rtol=1e-9, atol=1e-9)
+    c1, c2 = correct_correspondences(scene.F, scene.U1, scene.U2)
+    assert np.allclose(c1, scene.U1, atol=1e-8) and np.allclose(c2, scene.U2, atol=1e-8)
+
+
+def test_linear_triangulation_equals_batched_svd() -> None:
+    scene = make_two_view(np.random.default_rng(4), 200, noise=2.0)
+    P1, P2, u1, u2 = scene.P1, scene.P2, scene.U1, scene.U2
+    A = np.stack(
+        [
+            u1[:, 0:1] * P1[2] - P1[0],
+            u1[:, 1:2] * P1[2] - P1[1],
+            u2[:, 0:1] * P2[2] - P2[0],
+            u2[:, 1:2] * P2[2] - P2[1],
+        ],
+        axis=1,
+    )
+    V = np.linalg.svd(A)[2][:, -1]
+    X_ref = V[:, :3] / V[:, 3:]
+    assert np.allclose(triangulate_linear(P1, P2, u1, u2), X_ref, rtol=1e-10, atol=1e-10)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_optimal_correction(seed: int) -> None:
+    scene = make_two_view(np.random.default_rng(seed), 150, noise=1.5)
+    F = fundamental_from_projections(scene.P1, scene.P2)
+    assert f_distance(F, scene.F) < 1e-12
+    c1, c2 = correct_correspondences(F, scene.U1, scene.U2)
+    # Exactly on corresponding epipolar lines: distance of c2 to F c1 in pixels.
+    l2 = np.c_[c1, np.ones(150)] @ F.T
+    dist = np.abs(np.sum(np.c_[c2, np.ones(150)] * l2, axis=1)) / np.hypot(l2[:, 0], l2[:, 1])
+    assert np.max(dist) < 1e-9 * 640
+    # The correction is at least as small as the first-order (Sampson) estimate suggests.
+    moved = np.sum((c1 - scene.U1) ** 2 + (c2 - scene.U2) ** 2, axis=1)
+    assert np.allclose(moved, sampson_distance(F, scene.U1, scene.U2), rtol=1e-3, atol=1e-9)
+    X_lin = triangulate_linear(scene.P1, scene.P2, scene.U1, scene.U2)
+    X_opt = triangulate_optimal(scene.P1, scene.P2, scene.U1, scene.U2)
+    e_lin = reprojection_error(scene.P1, scene.P2, X_lin, scene.U1, scene.U2)
+    e_opt = reprojection_error(scene.P1, scene.P2, X_opt, scene.U1, scene.U2)
+    assert np.all(e_opt <= e_lin + 1e-9)
+    assert np.allclose(2 * e_opt**2, moved, rtol=1e-6)
+
+
+# --------------------------------------------------------------------------- error paths
+
+
+@pytest.fixture
+def pts() -> tuple[np.ndarray, np.ndarray]:
+    scene = make_two_view(np.random.default_rng(0), 12)
+    return scene.U1, scene.U2
+
+
+@pytest.mark.parametrize("fn", [fundamental_8point, fundamental_normalized_8point, fundamental_sampson])
+def test_errors_linear(fn, pts) -> None:
+    U1, U2 = pts
+    with pytest.raises(GeometryError, match=r"U1: expected shape \(N, 2\)"):
+        fn(np.c_[U1, np.ones(12)], U2)
+    bad = U2.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(GeometryError, match="U2: contains NaN or inf"):
+        fn(U1, bad)
+    with pytest.raises(GeometryError, match="U1: needs at least 8 points, got 7"):
+        fn(U1[:7], U2[:7])
+    with pytest.raises(GeometryError, match="same number of points, got 12 and 11"):
+        fn(U1, U2[:11])
+    with pytest.raises(DegenerateConfigurationError, match="U1: all points coincide"):
+        fn(np.tile([100.0, 200.0], (12, 1)), U2)
+    line = np.c_[np.linspace(10, 600, 12), np.linspace(20, 400, 12)]
+    with pytest.raises(DegenerateConfigurationError, match="rank < 8"):
+        fn(line, U2)
+
+
+def test_errors_other(pts) -> None:
+    U1, U2 = pts
+    with pytest.raises(GeometryError, match="exactly 7 points, got 8"):
+        fundamental_7point(U1[:8], U2[:8])
+    with pytest.raises(DegenerateConfigurationError, match="U2: all points coincide"):
+        fundamental_7point(U1[:7], np.zeros((7, 2)))
+    with pytest.raises(GeometryError, match="confidence"):
+        fundamental_ransac(U1, U2, confidence=1.0)
+    with pytest.raises(GeometryError, match="threshold"):
+        fundamental_ransac(U1, U2, threshold=0.0)
+    with pytest.raises(GeometryError, match="max_iterations"):
+        fundamental_lmeds(U1, U2, max_iterations=0)
+    with pytest.raises(DegenerateConfigurationError, match="coincide"):
+        fundamental_lmeds(np.ones((20, 2)), np.ones((20, 2)))
+    with pytest.raises(GeometryError, match=r"F0: expected shape \(3, 3\)"):
+        fundamental_sampson(U1, U2, F0=np.eye(2))
+    with pytest.raises(GeometryError, match="F0: expected a matrix of rank 2"):
+        fundamental_sampson(U1, U2, F0=np.outer([1.0, 2, 3], [1.0, 0, 1]))
+    with pytest.raises(GeometryError, match="E: expected an essential matrix of rank 2"):
+        decompose_essential(np.zeros((3, 3)))
+    with pytest.raises(GeometryError, match=r"E: expected shape \(3, 3\)"):
+        decompose_essential(np.eye(4))
+    with pytest.raises(GeometryError, match="x1n, x2n: expected the same number"):
+        pose_from_essential(skew([1.0, 0, 0]), U1[:5] / 800, U2[:4] / 800)
+    with pytest.raises(GeometryError, match="F: contains NaN"):
+        sampson_distance(np.full((3, 3), np.nan), U1, U2)
+    with pytest.raises(GeometryError, match="K1: calibration matrix is not invertible"):
+        essential_from_fundamental(np.eye(3), np.diag([0.0, 1.0, 1.0]), np.eye(3))
+
+
+def test_errors_triangulation(pts) -> None:
+    U1, U2 = pts
+    P = np.hstack([np.eye(3), np.zeros((3, 1))])
+    with pytest.raises(DegenerateConfigurationError, match="camera centres coincide"):
+        triangulate_linear(P, 2.0 * P, U1, U2)
+    with pytest.raises(GeometryError, match=r"P2: expected shape \(3, 4\)"):
+        triangulate_optimal(P, np.eye(3), U1, U2)
+    with pytest.raises(GeometryError, match="P1: expected a camera matrix of rank 3"):
+        triangulate_linear(np.zeros((3, 4)), P, U1, U2)
+    with pytest.raises(GeometryError, match="same number of points"):
+        triangulate_linear(P, P + np.c_[np.zeros((3, 3)), [1.0, 0, 0]], U1, U2[:3])
+    with pytest.raises(GeometryError, match="F: expected a fundamental matrix of rank 2"):
+        correct_correspondences(np.diag([1.0, 0, 0]), U1, U2)
+
+
+def test_reprojection_error_propagates_nan_points() -> None:
+    scene = make_two_view(np.random.default_rng(3), 5)
+    X = scene.X.copy()
+    X[2] = np.nan
+    r = reprojection_error(scene.P1, scene.P2, X, scene.U1, scene.U2)
+    assert np.isnan(r[2]) and np.all(r[[0, 1, 3, 4]] < 1e-9)
+    with pytest.raises(GeometryError, match=r"X: expected shape \(N, 3\)"):
+        reprojection_error(scene.P1, scene.P2, X[:, :2], scene.U1, scene.U2)
