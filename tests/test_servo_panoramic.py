@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 
 import numpy as np
 import pytest
@@ -102,12 +101,10 @@ def test_invalid_parameters(kwargs, match):
         simulate_panoramic(**kwargs)
 
 
-def test_speed_and_json(tmp_path, capsys):
-    t0 = time.process_time()
+def test_full_length_run_and_json(tmp_path, capsys):
+    # Speed is measured by `egtviz bench servo`, not asserted here.
     r = simulate_panoramic(seed=1, steps=1000, stop_px=0.0)
-    cpu = time.process_time() - t0
     assert r.steps == 1000
-    assert cpu < 4.0, f"1000-step panoramic simulation took {cpu:.2f} s CPU"
     d = json.loads(json.dumps(r.to_json_dict(), allow_nan=False))
     assert len(d["controls"]["robot_velocity"]) == 1001 and len(d["extras"]["biconics"][0][0]) == 3
     parser = argparse.ArgumentParser()

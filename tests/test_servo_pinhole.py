@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import time
 
 import numpy as np
 import pytest
@@ -166,13 +165,10 @@ def test_ets_matches_rtb_fkine_and_jacobian():
     np.testing.assert_allclose(ets.jacob0(q), robot.jacob0(q), atol=1e-10)
 
 
-def test_result_json_and_speed(tmp_path):
-    simulate_pinhole(seed=0, steps=5)  # warm the cached robot
-    t0 = time.process_time()
+def test_result_json_full_length(tmp_path):
+    # Speed is measured by `egtviz bench servo`, not asserted here.
     r = simulate_pinhole(seed=0, steps=1000, stop_px=0.0)
-    cpu = time.process_time() - t0
     assert r.steps == 1000 and r.n_samples == 1001
-    assert cpu < 4.0, f"1000-step pin-hole simulation took {cpu:.2f} s CPU"
     d = r.to_json_dict()
     for key in ("converged", "reason", "initial_rotation_error_rad", "initial_translation_error",
                 "final_rotation_error_rad", "final_translation_error", "steps", "sim_time_s"):

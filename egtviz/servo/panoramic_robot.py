@@ -50,7 +50,7 @@ import numpy.typing as npt
 from egtviz.geometry.catadioptric import CatadioptricCamera
 from egtviz.geometry.mirrors import HyperbolicMirror
 from egtviz.geometry.panoramic_epipolar import biconic
-from egtviz.geometry.poses import Pose
+from egtviz.geometry.poses import Pose, rotz
 
 from .result import Recorder, ServoResult
 
@@ -123,19 +123,34 @@ def _wrap(a: float) -> float:
 
 
 # ---------------------------------------------------------------- control law (pure functions)
-def _rotz_rows(d: np.ndarray, alpha: np.ndarray) -> np.ndarray:
-    """``R_z(alpha) d`` for every alpha (A,) and row d (N, 3): (A, N, 3)."""
-    c, s = np.cos(alpha)[:, None], np.sin(alpha)[:, None]
-    x, y, z = d[:, 0][None], d[:, 1][None], d[:, 2][None]
-    return np.stack([c * x - s * y, s * x + c * y, np.broadcast_to(z, (len(alpha), d.shape[0]))], axis=-1)
+def _scatter_coefficients(d: np.ndarray, d_star: np.ndarray) -> np.ndarray:
+    r"""Coefficients (6, 3, 3) of :math:`\sum_i n_i n_i^T` as a quadratic form in :math:`(\cos\alpha, \sin\alpha, 1)`.
+
+    :math:`R_z(\alpha) d^* = \cos\alpha\,(x^*, y^*, 0) + \sin\alpha\,(-y^*, x^*, 0) + (0, 0, z^*)`, so
+    :math:`n_i = d_i \times R_z(\alpha) d^*_i = \cos\alpha\,A_i + \sin\alpha\,B_i + C_i` and the scatter is
+    :math:`c^2 AA + s^2 BB + CC + cs(AB + BA) + c(AC + CA) + s(BC + CB)`: computed once per step,
+    then evaluated at any number of trial angles without touching the N rays again.
+    """
+    # The three cross products written out: np.cross costs more than the arithmetic here.
+    dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
+    x, y, z = d_star[:, 0], d_star[:, 1], d_star[:, 2]
+    A = np.column_stack([-dz * y, dz * x, dx * y - dy * x])  # d x (x*, y*, 0)
+    B = np.column_stack([-dz * x, -dz * y, dx * x + dy * y])  # d x (-y*, x*, 0)
+    C = np.column_stack([dy * z, -dx * z, np.zeros_like(z)])  # d x (0, 0, z*)
+    AB, AC, BC = A.T @ B, A.T @ C, B.T @ C
+    return np.stack([A.T @ A, B.T @ B, C.T @ C, AB + AB.T, AC + AC.T, BC + BC.T])
+
+
+def _scatter_at(coefficients: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """The scatter matrices (A, 3, 3) at trial angles ``alpha`` (A,)."""
+    c, s = np.cos(alpha), np.sin(alpha)
+    w = np.stack([c * c, s * s, np.ones_like(c), c * s, c, s], axis=1)
+    return np.tensordot(w, coefficients, axes=1)
 
 
 def _normal_scatter(d: np.ndarray, d_star: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     r""":math:`\sum_i n_i n_i^T` (A, 3, 3) with :math:`n_i = d_i \times R_z(\alpha) d^*_i`."""
-    r = _rotz_rows(d_star, alpha)
-    a0, a1, a2 = d[:, 0], d[:, 1], d[:, 2]
-    n = np.stack([a1 * r[..., 2] - a2 * r[..., 1], a2 * r[..., 0] - a0 * r[..., 2], a0 * r[..., 1] - a1 * r[..., 0]], -1)
-    return np.einsum("ani,anj->aij", n, n)
+    return _scatter_at(_scatter_coefficients(d, d_star), alpha)
 
 
 def _min_eig_sym3(M: np.ndarray) -> np.ndarray:
@@ -182,16 +197,21 @@ def estimate_rotation(
     else:  # warm start: a local grid of +-0.2 rad around the previous estimate
         alpha = near + np.linspace(-0.2, 0.2, 21)
         half = 0.02
-    f = rotation_measure(d, d_star, alpha)
+    coefficients = _scatter_coefficients(d, d_star)
+
+    def measure(angles: np.ndarray) -> np.ndarray:
+        return _min_eig_sym3(_scatter_at(coefficients, angles))
+
+    f = measure(alpha)
     best = float(alpha[int(np.argmin(f))])
     for _ in range(refine):
         a = best + np.linspace(-half, half, 21)
-        f = rotation_measure(d, d_star, a)
+        f = measure(a)
         i = int(np.argmin(f))
         best = float(a[i])
         half = 2.0 * half / 20.0
     a = best + np.array([-half, 0.0, half])
-    f = rotation_measure(d, d_star, a)
+    f = measure(a)
     den = f[0] - 2.0 * f[1] + f[2]
     if den > 0:
         best += 0.5 * half * (f[0] - f[2]) / den
@@ -238,7 +258,7 @@ def control_law(
     longer observable from the bi-conics. The measures are
     """
     alpha = estimate_rotation(d, d_star, near=alpha_prev)
-    aligned = _rotz_rows(d_star, np.array([alpha]))[0]
+    aligned = d_star @ rotz(alpha).T
     s_angle = float(np.mean(np.arccos(np.clip(np.einsum("ij,ij->i", d, aligned), -1.0, 1.0))))
     if phase == 1 and abs(alpha) < switch_rad:
         phase = 2

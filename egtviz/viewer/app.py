@@ -393,8 +393,7 @@ class ClientView:
         self.revision += 1
         with self.client.atomic():
             self._sync_panels(scene)
-            self.scene3d.draw(scene, derived, moving=self._moving)
-            t2 = time.perf_counter()
+            # Panels first: within the atomic batch the browser then updates the SVGs before the 3D view.
             highlighted = {int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")}
             for spec in scene.cameras:
                 plane = derived.image_planes.get(spec.name)
@@ -409,15 +408,17 @@ class ClientView:
                 )
                 self.svgs[spec.name] = svg
                 self._html[spec.name].content = svg
-            t3 = time.perf_counter()
+            t2 = time.perf_counter()
             self.readout = pair_markdown(derived)
             self.readout_md.content = self.readout
             self._sync_fields(scene)
+            t3 = time.perf_counter()
+            self.scene3d.draw(scene, derived, moving=self._moving)
             t4 = time.perf_counter()
         t5 = time.perf_counter()
         self.last_update_wall = time.time()
         #: Seconds spent in each part of the last update (benchmark, docs/viewer.md).
-        self.breakdown = {"derived": t1 - t0, "scene3d": t2 - t1, "svg": t3 - t2, "fields": t4 - t3, "flush": t5 - t4}
+        self.breakdown = {"derived": t1 - t0, "svg": t2 - t1, "fields": t3 - t2, "scene3d": t4 - t3, "flush": t5 - t4}
         t_event = getattr(self, "_t_event", None)
         if t_event is not None:
             self.timings.append(t5 - t_event)
