@@ -203,13 +203,12 @@ def test_sampled_arcs_are_real_visible_and_on_the_conic(seed, kind):
     assert np.all(np.isfinite(d))
     d_mirror = d @ cam.pose.R
     np.testing.assert_allclose(d_mirror @ (n / np.linalg.norm(n)), 0.0, atol=1e-9)
-    # No jump segment: consecutive samples are one sampling step apart on the circle
-    # (the refined end points of an open arc are at most one step from their neighbours).
+    # No jump segment: the samples are evenly spaced on the circle, a closed loop at 2 pi / n,
+    # an open arc at most 2 pi / (n - 1) apart.
     step = np.arccos(np.clip(np.sum(d_mirror[1:] * d_mirror[:-1], axis=1), -1, 1))
     closed = np.array_equal(arc[0], arc[-1])
-    inner = step if closed else step[1:-1]
-    np.testing.assert_allclose(inner, 2 * np.pi / n_samples, atol=1e-6)
-    assert np.all(step <= 2 * np.pi / n_samples + 1e-6)
+    np.testing.assert_allclose(step, step.mean(), atol=1e-6)
+    assert np.all(step <= 2 * np.pi / (n_samples if closed else n_samples - 1) + 1e-6)
     if not closed:
         # Open arcs end where the circle leaves the visible field: on the rim.
         ends = d_mirror[[0, -1]] * cam.mirror.intersect(d_mirror[[0, -1]], rim_tol=1e-9).lam[:, None]

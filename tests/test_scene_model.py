@@ -179,3 +179,24 @@ def test_specs_convert_to_core_cameras():
     np.testing.assert_allclose(pin.camera().pose.R[:, 2], [0.5, np.sqrt(3) / 2, 0], atol=1e-12)
     pano = PanoramicSpec("p", (0, 0, 0), (90, 0, 0))
     np.testing.assert_allclose(pano.camera().pose.R[:, 0], [0, 1, 0], atol=1e-12)
+
+
+def test_one_drag_is_one_undo_step_and_no_op_changes_are_silent():
+    model = SceneModel()
+    seen = []
+    model.subscribe(lambda scene, change: seen.append(change.kind))
+    start = model.scene
+    R = start.camera("cam1").pose.R
+    for x in (0.0, 0.5, 1.0):
+        model.set_camera_pose("cam1", (x, -8, 1.5), R, drag_id=1)
+    for z in (1.0, 2.0):
+        model.set_point(0, (0, 0, z), drag_id=2)
+    assert len(seen) == 5
+    model.update_camera("cam2", focal_length=model.scene.camera("cam2").focal_length)
+    model.set_point(0, (0, 0, 2.0))
+    assert len(seen) == 5  # nothing changed: no notification
+    assert model.undo()  # the whole point drag
+    assert model.scene.points[0] == start.points[0]
+    assert model.undo()  # the whole camera drag
+    assert model.scene.camera("cam1") == start.camera("cam1")
+    assert not model.undo()

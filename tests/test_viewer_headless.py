@@ -293,3 +293,36 @@ def test_cli_serve_reports_the_real_port_and_bad_scene(tmp_path, capsys):
     assert rc == [0]
     port = int(out.split("http://127.0.0.1:")[1].split()[0])
     assert port > 0
+
+
+def test_highlight_and_lock_from_a_lesson(tabs):
+    view = view_of(tabs)
+    view.model.highlight(["cam1", "point:2"])
+    assert tuple(view.scene3d._cams["cam1"]["frustum"].color) == (230, 159, 0)
+    rings = [el for el in ET.fromstring(view.svgs["cam2"]).iter() if el.get("data-selected") == "false"]
+    assert len(rings) == 1
+    view.model.lock("cam1")
+    g = view.scene3d._cams["cam1"]["gizmo"]
+    assert g.disable_axes and g.disable_rotations
+    view.model.lock("point:1")
+    assert view.scene3d._point_gizmos[1].disable_axes
+
+
+def test_panoramic_and_mixed_pairs(tabs):
+    view = view_of(tabs)
+    view.btn_add_pano.value = True
+    pano = [c.name for c in view.model.scene.cameras if c.kind == "panoramic"][0]
+    assert pano in view.svgs and len(kinds(view.svgs[pano], "rim")) == 1
+    view.model.add_camera("panoramic")
+    panos = [c.name for c in view.model.scene.cameras if c.kind == "panoramic"]
+    view.pair_dropdown.value = f"{panos[0]} & {panos[1]}"
+    assert view.model.scene.drawn_pair == tuple(panos)
+    assert len(view._html) == 4
+    for name in panos:
+        assert kinds(view.svgs[name], "epipolar-conic")
+        assert len(kinds(view.svgs[name], "epipole")) >= 1
+    assert "Panoramic pair" in view.readout
+    # a mixed pin-hole / panoramic pair must draw without errors
+    view.pair_dropdown.value = f"cam1 & {panos[0]}"
+    assert view.model.scene.drawn_pair == ("cam1", panos[0])
+    assert not kinds(view.svgs["cam1"], "message") or "cannot draw" not in kinds(view.svgs["cam1"], "message")[0].text

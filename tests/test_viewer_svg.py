@@ -151,3 +151,19 @@ def test_default_scene_counts_match_the_derived_data():
         assert len(kinds(svg, "epipolar-line")) == n_lines
         assert len(kinds(svg, "epipole")) == len(ip.epipoles)
         assert re.search(r'data-camera="%s"' % name, svg)
+
+
+def test_many_conics_are_thinned_but_keep_their_ends():
+    from egtviz.viewer.svg import CONIC_VERTEX_BUDGET
+
+    t = np.linspace(0, 2 * np.pi, 129)
+    arc = np.column_stack([320 + 100 * np.cos(t), 240 + 100 * np.sin(t)])
+    n = 200
+    pts = np.full((n, 2), np.nan)
+    p = plane(kind="panoramic", points=pts, visible=np.zeros(n, bool), in_image=np.zeros(n, bool), n_hidden=n,
+              conics=tuple((arc,) for _ in range(n)))
+    conics = kinds(image_plane_svg(p), "epipolar-conic")
+    assert len(conics) == n
+    vertices = [c.get("points").split() for c in conics]
+    assert sum(len(v) for v in vertices) <= CONIC_VERTEX_BUDGET + n
+    assert vertices[0][0] == "420,240" and vertices[0][-1] == "420,240"  # both ends kept (whole pixels)

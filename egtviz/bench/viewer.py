@@ -147,8 +147,8 @@ def run_viewer_bench(events: int = EVENTS, browser: bool = True) -> list[dict]:
                 rows.append({"case": f"viewer server, {label} pair, {n_points} points", "ours_ms": float("nan"),
                              "opencv_ms": None, "ratio": None, "note": f"failed: {type(exc).__name__}: {exc}"})
                 continue
-            note = (f"median parts: derived {s['derived']:.2f}, 3D {s['scene3d']:.2f}, SVG {s['svg']:.2f}, "
-                    f"fields {s['fields']:.2f}, flush {s['flush']:.2f} ms")
+            note = (f"median parts (ms): model {s['model']:.2f}, derived {s['derived']:.2f}, SVG {s['svg']:.2f}, "
+                    f"fields {s['fields']:.2f}, 3D {s['scene3d']:.2f}, flush {s['flush']:.2f}")
             for q in ("p50", "p99"):
                 rows.append({"case": f"viewer server, {label} pair, {n_points} points, gizmo event ({q})",
                              "ours_ms": s[q], "opencv_ms": None, "ratio": None, "note": note})

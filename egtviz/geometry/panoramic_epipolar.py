@@ -297,27 +297,18 @@ def _on_circle(u: np.ndarray, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return np.cos(theta)[..., None] * u + np.sin(theta)[..., None] * v
 
 
-_BISECTIONS = 40
-
-
-def _visible_runs(visible: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
-    """Runs of a partly visible closed sampling: ``(shift, begins, ends)`` in the order rolled by ``shift``.
-
-    Rolling by the index of the first invisible sample makes every run contiguous
-    (none straddles the start of the circle).
-    """
-    shift = int(np.argmin(visible))
-    vis = np.roll(visible, -shift).astype(np.int8)
-    edges = np.diff(np.concatenate([[0], vis, [0]]))
-    return shift, np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-
-
 def _sample_circles(camera: CatadioptricCamera, normals: np.ndarray, n: int) -> list[list[np.ndarray]]:
-    """Visible arcs of the images of great circles, one list of polylines per normal.
+    r"""Visible arcs of the images of great circles, one list of polylines per normal.
 
-    Each arc's two ends are refined by bisection onto the boundary of the
-    visible field (the rim; a hyperbola's rim is always below its asymptote), so
-    arcs end on the rim's image instead of one sampling step short of it.
+    A ray from the focus meets the mirror inside its rim exactly when its angle
+    from the mirror axis exceeds the rim's: :math:`d_z / |d| \le c_{rim}`, with
+    :math:`c_{rim} = z_{rim} / \sqrt{r_{rim}^2 + z_{rim}^2}` (the hit radius grows
+    monotonically with elevation, and a hyperbola's rim lies below its asymptote).
+    On the circle :math:`d(\theta) = \cos\theta\,u + \sin\theta\,v`,
+    :math:`d_z = A \cos(\theta - \theta_0)` with :math:`A = \sqrt{u_z^2 + v_z^2}`, so the
+    visible part is the single arc :math:`|\theta - \theta_0| \ge \arccos(c_{rim} / A)`:
+    sampled directly, its ends exactly on the rim, with no splitting and no
+    phantom branch. A fully visible circle is one closed polyline.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
         raise GeometryError(f"n: expected an integer >= 3, got {n!r}")
@@ -328,44 +319,27 @@ def _sample_circles(camera: CatadioptricCamera, normals: np.ndarray, n: int) -> 
     if len(good) == 0:
         return out
     u, v = _circle_basis(normals[good] / norm[good, None])
-    step = 2.0 * np.pi / n
-    theta = step * np.arange(n)
-    proj = camera.project_directions(_on_circle(u[:, None, :], v[:, None, :], theta[None, :]).reshape(-1, 3))
-    pixels = proj.pixels.reshape(len(good), n, 2)
-    visible = proj.visible.reshape(len(good), n)
-
-    # Pass 1: runs, and the (visible, invisible) angle pairs around their ends.
-    runs: list[tuple[int, np.ndarray]] = []  # (circle, original sample indices of the run)
-    circle, th_in, th_out = [], [], []
-    for k in range(len(good)):
-        if visible[k].all():
-            out[good[k]] = [np.vstack([pixels[k], pixels[k, :1]])]  # closed loop
-            continue
-        if not visible[k].any():
-            continue
-        shift, begins, ends = _visible_runs(visible[k])
-        for b, e in zip(begins, ends, strict=True):
-            idx = (np.arange(b, e) + shift) % n
-            runs.append((k, idx))
-            circle += [k, k]
-            th_in += [theta[idx[0]], theta[idx[-1]]]
-            th_out += [theta[idx[0]] - step, theta[idx[-1]] + step]
-    if not runs:
+    mirror = camera.mirror
+    c_rim = mirror.rim_z / np.hypot(mirror.rim_radius, mirror.rim_z)
+    A = np.hypot(u[:, 2], v[:, 2])
+    theta0 = np.arctan2(v[:, 2], u[:, 2])
+    full = A <= c_rim
+    some = ~full & (c_rim > -A)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        half_blind = np.arccos(np.clip(c_rim / np.where(A > 0, A, 1.0), -1.0, 1.0))
+    # Stay a hair inside the rim so rounding never drops the arc's end points.
+    inset = 1e-13
+    start = np.where(full, 0.0, theta0 + half_blind + inset)
+    span = np.where(full, 2.0 * np.pi * (n - 1) / n, 2.0 * (np.pi - half_blind - inset))
+    rows = np.flatnonzero(full | some)
+    if len(rows) == 0:
         return out
-
-    # Pass 2: bisect all run ends at once (visible side kept).
-    ci = np.asarray(circle)
-    lo, hi = np.asarray(th_in), np.asarray(th_out)
-    for _ in range(_BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        hit = camera.mirror.intersect(_on_circle(u[ci], v[ci], mid)).hit
-        lo = np.where(hit, mid, lo)
-        hi = np.where(hit, hi, mid)
-    ends_px = camera.project_directions(_on_circle(u[ci], v[ci], lo)).pixels
-
-    for j, (k, idx) in enumerate(runs):
-        poly = np.vstack([ends_px[2 * j], pixels[k, idx], ends_px[2 * j + 1]])
-        out[good[k]].append(poly)
+    theta = start[rows, None] + span[rows, None] * np.linspace(0.0, 1.0, n)[None, :]
+    d = _on_circle(u[rows, None, :], v[rows, None, :], theta)
+    pixels = camera.project_directions(d.reshape(-1, 3)).pixels.reshape(len(rows), n, 2)
+    closed = np.concatenate([pixels, pixels[:, :1]], axis=1)
+    for j, k in enumerate(rows):
+        out[good[k]] = [closed[j] if full[k] else pixels[j]]
     return out
 
 

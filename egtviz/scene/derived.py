@@ -19,8 +19,10 @@ from .scene import Scene
 from .specs import PanoramicSpec
 
 COINCIDENT_MESSAGE = "no epipolar geometry: the centres coincide"
-#: Samples on each epipolar great circle (conic polylines).
-CONIC_SAMPLES = 128
+#: Samples on each epipolar great circle (conic polylines): fewer per conic when there are many,
+#: so that a panel holds about ``CONIC_VERTEX_BUDGET`` vertices.
+CONIC_SAMPLES = (24, 96)
+CONIC_VERTEX_BUDGET = 4800
 
 
 @dataclass(frozen=True, eq=False)
@@ -243,5 +245,7 @@ def _pair_content(cam, other_centre: np.ndarray, normals: np.ndarray, plane: Ima
         if vis:
             epis.append(_epipole(label, np.append(px, 1.0), plane.width, plane.height))
     n_mirror = normals @ cam.pose.R
-    arcs = sample_plane_conics(cam, n_mirror, CONIC_SAMPLES) if len(normals) else []
+    lo, hi = CONIC_SAMPLES
+    n_samples = int(np.clip(CONIC_VERTEX_BUDGET // max(len(normals), 1), lo, hi))
+    arcs = sample_plane_conics(cam, n_mirror, n_samples) if len(normals) else []
     return {"epipoles": tuple(epis), "conics": tuple(tuple(a) for a in arcs)}

@@ -33,13 +33,18 @@ def default_scene() -> Scene:
 
 
 def panoramic_scene() -> Scene:
-    """Two hyperbolic-mirror cameras (tutorial Example 4): foci apart on the ground, eight points around."""
+    """Two hyperbolic-mirror cameras (tutorial Example 4, at table-top scale): eight points around them.
+
+    The mirrors are EGT's ``a = 3``, ``b = 1`` scaled by 1/10 (the image does
+    not change with the scale), with a CCD focal length that fills the image.
+    """
+    mirror = dict(a=0.3, b=0.1, focal_pixels=1100.0)
     return Scene(
         cameras=(
-            PanoramicSpec("pano1", (-4.0, -4.0, 0.0), (45.0, 0.0, 0.0), focal_pixels=600.0),
-            PanoramicSpec("pano2", (4.0, -3.0, 0.0), focal_pixels=600.0),
+            PanoramicSpec("pano1", (-1.5, -0.8, 0.2), (45.0, 0.0, 0.0), **mirror),
+            PanoramicSpec("pano2", (1.6, -0.4, 0.2), **mirror),
         ),
-        points=tuple((x * 2.5, y * 2.5 + 4.0, z * 1.5 - 1.0) for (x, y, z) in CUBE),
+        points=tuple((x * 1.2, y * 1.2 + 2.0, z * 0.6 + 0.9) for (x, y, z) in CUBE),
         title="Two panoramic cameras",
     )
 

@@ -49,6 +49,7 @@ class SceneModel:
         self._batch_depth = 0
         self._batch_changes: list[Change] = []
         self._batch_start: Scene | None = None
+        self._merge_key: object = None
 
     # -- reading ---------------------------------------------------------------
 
@@ -70,26 +71,28 @@ class SceneModel:
 
     # -- the core of every mutation ---------------------------------------------
 
-    def _commit(self, new: Scene, change: Change, *, undoable: bool = True) -> None:
+    def _commit(self, new: Scene, change: Change, *, undoable: bool = True, merge_key: object = None) -> None:
         with self._lock:
             if self._batch_depth:
                 self._scene = new
                 self._batch_changes.append(change)
                 return
-            if undoable:
+            # Consecutive changes with the same merge key (one gizmo drag) make one undo step.
+            if undoable and (merge_key is None or merge_key != self._merge_key):
                 self._undo.append(self._scene)
                 del self._undo[:-UNDO_DEPTH]
+            self._merge_key = merge_key if undoable else None
             self._scene = new
             listeners = list(self._listeners)
         for listener in listeners:
             listener(new, change)
 
-    def _replace(self, change: Change, **fields: Any) -> None:
+    def _replace(self, change: Change, merge_key: object = None, **fields: Any) -> None:
         try:
             new = self._scene.replace(**fields)
         except (GeometryError, TypeError) as exc:
             raise SceneError(str(exc)) from exc
-        self._commit(new, change)
+        self._commit(new, change, merge_key=merge_key)
 
     @contextmanager
     def batch(self, kind: str = "batch") -> Iterator[None]:
@@ -125,8 +128,11 @@ class SceneModel:
 
     # -- cameras ---------------------------------------------------------------
 
-    def update_camera(self, name: str, **fields: Any) -> None:
-        """Change fields of a camera spec (e.g. ``focal_length=0.01``); ``name=`` renames it."""
+    def update_camera(self, name: str, *, merge_key: object = None, **fields: Any) -> None:
+        """Change fields of a camera spec (e.g. ``focal_length=0.01``); ``name=`` renames it.
+
+        A change that alters nothing is not committed (no undo step, no notification).
+        """
         scene = self._scene
         spec = scene.camera(name)
         try:
@@ -135,19 +141,28 @@ class SceneModel:
             raise SceneError(f"camera {name!r}: {exc}") from exc
         except GeometryError as exc:
             raise SceneError(f"camera {name!r}: {exc}") from exc
+        if new_spec == spec:
+            return
         cameras = tuple(new_spec if c.name == name else c for c in scene.cameras)
         pair = scene.pair
         if pair and new_spec.name != name:
             pair = tuple(new_spec.name if n == name else n for n in pair)  # type: ignore[assignment]
-        self._replace(Change("camera", (name, new_spec.name) if new_spec.name != name else (name,)), cameras=cameras, pair=pair)
+        names = (name, new_spec.name) if new_spec.name != name else (name,)
+        self._replace(Change("camera", names), merge_key, cameras=cameras, pair=pair)
 
-    def set_camera_pose(self, name: str, position: Any, R_world: Any) -> None:
-        """Place a camera from a world pose (a gizmo drag): the spec keeps its own angle convention."""
+    def set_camera_pose(self, name: str, position: Any, R_world: Any, *, drag_id: object = None) -> None:
+        """Place a camera from a world pose (a gizmo drag): the spec keeps its own angle convention.
+
+        Successive calls with the same non-None ``drag_id`` (one drag) are one undo step.
+        """
         spec = self._scene.camera(name)
         R = np.asarray(R_world, dtype=np.float64)
         if R.shape != (3, 3) or not np.all(np.isfinite(R)):
             raise SceneError("R_world: expected a finite 3x3 rotation")
-        self.update_camera(name, position=_triple(position, "position"), ypr_deg=spec.ypr_from_world_rotation(R))
+        merge = None if drag_id is None else ("camera", name, drag_id)
+        self.update_camera(
+            name, merge_key=merge, position=_triple(position, "position"), ypr_deg=spec.ypr_from_world_rotation(R)
+        )
 
     def add_camera(self, kind: str = "pinhole", name: str | None = None, **fields: Any) -> str:
         """Add a camera of ``kind`` (``"pinhole"`` or ``"panoramic"``); returns its name."""
@@ -195,12 +210,17 @@ class SceneModel:
 
     # -- points and surfaces -------------------------------------------------------
 
-    def set_point(self, index: int, xyz: Any) -> None:
+    def set_point(self, index: int, xyz: Any, *, drag_id: object = None) -> None:
+        """Move point ``index``; successive calls with the same non-None ``drag_id`` are one undo step."""
         points = list(self._scene.points)
         if not 0 <= index < len(points):
             raise SceneError(f"index: no point {index} (have {len(points)})")
-        points[index] = _triple(xyz, f"point {index}")
-        self._replace(Change("points", (f"point:{index}",)), points=tuple(points))
+        p = _triple(xyz, f"point {index}")
+        if p == points[index]:
+            return
+        points[index] = p
+        merge = None if drag_id is None else ("point", index, drag_id)
+        self._replace(Change("points", (f"point:{index}",)), merge, points=tuple(points))
 
     def set_points(self, points: Any) -> None:
         """Replace all points at once ((N, 3) array-like)."""

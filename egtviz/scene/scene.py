@@ -49,7 +49,7 @@ class Scene:
         names = [c.name for c in self.cameras]
         if len(set(names)) != len(names):
             raise SceneError(f"cameras: names must be unique, got {names}")
-        object.__setattr__(self, "points", tuple(_triple(p, f"points[{i}]") for i, p in enumerate(self.points)))
+        object.__setattr__(self, "points", _points_tuple(self.points))
         if self.pair is not None:
             pair = tuple(self.pair)
             if len(pair) != 2 or pair[0] == pair[1] or any(n not in names for n in pair):
@@ -203,6 +203,17 @@ class Scene:
         except json.JSONDecodeError as exc:
             raise SceneFileError(f"{path}: line {exc.lineno}, column {exc.colno}: not valid JSON ({exc.msg})") from exc
         return cls.from_dict(data, source=str(path))
+
+
+def _points_tuple(points: Any) -> tuple[tuple[float, float, float], ...]:
+    """Points as a tuple of float triples, checked in one vectorised pass (cheap on every drag)."""
+    if isinstance(points, tuple) and all(type(p) is tuple and len(p) == 3 for p in points):
+        arr = np.array(points, dtype=np.float64).reshape(-1, 3)
+        if np.all(np.isfinite(arr)):
+            return points if all(type(c) is float for p in points[:1] for c in p) else tuple(map(tuple, arr.tolist()))
+    for i, p in enumerate(points):
+        _triple(p, f"points[{i}]")
+    return tuple(map(tuple, np.array(points, dtype=np.float64).reshape(-1, 3).tolist()))
 
 
 def _from_json(value: Any) -> Any:

@@ -19,6 +19,7 @@ import itertools
 import threading
 import time
 from collections import deque
+from html import escape
 from typing import Any
 
 import numpy as np
@@ -65,20 +66,25 @@ def _fmt_vec(v: np.ndarray | None) -> str:
     return f"({v[0] / v[2]:.1f}, {v[1] / v[2]:.1f}) px"
 
 
-def pair_markdown(derived: Any) -> str:
-    """The F / E read-out of the drawn pair as markdown."""
+def pair_html(derived: Any) -> str:
+    """The F / E read-out of the drawn pair (HTML: cheaper for the browser than re-parsing markdown per drag step)."""
     p = derived.pair
+    style = "font-size:0.82em;line-height:1.35"
     if p.names is None:
-        return "**Epipolar geometry**: add a second camera to see it."
-    head = f"**Epipolar geometry of {p.names[0]} -> {p.names[1]}**  \n`m2^T F m1 = 0`"
+        return f'<div style="{style}"><b>Epipolar geometry</b>: add a second camera to see it.</div>'
+    law = "<code>m2&#7488; F m1 = 0</code>" if p.F is not None else ""
+    head = (f'<div style="{style}" data-egtviz="readout"><b>Drawn pair {escape(p.names[0])} &rarr; '
+            f"{escape(p.names[1])}</b>&nbsp; {law}<br>")
     if p.message:
-        return f"{head}\n\n**{p.message}**"
+        return f'{head}<b style="color:#a00">{escape(p.message)}</b></div>'
     if p.F is None:
-        return f"{head}\n\nPanoramic pair: `X_h2^T E X_h1 = 0` between mirror points; the epipolar conics are drawn in the panels."
+        return (f"{head}Panoramic pair (no F between pixels): <code>X_h2&#7488; E X_h1 = 0</code> holds between "
+                "the viewing rays (mirror points); the epipolar conics are drawn in the panels.</div>")
+    pre = 'style="margin:2px 0;font-size:0.95em;background:#f3f3f3;padding:2px 4px"'
     return (
-        f"{head}\n\nF (unit Frobenius norm), rank {p.rank}:\n```\n{_fmt_matrix(p.F)}\n```\n"
-        f"E = [t]x R:\n```\n{_fmt_matrix(p.E)}\n```\n"
-        f"e1 = {_fmt_vec(p.e1)}  \ne2 = {_fmt_vec(p.e2)}"
+        f"{head}F (unit Frobenius norm), rank {p.rank}:<pre {pre}>{_fmt_matrix(p.F)}</pre>"
+        f"E = [t]&#8339; R:<pre {pre}>{_fmt_matrix(p.E)}</pre>"
+        f"e1 = {escape(_fmt_vec(p.e1))}<br>e2 = {escape(_fmt_vec(p.e2))}</div>"
     )
 
 
@@ -102,8 +108,12 @@ class ClientView:
         self._syncing = False
         self._moving: str | None = None
         self._gizmo_stamp: dict[str, float] = {}
-        #: (event time, end of atomic update) in ``time.perf_counter`` seconds, for the benchmark.
+        self._drag_seq: dict[str, int] = {}
+        #: Seconds from a user event (field, button, gizmo) to the end of its atomic update (benchmark).
         self.timings: deque[float] = deque(maxlen=5000)
+        self._t_event: float | None = None
+        #: Seconds spent in each part of the last update.
+        self.breakdown: dict[str, float] = {}
         self.last_update_wall: float = 0.0
         self.svgs: dict[str, str] = {}
         self.readout = ""
@@ -113,6 +123,7 @@ class ClientView:
         self._html: dict[str, Any] = {}
         self._panel_sig: tuple = ()
         self._pair_options: dict[str, tuple[str, str]] = {}
+        self._panel_share: dict[str, float] = {}
 
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event)
@@ -134,7 +145,7 @@ class ClientView:
         with gui.add_folder("Epipolar geometry", expand_by_default=True):
             self.pair_dropdown = gui.add_dropdown("drawn pair", ["-"], hint="Which two cameras' epipolar geometry is drawn.")
             self.pair_dropdown.on_update(self._pair_event)
-            self.readout_md = gui.add_markdown("")
+            self.readout_md = gui.add_html("")
         with gui.add_folder("Points", expand_by_default=True):
             self.point_dropdown = gui.add_dropdown("selected point", ["none"],
                                                    hint="The selected point's epipolar plane is drawn in 3D.")
@@ -194,7 +205,7 @@ class ClientView:
             gui.add_markdown(f"<small>{hint}</small>")
             if spec.kind == "pinhole":
                 f["focal"] = gui.add_number("focal length (mm)", spec.focal_length * 1e3, step=0.1)
-                f["pixel"] = gui.add_vector2("pixel size (um)", tuple(1e6 / k for k in spec.pixels_per_metre), step=0.1)
+                f["pixel"] = gui.add_vector2("pixel size (µm)", tuple(1e6 / k for k in spec.pixels_per_metre), step=0.1)
                 f["pp"] = gui.add_vector2("principal point (px)", spec.principal_point, step=1.0)
                 f["size"] = gui.add_vector2("image size (px)", (spec.width, spec.height), step=1.0)
             else:
@@ -288,13 +299,21 @@ class ClientView:
             self._gizmo_stamp[name] = stamp
             phase = getattr(event, "phase", "update")
             if phase == "start":
+                self._drag_seq[name] = self._drag_seq.get(name, 0) + 1  # one drag = one undo step
                 return
             self._t_event = t0
             R = SO3(np.asarray(target.wxyz, float)).as_matrix()
+            position = np.asarray(target.position, float)
             self._moving = name if phase == "update" else None
             try:
-                if name in self.model.scene.camera_names:
-                    self.model.set_camera_pose(name, tuple(np.asarray(target.position, float)), R)
+                if name not in self.model.scene.camera_names:
+                    return
+                pose = self.model.scene.camera(name).pose
+                if np.allclose(pose.t, position, atol=1e-9) and np.allclose(pose.R, R, atol=1e-9):
+                    if phase == "end":  # nothing moved since the last update: just resync the fields
+                        self._render(self.model.scene, None)
+                    return
+                self.model.set_camera_pose(name, tuple(position), R, drag_id=self._drag_seq.get(name))
             except SceneError as exc:
                 self._notify_error(exc)
             finally:
@@ -315,11 +334,12 @@ class ClientView:
             scene = self.model.scene
             try:
                 if getattr(event, "phase", "update") == "start":
+                    self._drag_seq[key] = self._drag_seq.get(key, 0) + 1  # one drag = one undo step
                     if scene.selected_point != index and index < len(scene.points):
                         self.model.select_point(index)
                     return
                 if index < len(scene.points):
-                    self.model.set_point(index, tuple(np.asarray(target.position, float)))
+                    self.model.set_point(index, tuple(np.asarray(target.position, float)), drag_id=self._drag_seq.get(key))
             except SceneError as exc:
                 self._notify_error(exc)
 
@@ -405,11 +425,13 @@ class ClientView:
                     highlighted=highlighted,
                     show_labels=scene.options.show_labels,
                     revision=self.revision,
+                    # Each SVG shrinks to its panel's share of the window height: no scrolling.
+                    max_height=f"calc({100.0 * self._panel_share.get(spec.name, 1.0):.3f}vh - 75px)",
                 )
                 self.svgs[spec.name] = svg
                 self._html[spec.name].content = svg
             t2 = time.perf_counter()
-            self.readout = pair_markdown(derived)
+            self.readout = pair_html(derived)
             self.readout_md.content = self.readout
             self._sync_fields(scene)
             t3 = time.perf_counter()
@@ -417,9 +439,8 @@ class ClientView:
             t4 = time.perf_counter()
         t5 = time.perf_counter()
         self.last_update_wall = time.time()
-        #: Seconds spent in each part of the last update (benchmark, docs/viewer.md).
-        self.breakdown = {"derived": t1 - t0, "svg": t2 - t1, "fields": t3 - t2, "scene3d": t4 - t3, "flush": t5 - t4}
-        t_event = getattr(self, "_t_event", None)
+        self.breakdown = {"model": t0 - self._t_event if self._t_event is not None else 0.0, "derived": t1 - t0, "svg": t2 - t1, "fields": t3 - t2, "scene3d": t4 - t3, "flush": t5 - t4}
+        t_event = self._t_event
         if t_event is not None:
             self.timings.append(t5 - t_event)
             self._t_event = None
@@ -437,7 +458,7 @@ class ClientView:
                 svg = empty_svg(spec.name, spec.width, spec.height, msg)
                 self.svgs[spec.name] = svg
                 self._html[spec.name].content = svg
-            self.readout = f"**{msg}**"
+            self.readout = f"<b>{escape(msg)}</b>"
             self.readout_md.content = self.readout
             self._sync_fields(scene)
         self._notify_error(exc)
@@ -454,24 +475,40 @@ class ClientView:
         for name in list(self._cam_folders):
             self._cam_folders.pop(name).remove()
             self._cam_fields.pop(name, None)
-        prev_top = None
-        column_top = None
-        for i, spec in enumerate(scene.cameras):
+        # One column docked on the right, panels stacked top to bottom: none hides another or the 3D view.
+        # viser splits a docked slot into two halves and applies the dock commands in the order the panels
+        # were created, so plan a balanced docking order first (equal heights for 2, 4, 8 ... cameras).
+        specs = {c.name: c for c in scene.cameras}
+        plan: list[tuple[str, str | None]] = []
+        self._panel_share = {}
+        names = list(specs)
+        if names:
+            plan.append((names[0], None))
+            self._plan_split(names, 1.0, plan)
+        for name, anchor in plan:
+            spec = specs[name]
             panel = gui.add_panel()
             with panel.add_tab(f"{spec.name}: image plane"):
                 self._html[spec.name] = gui.add_html(empty_svg(spec.name, spec.width, spec.height))
-            # Columns of two panels, docked on the right, so none hides another or the 3D view.
-            if i % 2 == 0:
+            if anchor is None:
                 panel.dock_right()
-                column_top = panel
+                panel.set_width(PANEL_WIDTH)
             else:
-                panel.dock_below(column_top)
-            panel.set_width(PANEL_WIDTH)
-            prev_top = panel
-            self._panels[spec.name] = panel
+                panel.dock_below(self._panels[anchor])
+            self._panels[name] = panel
+        for spec in scene.cameras:
             self._build_camera_fields(spec)
-        del prev_top
         self._panel_sig = sig
+
+    def _plan_split(self, names: list[str], share: float, plan: list) -> None:
+        """``names[0]`` holds a slot of height ``share``: stack all ``names`` in it by halving it recursively."""
+        if len(names) == 1:
+            self._panel_share[names[0]] = share
+            return
+        k = (len(names) + 1) // 2
+        plan.append((names[k], names[0]))
+        self._plan_split(names[:k], share / 2, plan)
+        self._plan_split(names[k:], share / 2, plan)
 
     def _sync_fields(self, scene: Scene) -> None:
         """Write the model's values into the GUI (guarded: these writes are not user edits)."""

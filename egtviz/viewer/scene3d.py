@@ -77,6 +77,9 @@ def _moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
     return float(np.max(np.abs(np.asarray(current, float) - np.asarray(new, float)))) > tol
 
 
+HIGHLIGHT_RGB = (230, 159, 0)
+
+
 def _slug(k: int) -> str:
     return f"/egt/cam_{k}"
 
@@ -133,7 +136,7 @@ class Scene3D:
         api.add_label("/egt/world/x", "x", position=(1.15, 0.0, 0.0), font_screen_scale=0.9)
         api.add_label("/egt/world/y", "y", position=(0.0, 1.15, 0.0), font_screen_scale=0.9)
         api.add_label("/egt/world/z", "z", position=(0.0, 0.0, 1.15), font_screen_scale=0.9)
-        api.add_label("/egt/grid_units", "grid: 1 m squares (world frame, z up)", position=(-9.8, -9.8, 0.0),
+        api.add_label("/egt/grid_units", "grid: 1 m squares (world frame, z up)", position=(-4.0, -3.0, 0.0),
                       font_screen_scale=0.8)
 
     # -- cameras ---------------------------------------------------------------
@@ -170,7 +173,7 @@ class Scene3D:
                                                   thickness=0.015)
             nodes["mirror"] = api.add_mesh_simple(
                 f"/egt/mirror_{k}", np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32),
-                color=(150, 190, 230), opacity=0.45, side="double", cast_shadow=False, receive_shadow=False,
+                color=(150, 190, 230), opacity=0.3, side="double", cast_shadow=False, receive_shadow=False,
             )
         self._rays[name] = api.add_line_segments(f"/egt/rays_{k}", _EMPTY_SEG, (0, 0, 0), thickness=0.008,
                                                  visible=False)
@@ -186,6 +189,7 @@ class Scene3D:
                 k = self._cam_id(spec.name)
                 colour = hex_to_rgb(CAMERA_COLOURS[k % len(CAMERA_COLOURS)])
                 self._cams[spec.name] = self._build_camera(spec, k, colour)
+                self._cams[spec.name]["colour"] = colour
                 self._cam_sig[spec.name] = (spec.kind,)
 
     def _drop_camera(self, name: str) -> None:
@@ -286,6 +290,9 @@ class Scene3D:
             _put(gizmo, "disable_rotations", locked)
             _put(nodes["axes"], "visible", opts.show_frames)
             _put(nodes["label"], "visible", opts.show_labels)
+            # A camera a lesson highlights is drawn in orange.
+            body = nodes.get("frustum", nodes.get("ccd"))
+            _put(body, "color", HIGHLIGHT_RGB if name in scene.highlighted else nodes["colour"])
             if spec.kind == "pinhole":
                 fr = derived.frustums[name]
                 fov, aspect = float(fr["fov"]), float(fr["aspect"])

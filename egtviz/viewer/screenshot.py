@@ -1,4 +1,4 @@
-"""Save a screenshot of the viewer on the default scene: ``python -m egtviz.viewer.screenshot [OUT.png]``.
+"""Save a screenshot of the viewer: ``python -m egtviz.viewer.screenshot [--panoramic] [OUT.png]``.
 
 Starts an in-process server on a free port, opens it in headless Chromium at
 1600 x 900, selects point 3 (so its epipolar plane shows) and writes the PNG
@@ -14,8 +14,14 @@ from pathlib import Path
 DEFAULT_OUT = Path(__file__).resolve().parents[2] / "assets" / "screenshot-default.png"
 
 
-def take_screenshot(out: str | Path = DEFAULT_OUT, *, width: int = 1600, height: int = 900, browser=None) -> Path:
-    """Write the PNG to ``out``; ``browser``: an already launched playwright browser (else one is started)."""
+def take_screenshot(out: str | Path = DEFAULT_OUT, *, width: int = 1600, height: int = 900, browser=None,
+                    scene=None) -> Path:
+    """Write the PNG to ``out``.
+
+    Args:
+        browser: an already launched playwright browser (else one is started).
+        scene: the scene to show (default: :func:`default_scene` with point 3 selected).
+    """
     import viser
 
     from ..scene import default_scene
@@ -26,7 +32,7 @@ def take_screenshot(out: str | Path = DEFAULT_OUT, *, width: int = 1600, height:
     out.parent.mkdir(parents=True, exist_ok=True)
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
-        app = EgtvizApp(server, default_scene().replace(selected_point=2))
+        app = EgtvizApp(server, scene if scene is not None else default_scene().replace(selected_point=2))
         def shoot(b) -> None:
             page = open_viewer(b, f"http://127.0.0.1:{server.get_port()}", width=width, height=height)
             close_notifications(page)
@@ -46,8 +52,14 @@ def take_screenshot(out: str | Path = DEFAULT_OUT, *, width: int = 1600, height:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = take_screenshot(argv[0] if argv else DEFAULT_OUT)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    scene = None
+    if "--panoramic" in argv:
+        from ..scene import panoramic_scene
+
+        argv.remove("--panoramic")
+        scene = panoramic_scene().replace(selected_point=2)
+    out = take_screenshot(argv[0] if argv else DEFAULT_OUT, scene=scene)
     print(f"screenshot written to {out}")
     return 0
 

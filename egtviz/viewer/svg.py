@@ -22,6 +22,7 @@ Point labels are 1-based, like EGT's ``f_3Dwfenum``; ``data-index`` is 0-based.
 from __future__ import annotations
 
 import math
+import zlib
 from html import escape
 from typing import Any
 
@@ -30,6 +31,9 @@ import numpy as np
 from .palette import EPIPOLE_COLOUR, RIM_COLOUR, point_colour
 
 __all__ = ["image_plane_svg", "empty_svg"]
+
+#: Most conic vertices drawn in one panel (200 conics x 129 samples would be ~260 kB of SVG per update).
+CONIC_VERTEX_BUDGET = 10_000
 
 
 def _f(x: float) -> str:
@@ -83,8 +87,15 @@ def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: fl
     )
 
 
-def _polyline_points(P: np.ndarray) -> str:
-    return " ".join(f"{x:.5g},{y:.5g}" for x, y in P)
+def _points_attr(P: np.ndarray, *, integer: bool) -> str:
+    """A polyline's ``points`` attribute in one %-format (a 200-conic panel has ~25 000 vertices).
+
+    Whole pixels when the image is large (a panel shows it at well under 1 screen pixel per image pixel).
+    """
+    if integer:
+        Q = np.rint(P).astype(np.int64)
+        return (("%d,%d " * len(Q)) % tuple(Q.ravel().tolist()))[:-1]
+    return (("%.5g,%.5g " * len(P)) % tuple(np.asarray(P, float).ravel().tolist()))[:-1]
 
 
 def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
@@ -95,17 +106,8 @@ def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
     ok = np.all(np.isfinite(P), axis=1)
     if ok.all():
         return [P] if len(P) >= 2 else []
-    runs, start = [], None
-    for i, good in enumerate(ok):
-        if good and start is None:
-            start = i
-        elif not good and start is not None:
-            if i - start >= 2:
-                runs.append(P[start:i])
-            start = None
-    if start is not None and len(P) - start >= 2:
-        runs.append(P[start:])
-    return runs
+    edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
+    return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
@@ -126,6 +128,7 @@ def image_plane_svg(
     highlighted: frozenset[int] | set[int] = frozenset(),
     show_labels: bool = True,
     revision: int | None = None,
+    max_height: str | None = None,
 ) -> str:
     """Inline SVG of one camera's image plane, in pixel units.
 
@@ -137,6 +140,7 @@ def image_plane_svg(
             ring, its epipolar line/conic thicker.
         highlighted: 0-based indices of highlighted points (a ring too).
         show_labels: write the point numbers (1-based) next to the points.
+        max_height: a CSS ``max-height`` for the SVG (it keeps its aspect ratio).
         revision: written as ``data-rev`` on the root (lets a browser test or
             the benchmark recognise a given update).
 
@@ -154,10 +158,11 @@ def image_plane_svg(
     bottom = margin * (0.45 + 0.55 * (n_inf_total + 1))
     vb = f"{_f(-margin)} {_f(-margin)} {_f(w + 2 * margin)} {_f(h + margin + bottom)}"
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
+    mh = "" if max_height is None else f";max-height:{escape(max_height)}"
     out: list[str] = [
         f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="image-plane" data-camera="{escape(str(plane.camera))}" '
         f'data-camera-kind="{escape(str(plane.kind))}"{rev} viewBox="{vb}" width="100%" '
-        f'style="display:block;font-family:sans-serif;background:#f4f4f4">',
+        f'style="display:block;font-family:sans-serif;background:#f4f4f4{mh}">',
         f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#ffffff" '
         f'stroke="#333" stroke-width="{_f(lw * 1.5)}"/>',
     ]
@@ -189,13 +194,14 @@ def image_plane_svg(
 
     # Clip everything drawn inside the image to the image rectangle.
     clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in str(plane.camera))
+    clip_id += f"-{zlib.crc32(str(plane.camera).encode()):08x}"  # "a b" and "a_b" stay distinct
     out.append(f'<defs><clipPath id="{clip_id}"><rect x="0" y="0" width="{_f(w)}" height="{_f(h)}"/></clipPath></defs>')
     out.append(f'<g clip-path="url(#{clip_id})">')
 
     if plane.rim is not None:
         for run in _finite_runs(plane.rim):
             out.append(
-                f'<polyline data-kind="rim" points="{_polyline_points(run)}" fill="none" stroke="{RIM_COLOUR}" '
+                f'<polygon data-kind="rim" points="{_points_attr(run, integer=False)}" fill="none" stroke="{RIM_COLOUR}" '
                 f'stroke-width="{_f(lw * 1.5)}" stroke-dasharray="{_f(lw * 6)} {_f(lw * 4)}"/>'
             )
 
@@ -216,13 +222,21 @@ def image_plane_svg(
 
     if plane.conics is not None:
         body = []
+        # Vertex budget: with hundreds of conics, keep every k-th sample (and each arc's ends).
+        total = sum(len(piece) for pieces in plane.conics for piece in pieces)
+        stride = max(1, math.ceil(total / CONIC_VERTEX_BUDGET))
         for i, pieces in enumerate(plane.conics):
             extra = f' stroke-width="{_f(lw * 3.0)}"' if i == selected_point else ""
             for piece in pieces:
                 for run in _finite_runs(piece):
-                    pts = ((c + "," + c + " ") * len(run)) % tuple(run.ravel().tolist())
+                    if stride > 1 and len(run) > 2:
+                        keep = np.zeros(len(run), bool)
+                        keep[::stride] = True
+                        keep[-1] = True
+                        run = run[keep]
+                    pts = _points_attr(run, integer=s >= 200)
                     body.append(
-                        f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{pts[:-1]}" '
+                        f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{pts}" '
                         f'stroke="{point_colour(i)}"{extra}/>'
                     )
         out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{"".join(body)}</g>')

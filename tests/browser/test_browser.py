@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 
 from egtviz.scene import compute_derived, default_scene, panoramic_scene
-from egtviz.viewer.browser import COUNT_JS, LINES_JS, chromium, chromium_available, open_viewer
+from egtviz.viewer.browser import CHROMIUM, COUNT_JS, LINES_JS, chromium, chromium_available, open_viewer
 
 pytestmark = pytest.mark.browser
 
 if not chromium_available():
     if os.environ.get("CI"):
-        raise RuntimeError("CI: /usr/bin/chromium is required for the browser tests (apt-get install -y chromium)")
-    pytest.skip("headless Chromium not found at /usr/bin/chromium (apt-get install -y chromium)", allow_module_level=True)
+        raise RuntimeError(f"CI: {CHROMIUM} is required for the browser tests (apt-get install -y chromium)")
+    pytest.skip(f"headless Chromium not found at {CHROMIUM} (apt-get install -y chromium)", allow_module_level=True)
 
 
 def _serve(scene):
