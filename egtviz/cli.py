@@ -20,6 +20,41 @@ def _run_bench(args) -> int:
     return run(args.suite, repeats=args.repeats)
 
 
+def _add_scene(subparsers) -> None:
+    p = subparsers.add_parser("scene", help="list the built-in scenes, save one to a file, or check a scene file")
+    sub = p.add_subparsers(dest="scene_command", required=True)
+    sub.add_parser("list", help="the built-in scenes")
+    save = sub.add_parser("save", help="write a built-in scene to a JSON file (to edit, then serve with --scene)")
+    save.add_argument("name", help="a built-in scene (see `egtviz scene list`)")
+    save.add_argument("file")
+    check = sub.add_parser("check", help="read a scene file and report what it holds, or what is wrong with it")
+    check.add_argument("file")
+
+
+def _run_scene(args) -> int:
+    from .scene import SCENES, Scene, SceneFileError
+
+    if args.scene_command == "list":
+        for name, make in SCENES.items():
+            print(f"{name:<10} {make().title}")
+        return 0
+    if args.scene_command == "save":
+        if args.name not in SCENES:
+            print(f"egtviz: no built-in scene {args.name!r} (have {', '.join(SCENES)})", file=sys.stderr)
+            return 2
+        SCENES[args.name]().save(args.file)
+        print(f"saved {args.name} to {args.file}")
+        return 0
+    try:
+        scene = Scene.load(args.file)
+    except SceneFileError as exc:
+        print(f"egtviz: {exc}", file=sys.stderr)
+        return 2
+    kinds = ", ".join(f"{c.name} ({c.kind})" for c in scene.cameras) or "no cameras"
+    print(f"{args.file}: {scene.title or 'untitled'}: {kinds}; {len(scene.points)} points, {len(scene.surfaces)} surfaces")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="egtviz",
@@ -35,6 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_servo(sub)
     _add_bench(sub)
+    _add_scene(sub)
     sub.add_parser("version", help="print the version")
     return parser
 
@@ -50,6 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.command == "bench":
         return _run_bench(args)
+    if args.command == "scene":
+        return _run_scene(args)
     if args.command == "serve":
         from .viewer.cli import run as run_serve
 

@@ -375,3 +375,22 @@ def test_reprojection_error_propagates_nan_points() -> None:
     assert np.isnan(r[2]) and np.all(r[[0, 1, 3, 4]] < 1e-9)
     with pytest.raises(GeometryError, match=r"X: expected shape \(N, 3\)"):
         reprojection_error(scene.P1, scene.P2, X[:, :2], scene.U1, scene.U2)
+
+
+@pytest.mark.parametrize("robust", ["ransac", "lmeds"])
+def test_all_coplanar_scene_is_refused_by_every_estimator(robust):
+    # Points on one plane seen by two cameras are related by a homography: F is not determined.
+    from egtviz.geometry import GeometryError, Intrinsics, PinholeCamera
+    from egtviz.geometry.estimation import fundamental_lmeds, fundamental_ransac
+    from egtviz.geometry.poses import look_at
+
+    rng = np.random.default_rng(5)
+    X = np.column_stack([rng.uniform(-2, 2, 40), np.zeros(40), rng.uniform(-2, 2, 40)])
+    c1 = PinholeCamera(look_at([-1, -6, 1], [0, 0, 0]), Intrinsics())
+    c2 = PinholeCamera(look_at([1, -6, 1.5], [0, 0, 0]), Intrinsics())
+    u1, u2 = c1.project(X).pixels, c2.project(X).pixels
+    estimator = fundamental_ransac if robust == "ransac" else fundamental_lmeds
+    with pytest.raises(GeometryError, match="degenerate configuration"):
+        estimator(u1, u2)
+    with pytest.raises(GeometryError, match="degenerate configuration"):
+        fundamental_normalized_8point(u1, u2)

@@ -206,3 +206,16 @@ def test_one_drag_is_one_undo_step_and_no_op_changes_are_silent():
     assert model.undo()  # the whole camera drag
     assert model.scene.camera("cam1") == start.camera("cam1")
     assert not model.undo()
+
+
+def test_mesh_surface_from_assets_is_sampled_with_unit_normals():
+    from egtviz.scene.surfaces import sample_surface
+
+    pts, normals = sample_surface(SurfaceSpec("mesh", (1.0, 2.0, 0.0), 2.0, samples=200, path="house.obj"))
+    assert 100 <= len(pts) <= 200 and pts.shape == normals.shape
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-9)
+    # The house (1 x 1 x 1.2, scaled by 2) stands on the ground at (1, 2).
+    assert pts[:, 2].min() >= -1e-9 and pts[:, 2].max() <= 2.4 + 1e-9
+    assert np.all(np.abs(pts[:, :2] - [1.0, 2.0]) <= 1.0 + 1e-9)
+    with pytest.raises(SceneError, match="cannot load mesh"):
+        sample_surface(SurfaceSpec("mesh", path="no-such-mesh.obj"))

@@ -653,6 +653,7 @@ def _robust(
     N = u1.shape[0]
     T1, n1, s1, T2, n2, s2 = _hartley(u1, u2)
     At = _design(n1, n2)
+    _null_vector_normal(At)  # all the data degenerate (e.g. a coplanar scene seen twice): no F to find
     A = At.T  # rows of the design matrix, for gathering samples
     rng = np.random.default_rng(seed)
     scorer = _Scorer(mode, threshold * threshold, N)

@@ -97,11 +97,13 @@ class ClientView:
         model: the tab's own :class:`SceneModel`.
     """
 
-    def __init__(self, client: viser.ClientHandle, model: SceneModel) -> None:
+    def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None) -> None:
         from .scene3d import Scene3D
 
         self.client = client
         self.model = model
+        #: ``open_demo(kind)`` opens a visual-servoing demo in this tab (the app passes it); None: no folder.
+        self._open_demo = open_demo
         self.lock = threading.RLock()
         self.closed = False
         self.revision = 0
@@ -157,7 +159,7 @@ class ClientView:
             self.btn_add_point.on_click(lambda _: self._guarded(lambda: self.model.add_point((0.0, 0.0, 1.0))))
             self.btn_remove_point = gui.add_button("Remove selected (or last) point")
             self.btn_remove_point.on_click(lambda _: self._guarded(self._remove_point))
-            self.surface_kind = gui.add_dropdown("surface", ["plane", "sphere"], initial_value="sphere")
+            self.surface_kind = gui.add_dropdown("surface", ["plane", "sphere", "mesh: house.obj"], initial_value="sphere")
             self.btn_surface = gui.add_button("Add surface")
             self.btn_surface.on_click(lambda _: self._guarded(self._add_surface))
         with gui.add_folder("Cameras", expand_by_default=True):
@@ -174,6 +176,12 @@ class ClientView:
                 cb = gui.add_checkbox(label, getattr(self.model.scene.options, opt))
                 cb.on_update(lambda e, opt=opt: self._guarded(lambda: self._toggle(opt, e.target.value)))
                 self.toggles[opt] = cb
+        if self._open_demo is not None:
+            with gui.add_folder("Visual servoing", expand_by_default=False):
+                self.btn_servo_pinhole = gui.add_button("Pin-hole camera on a Puma 560")
+                self.btn_servo_pinhole.on_click(lambda _: self._open_demo("pinhole"))
+                self.btn_servo_panoramic = gui.add_button("Panoramic camera on a mobile robot")
+                self.btn_servo_panoramic.on_click(lambda _: self._open_demo("panoramic"))
         with gui.add_folder("Scene file", expand_by_default=False):
             self.btn_undo = gui.add_button("Undo")
             self.btn_undo.on_click(lambda _: self._guarded(self.model.undo))
@@ -382,6 +390,12 @@ class ClientView:
         kind = self.surface_kind.value
         X = self.model.scene.points_array()
         centre = tuple(X.mean(axis=0)) if len(X) else (0.0, 0.0, 1.0)
+        if kind.startswith("mesh: "):
+            # A mesh from assets/, standing on the ground under the points.
+            self.model.add_surface(
+                SurfaceSpec(kind="mesh", center=(centre[0], centre[1], 0.0), size=2.0, samples=300, path=kind[6:])
+            )
+            return
         size = 1.0 if kind == "sphere" else 3.0
         self.model.add_surface(SurfaceSpec(kind=kind, center=centre, size=size, samples=200))
 
@@ -585,10 +599,17 @@ class EgtvizApp:
         scene: the scene every new tab starts from (default: :func:`default_scene`).
     """
 
-    def __init__(self, server: viser.ViserServer, scene: Scene | None = None) -> None:
+    def __init__(self, server: viser.ViserServer, scene: Scene | None = None, *, demo: str | None = None) -> None:
+        if demo not in (None, "pinhole", "panoramic"):
+            raise ValueError(f"demo: expected None, 'pinhole' or 'panoramic', got {demo!r}")
         self.server = server
         self.initial_scene = scene if scene is not None else default_scene()
+        #: Open this servo demo in every new tab instead of the workbench.
+        self.demo = demo
         self.views: dict[int, ClientView] = {}
+        #: The servo demo shown in a tab (``egtviz.viewer.servo_demo.ServoDemo``), by client id.
+        self.demos: dict[int, Any] = {}
+        self._models: dict[int, SceneModel] = {}
         self._lock = threading.Lock()
         self._gone: set[int] = set()
         self._frame_view(self.initial_scene)
@@ -609,8 +630,11 @@ class EgtvizApp:
         cam.fov = float(np.radians(60.0))
 
     def _connect(self, client: viser.ClientHandle) -> None:
+        if self.demo is not None:
+            self.open_demo(client, self.demo)
+            return
         model = SceneModel(self.initial_scene)
-        view = ClientView(client, model)
+        view = ClientView(client, model, open_demo=lambda kind, c=client: self.open_demo(c, kind))
         with self._lock:
             if client.client_id in self._gone:  # it left while we were building its view
                 self._gone.discard(client.client_id)
@@ -621,10 +645,60 @@ class EgtvizApp:
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
             view = self.views.pop(client.client_id, None)
-            if view is None:
+            demo = self.demos.pop(client.client_id, None)
+            self._models.pop(client.client_id, None)
+            if view is None and demo is None:
                 self._gone.add(client.client_id)
         if view is not None:
             view.close()
+        if demo is not None:
+            demo.close()
+
+    # -- visual-servoing demos (egtviz.viewer.servo_demo) ---------------------------------
+
+    def open_demo(self, client: viser.ClientHandle, kind: str) -> Any:
+        """Replace the tab's workbench by a servo demo (its scene is kept for the way back)."""
+        from .servo_demo import ServoDemo
+
+        cid = client.client_id
+        with self._lock:
+            view = self.views.pop(cid, None)
+            old = self.demos.pop(cid, None)
+        if view is not None:
+            view.close()
+            self._models[cid] = view.model
+        if old is not None:
+            old.close()
+        client.gui.reset()
+        client.scene.reset()
+        demo = ServoDemo(client, kind, on_back=lambda: self.close_demo(client))  # type: ignore[arg-type]
+        with self._lock:
+            if cid in self._gone:
+                self._gone.discard(cid)
+                demo.close()
+                return None
+            self.demos[cid] = demo
+        return demo
+
+    def close_demo(self, client: viser.ClientHandle) -> ClientView | None:
+        """Close the tab's servo demo and bring its workbench back."""
+        cid = client.client_id
+        with self._lock:
+            demo = self.demos.pop(cid, None)
+            model = self._models.pop(cid, None)
+        if demo is not None:
+            demo.close()
+        client.gui.reset()
+        client.scene.reset()
+        view = ClientView(client, model or SceneModel(self.initial_scene),
+                          open_demo=lambda kind, c=client: self.open_demo(c, kind))
+        with self._lock:
+            if cid in self._gone:
+                self._gone.discard(cid)
+                view.close()
+                return None
+            self.views[cid] = view
+        return view
 
     def wait_for_view(self, timeout: float = 10.0, count: int = 1) -> list[ClientView]:
         """Block until at least ``count`` tabs are connected (tests, benchmark)."""
@@ -635,3 +709,13 @@ class EgtvizApp:
                     return list(self.views.values())
             time.sleep(0.02)
         raise TimeoutError(f"fewer than {count} viewer tabs connected after {timeout} s")
+
+    def wait_for_demo(self, timeout: float = 10.0, count: int = 1) -> list[Any]:
+        """Block until at least ``count`` tabs show a servo demo (tests)."""
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            with self._lock:
+                if len(self.demos) >= count:
+                    return list(self.demos.values())
+            time.sleep(0.02)
+        raise TimeoutError(f"fewer than {count} servo demos open after {timeout} s")

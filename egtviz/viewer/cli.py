@@ -22,10 +22,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1: this computer only)")
     p.add_argument("--port", type=int, default=8080, help="port (default 8080; 0 = any free port)")
-    p.add_argument("--scene", metavar="FILE", default=None, help="start every tab from this scene file (JSON)")
+    p.add_argument("--scene", metavar="FILE", default=None, help="start every tab from this scene: a JSON file saved by egtviz, or a built-in name "
+                   "(default, panoramic, example1, example3)")
+    p.add_argument("--demo", choices=["pinhole", "panoramic"], default=None,
+                   help="open this visual-servoing demo in every new tab (docs/servo.md)")
 
 
-def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None, *, verbose: bool = False):
+def load_scene_argument(value: str | Path):
+    """A scene file, or the name of a built-in scene (``default``, ``panoramic``, ``example1``, ``example3``)."""
+    from ..scene import SCENES, Scene
+
+    if str(value) in SCENES and not Path(value).exists():
+        return SCENES[str(value)]()
+    return Scene.load(value)
+
+
+def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None, *, verbose: bool = False,
+          demo: str | None = None):
     """Start a server and the app without blocking; returns ``(server, app)``.
 
     Raises:
@@ -36,19 +49,19 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     from ..scene import Scene
     from .app import EgtvizApp
 
-    scene = Scene.load(scene_path) if scene_path is not None else None
+    scene = load_scene_argument(scene_path) if scene_path is not None else None
     server = viser.ViserServer(host=host, port=port, verbose=verbose)
-    app = EgtvizApp(server, scene)
+    app = EgtvizApp(server, scene, demo=demo)
     return server, app
 
 
 def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None,
-          *, stop_event: threading.Event | None = None) -> int:
+          *, stop_event: threading.Event | None = None, demo: str | None = None) -> int:
     """Serve until Ctrl-C (or until ``stop_event`` is set); returns the exit status."""
     from ..scene import SceneFileError
 
     try:
-        server, _app = start(host, port, scene_path)
+        server, _app = start(host, port, scene_path, demo=demo)
     except SceneFileError as exc:
         print(f"egtviz: cannot read the scene file: {exc}", file=sys.stderr)
         return 2
@@ -69,7 +82,7 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
 
 def run(args: argparse.Namespace) -> int:
     """Entry point for the parsed ``serve`` sub-command."""
-    return serve(args.host, args.port, args.scene)
+    return serve(args.host, args.port, args.scene, demo=getattr(args, "demo", None))
 
 
 def main(argv: list[str] | None = None) -> int:

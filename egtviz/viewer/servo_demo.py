@@ -281,7 +281,7 @@ class ServoDemo:
             n["robot"] = robot("/servo/robot", (86, 110, 140), None)
             api.add_label("/servo/robot/label", "robot", position=(0.0, 0.0, 0.75), font_screen_scale=0.9)
             n["points"] = api.add_point_cloud("/servo/points", self.points.astype(np.float32), cols,
-                                              point_size=0.12, point_shape="circle")
+                                              point_size=0.09, point_shape="circle")
             for i, X in enumerate(self.points):
                 api.add_label(f"/servo/point_labels/{i}", str(i + 1), position=tuple(X + [0, 0, 0.12]),
                               font_screen_scale=0.8)
@@ -289,7 +289,7 @@ class ServoDemo:
                                               thickness=0.025)
             n["rays"] = api.add_line_segments("/servo/rays", np.zeros((1, 2, 3), np.float32), (120, 120, 120),
                                               thickness=0.008)
-            self._view(np.array([0.0, 0.0, 0.5]), np.array([3.0, -7.5, 5.5]))
+            self._view(np.array([0.0, 0.0, 0.3]), np.array([2.0, -8.0, 6.0]))
 
     def _view(self, look_at: np.ndarray, position: np.ndarray) -> None:
         try:
@@ -323,6 +323,12 @@ class ServoDemo:
 
     def _build_gui(self, seed, beta, noise_px, estimator, steps, speed) -> None:
         gui = self.client.gui
+        gui.configure_theme(dark_mode=False, show_logo=False)
+        try:
+            gui.main_panel.dock_left()
+            gui.main_panel.set_width(330)
+        except Exception:  # noqa: BLE001 - placement is cosmetic
+            pass
         title, text = _TITLES[self.kind]
         self.title_md = gui.add_markdown(f"**{title}**  \n{text}")
         if self._on_back is not None:
@@ -372,20 +378,18 @@ class ServoDemo:
         with self.panel.add_tab("Image plane and plots"):
             self.image_html = gui.add_html("")
             if self.kind == "pinhole":
-                series = [("v_x (m/s)", "#0072B2", "v"), ("v_y (m/s)", "#D55E00", "v"), ("v_z (m/s)", "#009E73", "v"),
-                          ("ω_x (rad/s)", "#0072B2", "w"), ("ω_y (rad/s)", "#D55E00", "w"),
-                          ("ω_z (rad/s)", "#009E73", "w")]
+                series = [("v_x", "#0072B2", "v"), ("v_y", "#D55E00", "v"), ("v_z", "#009E73", "v"),
+                          ("ω_x", "#0072B2", "w"), ("ω_y", "#D55E00", "w"), ("ω_z", "#009E73", "w")]
                 ctitle = "Camera twist (camera frame): v solid, ω dashed"
             else:
-                series = [("v_x (m/s)", "#0072B2", "v"), ("v_y (m/s)", "#D55E00", "v"), ("ω (rad/s)", "#009E73", "w")]
+                series = [("v_x", "#0072B2", "v"), ("v_y", "#D55E00", "v"), ("ω (right axis)", "#009E73", "w")]
                 ctitle = "Robot velocity (robot frame)"
             self._control_series = series
             self.plot_controls = self._uplot(ctitle, series, dual=True)
-            ename = "s(t) (px)" if self.kind == "panoramic" else "feature error (px)"
-            eseries = [("rotation (deg)", "#D55E00", "e"), ("translation (cm)", "#0072B2", "e"),
-                       (ename, "#CC79A7", "e")]
+            ename = "s(t)" if self.kind == "panoramic" else "features"
+            eseries = [("rotation", "#D55E00", "e"), ("translation", "#0072B2", "e"), (ename, "#CC79A7", "e")]
             self._error_series = eseries
-            self.plot_errors = self._uplot("Errors (log scale)", eseries, dual=False)
+            self.plot_errors = self._uplot("Errors, % of their start value", eseries, dual=False)
         self.panel.dock_right()
         self.panel.set_width(PANEL_WIDTH)
 
@@ -406,10 +410,10 @@ class ServoDemo:
                     uplot.Axis(scale="w", side=1, label="ω (rad/s)", grid={"show": False}))
         else:
             scales = {"x": uplot.Scale(time=False, auto=False, range=(0.0, t_end)),
-                      "e": uplot.Scale(distr=3, log=10, auto=True)}
-            axes = (uplot.Axis(label="t (s)"), uplot.Axis(scale="e"))
+                      "e": uplot.Scale(auto=False, range=(0.0, 105.0))}
+            axes = (uplot.Axis(label="t (s)"), uplot.Axis(scale="e", label="%"))
         data = tuple([np.zeros(1)] + [np.full(1, np.nan) for _ in series])
-        return self.client.gui.add_uplot(data, tuple(ser), title=title, scales=scales, axes=axes, height=190,
+        return self.client.gui.add_uplot(data, tuple(ser), title=title, scales=scales, axes=axes, height=140,
                                          legend=uplot.Legend(show=True), aspect=2.0)
 
     # -- public control ------------------------------------------------------------------
@@ -635,6 +639,14 @@ class ServoDemo:
             self.slider.value = 0.0
         finally:
             self._syncing = False
+        if self.plot_errors is not None:
+            e = r.errors
+            starts = (f"{math.degrees(e['rotation_error_rad'][0]):.3g}°", f"{100 * e['translation_error'][0]:.3g} cm",
+                      f"{e['feature_error_px'][0]:.3g} px")
+            ser = list(self.plot_errors.series)
+            for j, ((label, _, _), s0) in enumerate(zip(self._error_series, starts)):
+                ser[j + 1] = {**ser[j + 1], "label": f"{label} (100% = {s0})"}
+            self.plot_errors.series = tuple(ser)
         for plot in (self.plot_controls, self.plot_errors):
             if plot is not None:
                 scales = dict(plot.scales)
@@ -706,7 +718,7 @@ class ServoDemo:
 
     def _send_svg(self, img: ServoImage) -> None:
         self.revision += 1
-        self.svg = servo_image_svg(img, revision=self.revision, max_height="calc(100vh - 520px)")
+        self.svg = servo_image_svg(img, revision=self.revision, max_height="calc(100vh - 500px)")
         if self.image_html is not None:
             self.image_html.content = self.svg
 
@@ -791,10 +803,10 @@ class ServoDemo:
             u = r.controls["robot_velocity"][idx]
         self.plot_controls.data = (t, *[u[:, j] for j in range(u.shape[1])])
         e = r.errors
-        floor = 1e-4
-        self.plot_errors.data = (
-            t,
-            np.maximum(np.degrees(e["rotation_error_rad"][idx]), floor),
-            np.maximum(100.0 * e["translation_error"][idx], floor),
-            np.maximum(e["feature_error_px"][idx], floor),
-        )
+
+        def pct(x: np.ndarray) -> np.ndarray:
+            x0 = float(x[0]) if np.isfinite(x[0]) and x[0] > 0 else 1.0
+            return 100.0 * x[idx] / x0
+
+        self.plot_errors.data = (t, pct(e["rotation_error_rad"]), pct(e["translation_error"]),
+                                 pct(e["feature_error_px"]))

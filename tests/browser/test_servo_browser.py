@@ -1,0 +1,54 @@
+"""Real-browser test of ``egtviz serve --demo pinhole`` (headless Debian Chromium, in-process server).
+
+Skips only when /usr/bin/chromium is missing and ``CI`` is unset.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from egtviz.viewer.browser import CHROMIUM, chromium, chromium_available
+
+pytestmark = pytest.mark.browser
+
+if not chromium_available():
+    if os.environ.get("CI"):
+        raise RuntimeError(f"CI: {CHROMIUM} is required for the browser tests (apt-get install -y chromium)")
+    pytest.skip(f"headless Chromium not found at {CHROMIUM} (apt-get install -y chromium)", allow_module_level=True)
+
+SVG = 'svg[data-egtviz="servo-image"]'
+
+
+def test_pinhole_demo_plays_in_the_browser():
+    from egtviz.viewer.cli import start
+
+    server, app = start("127.0.0.1", 0, demo="pinhole")
+    try:
+        with chromium() as browser:
+            page = browser.new_page(viewport={"width": 1000, "height": 650})
+            page.goto(f"http://127.0.0.1:{server.get_port()}")
+            page.wait_for_selector(SVG, timeout=60_000)
+            demo = app.wait_for_demo()[0]
+            assert demo.wait(60)
+            demo.pause()
+            demo.seek(0)
+            page.wait_for_function(f"() => document.querySelector('{SVG}')?.dataset.frame === '0'", timeout=30_000)
+            n = len(demo.result.desired_features)
+            counts = page.evaluate(f"""() => {{ const s = document.querySelector('{SVG}');
+                return {{point: s.querySelectorAll('[data-kind="point"]').length,
+                         line: s.querySelectorAll('[data-kind="epipolar-line"]').length,
+                         desired: s.querySelectorAll('[data-kind="desired"]').length}}; }}""")
+            assert counts["point"] == n and counts["desired"] == n and counts["line"] >= n - 1
+            # Press the real Play button: the image plane changes (new frame, trails appear).
+            page.get_by_role("button", name="Play").first.click()
+            page.wait_for_function(
+                f"() => Number(document.querySelector('{SVG}')?.dataset.frame) > 3 && "
+                f"document.querySelectorAll('{SVG} [data-kind=\"trail\"]').length > 0", timeout=30_000)
+            assert demo.playing or demo.frame > 3
+            # The uPlot charts are canvases in the panel.
+            assert page.locator(".uplot canvas").count() >= 2
+            page.close()
+    finally:
+        server.stop()

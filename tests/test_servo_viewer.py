@@ -1,0 +1,209 @@
+"""Headless tests of the servo demo unit (egtviz.viewer.servo_demo) on a real viser server.
+
+A websocket stand-in (egtviz.viewer.headless.FakeTab) is the browser tab; GUI
+handle values are set directly (their callbacks run synchronously).
+"""
+
+from __future__ import annotations
+
+import re
+import time
+
+import numpy as np
+import pytest
+import viser
+
+from egtviz.viewer.headless import FakeTab
+from egtviz.viewer.servo_demo import ServoDemo
+from egtviz.viewer.servo_svg import ServoImage, servo_image_svg
+
+
+@pytest.fixture(scope="module")
+def client():
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    clients = []
+    server.on_client_connect(clients.append)
+    tab = FakeTab(server.get_port())
+    deadline = time.time() + 10
+    while not clients and time.time() < deadline:
+        time.sleep(0.02)
+    assert clients
+    yield clients[0]
+    tab.close()
+    server.stop()
+
+
+def _kinds(svg: str) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for k in re.findall(r'data-kind="([a-z-]+)"', svg):
+        out[k] = out.get(k, 0) + 1
+    return out
+
+
+def _point_xy(svg: str, i: int) -> tuple[float, float]:
+    m = re.search(rf'data-kind="point" data-index="{i}" cx="([-\d.e]+)" cy="([-\d.e]+)"', svg)
+    assert m, svg[:400]
+    return float(m.group(1)), float(m.group(2))
+
+
+def _trail_len(svg: str, i: int) -> int:
+    m = re.search(rf'data-kind="trail" data-index="{i}" points="([^"]*)"', svg)
+    return 0 if m is None else len(m.group(1).split())
+
+
+def test_pinhole_demo_steps_and_scrubs(client):
+    demo = ServoDemo(client, "pinhole", steps=60, autoplay=False)
+    try:
+        assert demo.wait(30) and demo.error == ""
+        r = demo.result
+        assert r is not None and r.n_samples == 61
+        assert demo.frame == 0 and 'data-egtviz="servo-image"' in demo.svg
+        s0 = demo.svg
+        k0 = _kinds(s0)
+        n = len(r.desired_features)
+        assert k0["point"] == n and k0["desired"] == n
+        assert k0["epipolar-line"] >= n - 1 and k0["epipole"] == 1
+        assert "trail" not in k0  # one sample: no trail yet
+        p0 = _point_xy(s0, 0)
+        demo.btn_step.value = None  # a "click": viser runs the button's callbacks on assignment
+        assert demo.frame == 1
+        demo.step(4)
+        assert demo.frame == 5
+        s5 = demo.svg
+        assert _point_xy(s5, 0) != p0  # features move
+        assert _kinds(s5)["trail"] == n and _trail_len(s5, 0) == 6
+        demo.step(10)
+        assert _trail_len(demo.svg, 0) == 16  # trails grow
+        demo.step(-3)
+        assert demo.frame == 12
+        # The scrubber sets the frame (its callback runs synchronously).
+        demo.slider.value = float(r.time[40])
+        assert demo.frame == 40 and 'data-frame="40"' in demo.svg
+        assert abs(demo.slider.value - r.time[40]) < 1e-9
+        # Plots are revealed up to the current time.
+        assert len(demo.plot_controls.data[0]) == 41 and len(demo.plot_controls.data) == 7
+        assert len(demo.plot_errors.data[0]) == 41
+        assert "rotation error" in demo.readout.content
+        # Not converged in 60 steps: the status says why, no traceback.
+        assert not r.converged and "not converged" in demo.status.content
+    finally:
+        demo.close()
+    assert demo.closed
+
+
+def test_pinhole_play_pause(client):
+    demo = ServoDemo(client, "pinhole", steps=200, autoplay=False, speed="4x")
+    try:
+        assert demo.wait(30)
+        demo.play()
+        assert demo.playing and demo.btn_play.label == "Pause"
+        time.sleep(0.6)
+        demo.pause()
+        k = demo.frame
+        assert k > 5 and not demo.playing and demo.btn_play.label == "Play"
+        time.sleep(0.3)
+        assert demo.frame == k  # paused: the loop has stopped
+    finally:
+        demo.close()
+
+
+def test_panoramic_demo_biconics(client):
+    demo = ServoDemo(client, "panoramic", steps=80, autoplay=False)
+    try:
+        assert demo.wait(30) and demo.error == ""
+        s0 = _kinds(demo.svg)
+        n = len(demo.result.desired_features)
+        assert s0["point"] == n and s0["desired"] == n and s0["rim"] == 1
+        assert s0["epipolar-conic"] >= n  # one bi-conic (or more pieces) per feature
+        demo.seek(30)
+        k = _kinds(demo.svg)
+        assert k["trail"] == n and k["epipolar-conic"] >= n
+        assert "step 1: rotation" in demo.svg or "step 2: translation" in demo.svg
+        assert len(demo.plot_controls.data) == 4  # t, v_x, v_y, omega
+        demo.seek_time(1.0)
+        assert demo.frame == 20
+    finally:
+        demo.close()
+
+
+def test_bad_parameters_are_shown_not_raised(client):
+    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False)
+    try:
+        demo.f_beta.value = -1.0
+        assert demo.run(wait=True)
+        assert demo.result is None
+        assert "beta" in demo.error and "Bad parameters" in demo.status.content
+        assert 'data-level="error"' in demo.status.content
+        assert 'data-kind="message"' in demo.svg and "beta" in demo.svg
+        # A good run afterwards clears the error.
+        demo.set_params(beta=1.0, steps=10)
+        assert demo.run(wait=True) and demo.error == "" and demo.result.n_samples == 11
+    finally:
+        demo.close()
+
+
+def test_rerun_while_running_is_refused_and_close_stops(client):
+    demo = ServoDemo(client, "panoramic", steps=400, autorun=False, autoplay=True)
+    try:
+        assert demo.run()
+        assert not demo.run()  # one run at a time
+        assert demo.wait(30)
+        deadline = time.time() + 5
+        while not demo.playing and time.time() < deadline:
+            time.sleep(0.02)
+        assert demo.playing
+    finally:
+        demo.close()
+    assert not demo.playing
+    time.sleep(0.2)
+    assert demo._play_thread is None or not demo._play_thread.is_alive()
+
+
+def test_app_opens_demo_and_goes_back():
+    from egtviz.viewer.headless import start_headless
+
+    server, app, fakes, views = start_headless()
+    try:
+        client = views[0].client
+        views[0].btn_servo_panoramic.value = None  # click "Visual servoing > Panoramic ..."
+        demo = app.demos[client.client_id]
+        assert demo.kind == "panoramic" and not app.views
+        assert views[0].closed
+        demo.wait(30)
+        demo.btn_back.value = None  # click "Back to the epipolar workbench"
+        view = app.views.get(client.client_id)
+        assert demo.closed and view is not None and app.views[client.client_id] is view
+        assert not app.demos
+    finally:
+        for f in fakes:
+            f.close()
+        server.stop()
+
+
+def test_app_demo_mode_and_cli():
+    from egtviz.viewer.cli import start
+
+    server, app = start("127.0.0.1", 0, demo="pinhole")
+    try:
+        tab = FakeTab(server.get_port())
+        demo = app.wait_for_demo()[0]
+        assert demo.kind == "pinhole"
+        tab.close()
+        deadline = time.time() + 5
+        while app.demos and time.time() < deadline:
+            time.sleep(0.02)
+        assert not app.demos and demo.closed  # disconnect closes the demo
+    finally:
+        server.stop()
+
+
+def test_servo_svg_pure():
+    n = 3
+    cur = np.array([[10.0, 10.0], [50.0, 60.0], [np.nan, np.nan]])
+    img = ServoImage(demo="pinhole", width=640, height=480, frame=2, current=cur, desired=cur + 5,
+                     trails=np.stack([cur, cur + 1, cur + 2]), lines=np.full((n, 2, 2), np.nan),
+                     epipoles=[("e", np.array([100.0, 100.0]))], caption="t = 0.10 s", message="hi <b>")
+    svg = servo_image_svg(img, revision=7)
+    k = _kinds(svg)
+    assert k["point"] == 2 and k["desired"] == 2 and k["trail"] == 2 and k["epipole"] == 1
+    assert "epipolar-line" not in k and 'data-rev="7"' in svg and "hi &lt;b&gt;" in svg
