@@ -18,6 +18,28 @@ def median_ms(fn, repeats: int = 20) -> float:
     return 1e3 * float(np.median(times))
 
 
+def paired_median_ms(fn_a, fn_b, repeats: int = 20) -> tuple[float, float]:
+    """Median ms of two functions timed alternately, after a few warm-up calls of each.
+
+    Alternating keeps both under the same allocator and cache state: large
+    temporaries make glibc's malloc switch between fresh mmaps (page faults)
+    and a warm heap, which would otherwise favour whichever runs second.
+    """
+    for _ in range(3):
+        fn_a()
+        fn_b()
+    ta, tb = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn_a()
+        t1 = time.perf_counter()
+        fn_b()
+        t2 = time.perf_counter()
+        ta.append(t1 - t0)
+        tb.append(t2 - t1)
+    return 1e3 * float(np.median(ta)), 1e3 * float(np.median(tb))
+
+
 def run_projection_bench(n: int = 100_000, repeats: int = 20) -> list[dict]:
     from ..geometry import Intrinsics, PinholeCamera
     from ..geometry.poses import look_at
@@ -33,8 +55,7 @@ def run_projection_bench(n: int = 100_000, repeats: int = 20) -> list[dict]:
         m = Xh @ P.T
         return m[:, :2] / m[:, 2:3]
 
-    ours = median_ms(lambda: cam.project(X), repeats)
-    base = median_ms(bare, repeats)
+    ours, base = paired_median_ms(lambda: cam.project(X), bare, repeats)
     return [
         {
             "case": f"pin-hole projection, N={n}",

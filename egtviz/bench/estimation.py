@@ -10,22 +10,15 @@ is too noisy a comparison: the estimators trade places from scene to scene).
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
+
+from .core import median_ms
 
 
 _ACCURACY_SCENES = 8
 
 
-def _median_ms(fn, repeats: int) -> float:
-    fn()  # warm-up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(times))
 
 
 def _rotvec(w: np.ndarray) -> np.ndarray:
@@ -100,10 +93,10 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
         )
 
     # Normalised 8-point.
-    ours = _median_ms(lambda: fundamental_normalized_8point(clean["U1"], clean["U2"]), repeats)
+    ours = median_ms(lambda: fundamental_normalized_8point(clean["U1"], clean["U2"]), repeats)
     theirs = None
     if cv2 is not None:
-        theirs = _median_ms(lambda: cv2.findFundamentalMat(clean["U1"], clean["U2"], cv2.FM_8POINT), repeats)
+        theirs = median_ms(lambda: cv2.findFundamentalMat(clean["U1"], clean["U2"], cv2.FM_8POINT), repeats)
     row(f"normalised 8-point, N={n} (vs FM_8POINT)", ours, theirs, "target ratio <= 2")
 
     # RANSAC vs MAGSAC, and LMedS vs FM_LMEDS, with accuracy on the true inliers.
@@ -112,7 +105,7 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
         ("RANSAC", lambda s: fundamental_ransac(s["U1"], s["U2"], threshold=1.0), "USAC_MAGSAC"),
         ("LMedS", lambda s: fundamental_lmeds(s["U1"], s["U2"]), "FM_LMEDS"),
     ):
-        ours = _median_ms(lambda: ours_fn(dirty), robust_repeats)
+        ours = median_ms(lambda: ours_fn(dirty), robust_repeats)
         acc = np.mean([_accuracy(ours_fn(s).F, s) for s in scenes])
         note = f"acc ours {acc:.3f} px ({ours_fn(dirty).iterations} samples)"
         theirs = None
@@ -122,16 +115,16 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
             def cv_fn(s, method=method):
                 return cv2.findFundamentalMat(s["U1"], s["U2"], method, 1.0, 0.999, 2000)
 
-            theirs = _median_ms(lambda: cv_fn(dirty), robust_repeats)
+            theirs = median_ms(lambda: cv_fn(dirty), robust_repeats)
             note += f", OpenCV {np.mean([_accuracy(cv_fn(s)[0], s) for s in scenes]):.3f} px"
         row(f"{name}, N={n}, 30% outliers (vs {flag})", ours, theirs, note + f" (mean of {len(scenes)} scenes)")
 
     # Linear triangulation.
     s = clean
-    ours = _median_ms(lambda: triangulate_linear(s["P1"], s["P2"], s["U1"], s["U2"]), repeats)
+    ours = median_ms(lambda: triangulate_linear(s["P1"], s["P2"], s["U1"], s["U2"]), repeats)
     theirs = None
     if cv2 is not None:
         a, b = s["U1"].T.copy(), s["U2"].T.copy()
-        theirs = _median_ms(lambda: cv2.triangulatePoints(s["P1"], s["P2"], a, b), repeats)
+        theirs = median_ms(lambda: cv2.triangulatePoints(s["P1"], s["P2"], a, b), repeats)
     row(f"linear triangulation, N={n} (vs triangulatePoints)", ours, theirs, "DLT, same solution")
     return rows

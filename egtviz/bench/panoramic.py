@@ -6,9 +6,10 @@ epipolar conics, so the comparison columns are ``None``.
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
+
+from .core import median_ms
 
 from egtviz.geometry.catadioptric import CatadioptricCamera
 from egtviz.geometry.mirrors import HyperbolicMirror
@@ -16,14 +17,6 @@ from egtviz.geometry.panoramic_epipolar import epipolar_conics
 from egtviz.geometry.poses import Pose, rotz
 
 
-def _median_ms(fn, repeats: int) -> float:
-    fn()  # warm-up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(times))
 
 
 def bench_conics(n: int = 1000, *, n_project: int = 100_000, repeats: int = 20, seed: int = 0) -> list[dict]:
@@ -38,8 +31,8 @@ def bench_conics(n: int = 1000, *, n_project: int = 100_000, repeats: int = 20, 
     cam2 = CatadioptricCamera(Pose(np.eye(3), [0.0, 0.0, 0.0]), mirror)
     X = rng.uniform([-10, -10, -3], [10, 10, 3], size=(n, 3))
     Xp = rng.uniform([-10, -10, -3], [10, 10, 3], size=(n_project, 3))
-    conic_ms = _median_ms(lambda: epipolar_conics(cam1, cam2, X), repeats)
-    project_ms = _median_ms(lambda: cam1.project(Xp), max(3, repeats // 4))
+    conic_ms = median_ms(lambda: epipolar_conics(cam1, cam2, X), repeats)
+    project_ms = median_ms(lambda: cam1.project(Xp), max(3, repeats // 4))
     return [
         {
             "case": f"epipolar_conics, {n} points, both images",

@@ -135,23 +135,25 @@ class PinholeCamera:
         """
         X = as_points(X_world, "X_world", 3)
         M = self.K @ self.pose.R.T
-        # Written per column rather than as (N, 3) @ (3, 3): a product this thin gains nothing
-        # from BLAS, whose threads cost more than the arithmetic on a busy 2-core machine.
-        x, y, z = (X[:, i] - self.pose.t[i] for i in range(3))
-        m = np.empty((len(X), 3))
-        for i in range(3):
-            np.multiply(x, M[i, 0], out=m[:, i])
-            m[:, i] += M[i, 1] * y
-            m[:, i] += M[i, 2] * z
-        depth = m[:, 2].copy()
+        c = M @ self.pose.t
+        # K R^T (X - t) = K R^T X - K R^T t: one thin product, then per-column work (no (N, 3) temporaries).
+        m = X @ M.T
+        depth = m[:, 2] - c[2]
         in_front = depth > 0
         with np.errstate(divide="ignore", invalid="ignore"):
-            pixels = m[:, :2] / depth[:, None]
-        pixels[~in_front] = np.nan
+            inv = 1.0 / depth
+            pixels = np.empty((len(X), 2))
+            np.multiply(m[:, 0] - c[0], inv, out=pixels[:, 0])
+            np.multiply(m[:, 1] - c[1], inv, out=pixels[:, 1])
+        if not in_front.all():
+            pixels[~in_front] = np.nan
         w, h = self.intrinsics.width, self.intrinsics.height
         u, v = pixels[:, 0], pixels[:, 1]
         with np.errstate(invalid="ignore"):
-            in_image = in_front & (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
+            in_image = u >= 0  # NaN compares False: points behind are never in the image
+            in_image &= u <= w
+            in_image &= v >= 0
+            in_image &= v <= h
         return PinholeProjection(pixels, depth, in_front, in_image)
 
     def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
