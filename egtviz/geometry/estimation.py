@@ -501,14 +501,19 @@ class _SampsonProblem:
 
 
 def _refine_sampson(
-    Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, weights: np.ndarray | None = None
+    Fn0: np.ndarray,
+    At: np.ndarray,
+    s1: float,
+    s2: float,
+    weights: np.ndarray | None = None,
+    tol: float = 1e-10,
 ) -> np.ndarray:
     """Minimise the (weighted) pixel Sampson distance over rank-2 ``F`` in normalised coordinates."""
     prob = _SampsonProblem(Fn0, At, s1, s2, weights)
     r0 = prob.residuals(prob.p0)
     cost0 = float(r0 @ r0)
     res = least_squares(
-        prob.residuals, prob.p0, jac=prob.jacobian, method="lm", xtol=1e-10, ftol=1e-10, gtol=1e-12, max_nfev=50
+        prob.residuals, prob.p0, jac=prob.jacobian, method="lm", xtol=tol, ftol=tol, gtol=1e-12, max_nfev=50
     )
     F = prob.F(res.x)
     if not (np.all(np.isfinite(F)) and 2.0 * res.cost <= cost0):
@@ -732,7 +737,8 @@ def _robust(
     # weights tie the fit to the starting F (the same bias as truncation).
     c2 = 4.0 * threshold**2 if mode == "ransac" else 4.0 * scorer.lmeds_scale / 2.5**2 * float(scorer.cost(d))
     for _ in range(1 if mode == "ransac" else 2):
-        Fn = _refine_sampson(Fn, At[:, sel], s1, s2, 1.0 / (1.0 + d[sel] / max(c2, 1e-24)))
+        # A relative cost change of 1e-6 is far below the noise a robust fit works with.
+        Fn = _refine_sampson(Fn, At[:, sel], s1, s2, 1.0 / (1.0 + d[sel] / max(c2, 1e-24)), tol=1e-6)
         new, d = support(Fn, widen)
         if new.sum() < _MIN_REFIT:
             break
