@@ -18,7 +18,7 @@ from html import escape
 import numpy as np
 
 from .palette import EPIPOLE_COLOUR, RIM_COLOUR, point_colour
-from .svg import _f, _finite_runs, _nice_step, _points_attr
+from .svg import _f, _finite_runs, _points_attr, axes_svg
 
 __all__ = ["ServoImage", "servo_image_svg", "trail_indices"]
 
@@ -76,23 +76,7 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
         f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#fff" '
         f'stroke="#333" stroke-width="{_f(lw * 1.5)}"/>',
     ]
-    # Axis ticks (u along the top, v along the left; origin top-left).
-    step = _nice_step(s)
-    tick = font * 0.45
-    t: list[str] = []
-    u = 0.0
-    while u <= w + 1e-9:
-        t.append(f'<line x1="{_f(u)}" y1="0" x2="{_f(u)}" y2="{_f(-tick)}" stroke="#333" stroke-width="{_f(lw)}"/>'
-                 f'<text x="{_f(u)}" y="{_f(-tick * 1.4)}" font-size="{_f(font * 0.7)}" text-anchor="middle" '
-                 f'fill="#555">{u:g}</text>')
-        u += step
-    v = 0.0
-    while v <= h + 1e-9:
-        t.append(f'<line x1="0" y1="{_f(v)}" x2="{_f(-tick)}" y2="{_f(v)}" stroke="#333" stroke-width="{_f(lw)}"/>'
-                 f'<text x="{_f(-tick * 1.4)}" y="{_f(v + font * 0.25)}" font-size="{_f(font * 0.7)}" '
-                 f'text-anchor="end" fill="#555">{v:g}</text>')
-        v += step
-    out.append(f'<g data-kind="axes">{"".join(t)}</g>')
+    out.append(axes_svg(w, h, font, lw))
     out.append(f'<defs><clipPath id="servo-clip-{escape(img.demo)}"><rect x="0" y="0" width="{_f(w)}" '
                f'height="{_f(h)}"/></clipPath></defs><g clip-path="url(#servo-clip-{escape(img.demo)})">')
     integer = s > 300

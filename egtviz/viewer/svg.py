@@ -110,6 +110,35 @@ def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
+def axes_svg(w: float, h: float, font: float, lw: float) -> str:
+    """Pixel axes with ticks and labels: u along the top edge, v along the left edge (origin top-left)."""
+    step = _nice_step(max(w, h))
+    tick = font * 0.5
+    ticks: list[str] = []
+    u = 0.0
+    while u <= w + 1e-9:
+        ticks.append(f'<line x1="{_f(u)}" y1="0" x2="{_f(u)}" y2="{_f(-tick)}" stroke="#333" stroke-width="{_f(lw)}"/>')
+        ticks.append(
+            f'<text x="{_f(u)}" y="{_f(-tick * 1.4)}" font-size="{_f(font * 0.8)}" text-anchor="middle" '
+            f'fill="#333">{u:g}</text>'
+        )
+        u += step
+    v = 0.0
+    while v <= h + 1e-9:
+        ticks.append(f'<line x1="0" y1="{_f(v)}" x2="{_f(-tick)}" y2="{_f(v)}" stroke="#333" stroke-width="{_f(lw)}"/>')
+        ticks.append(
+            f'<text x="{_f(-tick * 1.4)}" y="{_f(v + font * 0.3)}" font-size="{_f(font * 0.8)}" text-anchor="end" '
+            f'fill="#333">{v:g}</text>'
+        )
+        v += step
+    return (
+        f'<g data-kind="axes">{"".join(ticks)}'
+        f'<text x="{_f(w + tick)}" y="{_f(-tick * 1.4)}" font-size="{_f(font)}" font-style="italic">u</text>'
+        f'<text x="{_f(-tick * 1.4)}" y="{_f(h + font * 1.2)}" font-size="{_f(font)}" font-style="italic" '
+        f'text-anchor="end">v</text></g>'
+    )
+
+
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
     """A blank image plane with a border and a message (before the first update)."""
     return (
@@ -167,30 +196,7 @@ def image_plane_svg(
         f'stroke="#333" stroke-width="{_f(lw * 1.5)}"/>',
     ]
 
-    # Axes with ticks: u along the top edge, v along the left edge (origin top-left).
-    step = _nice_step(s)
-    tick = font * 0.5
-    ticks: list[str] = []
-    u = 0.0
-    while u <= w + 1e-9:
-        ticks.append(f'<line x1="{_f(u)}" y1="0" x2="{_f(u)}" y2="{_f(-tick)}" stroke="#333" stroke-width="{_f(lw)}"/>')
-        ticks.append(
-            f'<text x="{_f(u)}" y="{_f(-tick * 1.4)}" font-size="{_f(font * 0.8)}" text-anchor="middle" '
-            f'fill="#333">{u:g}</text>'
-        )
-        u += step
-    v = 0.0
-    while v <= h + 1e-9:
-        ticks.append(f'<line x1="0" y1="{_f(v)}" x2="{_f(-tick)}" y2="{_f(v)}" stroke="#333" stroke-width="{_f(lw)}"/>')
-        ticks.append(
-            f'<text x="{_f(-tick * 1.4)}" y="{_f(v + font * 0.3)}" font-size="{_f(font * 0.8)}" text-anchor="end" '
-            f'fill="#333">{v:g}</text>'
-        )
-        v += step
-    out.append(f'<g data-kind="axes">{"".join(ticks)}'
-               f'<text x="{_f(w + tick)}" y="{_f(-tick * 1.4)}" font-size="{_f(font)}" font-style="italic">u</text>'
-               f'<text x="{_f(-tick * 1.4)}" y="{_f(h + font * 1.2)}" font-size="{_f(font)}" font-style="italic" '
-               f'text-anchor="end">v</text></g>')
+    out.append(axes_svg(w, h, font, lw))
 
     # Clip everything drawn inside the image to the image rectangle.
     clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in str(plane.camera))
