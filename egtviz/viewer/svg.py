@@ -110,6 +110,50 @@ def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
+def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) -> str:
+    """The ``epipolar-conic`` polylines of a panel, formatted in bulk.
+
+    Arcs of equal length (the usual case: the scene layer samples every conic
+    alike) are stacked and rounded in one numpy pass; an arc with NaN vertices
+    is split into its finite runs first. Past ``CONIC_VERTEX_BUDGET`` vertices
+    only every k-th sample is kept (and each arc's last).
+    """
+    by_length: dict[int, list[tuple[int, Any]]] = {}
+    for i, arcs in enumerate(conics):
+        for piece in arcs:
+            if len(piece) >= 2:
+                by_length.setdefault(len(piece), []).append((i, piece))
+    total = sum(length * len(items) for length, items in by_length.items())
+    stride = max(1, math.ceil(total / CONIC_VERTEX_BUDGET))
+    groups: dict[int, list[tuple[int, np.ndarray]]] = {}
+    for length, items in by_length.items():
+        stacked = np.asarray([piece for _, piece in items], float).reshape(len(items), length, 2)
+        finite = np.isfinite(stacked).all(axis=(1, 2))
+        for (i, _), arc, ok in zip(items, stacked, finite.tolist()):
+            for run in [arc] if ok else _finite_runs(arc):
+                groups.setdefault(len(run), []).append((i, run))
+    integer = s >= 200
+    thick = f' stroke-width="{_f(lw * 3.0)}"'
+    body: list[str] = []
+    for length, items in groups.items():
+        keep = np.arange(0, length, stride) if stride > 1 and length > 2 else np.arange(length)
+        if keep[-1] != length - 1:
+            keep = np.append(keep, length - 1)
+        arr = np.stack([run for _, run in items])[:, keep]
+        if integer:
+            flat = np.rint(arr).astype(np.int64).reshape(len(items), -1).tolist()
+            pts_tpl = ("%d,%d " * len(keep))[:-1]
+        else:
+            flat = arr.reshape(len(items), -1).tolist()
+            pts_tpl = ("%.5g,%.5g " * len(keep))[:-1]
+        for (i, _), row in zip(items, flat):
+            body.append(
+                f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{pts_tpl % tuple(row)}" '
+                f'stroke="{point_colour(i)}"{thick if i == selected_point else ""}/>'
+            )
+    return "".join(body)
+
+
 def axes_svg(w: float, h: float, font: float, lw: float) -> str:
     """Pixel axes with ticks and labels: u along the top edge, v along the left edge (origin top-left)."""
     step = _nice_step(max(w, h))
@@ -227,25 +271,7 @@ def image_plane_svg(
         out.append(f'<g stroke-width="{_f(lw * 1.2)}">{"".join(body)}</g>')
 
     if plane.conics is not None:
-        body = []
-        # Vertex budget: with hundreds of conics, keep every k-th sample (and each arc's ends).
-        total = sum(len(piece) for pieces in plane.conics for piece in pieces)
-        stride = max(1, math.ceil(total / CONIC_VERTEX_BUDGET))
-        for i, pieces in enumerate(plane.conics):
-            extra = f' stroke-width="{_f(lw * 3.0)}"' if i == selected_point else ""
-            for piece in pieces:
-                for run in _finite_runs(piece):
-                    if stride > 1 and len(run) > 2:
-                        keep = np.zeros(len(run), bool)
-                        keep[::stride] = True
-                        keep[-1] = True
-                        run = run[keep]
-                    pts = _points_attr(run, integer=s >= 200)
-                    body.append(
-                        f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{pts}" '
-                        f'stroke="{point_colour(i)}"{extra}/>'
-                    )
-        out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{"".join(body)}</g>')
+        out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{_conics_svg(plane.conics, selected_point, lw, s)}</g>')
 
     P = np.asarray(plane.points, float).reshape(-1, 2)
     in_image = np.asarray(plane.in_image, bool).reshape(-1)
