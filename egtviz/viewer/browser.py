@@ -45,7 +45,11 @@ LINES_JS = """(camera) => [...document.querySelectorAll(
 
 
 def chromium_available() -> bool:
-    return Path(CHROMIUM).exists() or shutil.which(CHROMIUM) is not None
+    """Debian's Chromium and the playwright driver (a test extra: ``pip install -e '.[test]'``) are both here."""
+    import importlib.util
+
+    has_browser = Path(CHROMIUM).exists() or shutil.which(CHROMIUM) is not None
+    return has_browser and importlib.util.find_spec("playwright") is not None
 
 
 @contextmanager

@@ -19,8 +19,8 @@ pytestmark = pytest.mark.browser
 
 if not chromium_available():
     if os.environ.get("CI"):
-        raise RuntimeError(f"CI: {CHROMIUM} is required for the browser tests (apt-get install -y chromium)")
-    pytest.skip(f"headless Chromium not found at {CHROMIUM} (apt-get install -y chromium)", allow_module_level=True)
+        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests (bash .ci/run installs both)")
+    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing (bash .ci/run installs both)", allow_module_level=True)
 
 
 def _serve(scene):
