@@ -83,11 +83,31 @@ def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
         K2: ``(3, 3)`` calibration of camera 2.
     """
     E = as_matrix(E, "E", (3, 3))
-    F = np.linalg.inv(as_calibration(K2, "K2")).T @ E @ np.linalg.inv(as_calibration(K1, "K1"))
+    F = _inverse_calibration(K2, "K2").T @ E @ _inverse_calibration(K1, "K1")
     n = np.linalg.norm(F)
     if n == 0:
         raise GeometryError("E: expected a nonzero matrix")
     return F / n
+
+
+_INV_K_CACHE: dict[bytes, np.ndarray] = {}
+
+
+def _inverse_calibration(K: npt.ArrayLike, name: str) -> np.ndarray:
+    """``inv(as_calibration(K))``, remembered per matrix (a camera drag keeps both calibrations)."""
+    arr = np.asarray(K)
+    key = arr.tobytes() if arr.dtype == np.float64 and arr.shape == (3, 3) else None
+    if key is not None:
+        hit = _INV_K_CACHE.get(key)
+        if hit is not None:
+            return hit
+    inv = np.linalg.inv(as_calibration(K, name))
+    if key is not None:
+        if len(_INV_K_CACHE) >= 64:
+            _INV_K_CACHE.clear()
+        inv.setflags(write=False)
+        _INV_K_CACHE[key] = inv
+    return inv
 
 
 @dataclass(frozen=True, eq=False)

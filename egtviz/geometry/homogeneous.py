@@ -23,6 +23,14 @@ def normalize_homogeneous(v: npt.ArrayLike) -> np.ndarray:
     Never divides by zero (see ``docs/conventions.md``).
     """
     a = np.array(v, dtype=np.float64)
+    if a.shape == (3,):
+        # One vector (epipoles, on every drag): plain floats, the same arithmetic as below.
+        x, y, z = a.tolist()
+        norm = float(np.linalg.norm(a))
+        if abs(z) <= AT_INFINITY_TOL * norm:
+            safe = norm if norm > 0 else 1.0
+            return np.array([x / safe, y / safe, 0.0])
+        return np.array([x / z, y / z, 1.0])
     single = a.ndim == 1
     a = np.atleast_2d(a)
     norm = np.linalg.norm(a, axis=1)

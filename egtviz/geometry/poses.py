@@ -8,6 +8,7 @@ in world coordinates, so a world point maps into the frame as
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -151,7 +152,29 @@ class Pose:
 
 def quat_wxyz_from_matrix(R: npt.ArrayLike) -> np.ndarray:
     """Unit quaternion ``(w, x, y, z)`` of a rotation matrix, with ``w >= 0``."""
-    q = Rotation.from_matrix(as_rotation(R, "R")).as_quat(scalar_first=True)
+    R = as_rotation(R, "R")
+    # Shepperd's method as scipy's ``Rotation.from_matrix`` does it, in plain floats (no per-call
+    # numpy overhead: this runs on every camera drag).
+    m = R.tolist()
+    tr = m[0][0] + m[1][1] + m[2][2]
+    decision = (m[0][0], m[1][1], m[2][2], tr)
+    choice = max(range(4), key=decision.__getitem__)
+    xyzw = [0.0, 0.0, 0.0, 0.0]
+    if choice != 3:
+        i = choice
+        j = (i + 1) % 3
+        k = (j + 1) % 3
+        xyzw[i] = 1.0 - tr + 2.0 * m[i][i]
+        xyzw[j] = m[j][i] + m[i][j]
+        xyzw[k] = m[k][i] + m[i][k]
+        xyzw[3] = m[k][j] - m[j][k]
+    else:
+        xyzw[0] = m[2][1] - m[1][2]
+        xyzw[1] = m[0][2] - m[2][0]
+        xyzw[2] = m[1][0] - m[0][1]
+        xyzw[3] = 1.0 + tr
+    n = math.sqrt(sum(c * c for c in xyzw))
+    q = np.array([xyzw[3] / n, xyzw[0] / n, xyzw[1] / n, xyzw[2] / n])
     return q if q[0] >= 0 else -q
 
 
@@ -185,7 +208,13 @@ def ypr_from_egt_rotation(R: npt.ArrayLike) -> tuple[float, float, float]:
     Pitch is in ``[-pi/2, pi/2]``; at the gimbal lock (pitch = +-pi/2) roll is 0.
     """
     R = as_rotation(R, "R")
-    # Intrinsic Y-X-Z Euler angles.
+    # Intrinsic Y-X-Z Euler angles: R[1, 2] = -sin(pitch), R[0, 2] / R[2, 2] = tan(yaw), R[1, 0] / R[1, 1] = tan(roll).
+    m = R.tolist()
+    if abs(m[1][2]) < 0.999:  # well away from the gimbal lock: closed form (no scipy overhead on every drag)
+        yaw = math.atan2(m[0][2], m[2][2])
+        pitch = math.atan2(-m[1][2], math.hypot(m[0][2], m[2][2]))
+        roll = math.atan2(m[1][0], m[1][1])
+        return yaw, pitch, roll
     yaw, pitch, roll = Rotation.from_matrix(R).as_euler("YXZ")
     return float(yaw), float(pitch), float(roll)
 

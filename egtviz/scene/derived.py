@@ -123,49 +123,90 @@ def _epipole(label: str, e: np.ndarray, width: int, height: int) -> Epipole:
     return Epipole(label, xy, None, False, inside)
 
 
+#: Per-camera results that depend only on the camera's spec and the points (a drag changes one camera:
+#: the others' projections, rays, meshes and image content are reused). Keys hold the frozen spec and
+#: the points tuple; values are read-only arrays.
+_CAMERA_CACHE: dict[tuple, dict] = {}
+_CAMERA_CACHE_SIZE = 64
+_POINTS_CACHE: dict[int, tuple[tuple, np.ndarray]] = {}
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+def _points_array(scene: Scene) -> np.ndarray:
+    """``scene.points_array()``, reused while the points tuple is the same object (read-only)."""
+    pts = scene.points
+    hit = _POINTS_CACHE.get(id(pts))
+    if hit is not None and hit[0] is pts:
+        return hit[1]
+    X = _frozen(scene.points_array())
+    if len(_POINTS_CACHE) >= 8:
+        _POINTS_CACHE.clear()
+    _POINTS_CACHE[id(pts)] = (pts, X)
+    return X
+
+
+def _camera_block(spec, points: tuple, X: np.ndarray) -> dict:
+    """Everything about one camera that does not depend on the other cameras (cached)."""
+    key = (spec, points)
+    hit = _CAMERA_CACHE.get(key)
+    if hit is not None:
+        return hit
+    cam = spec.camera()
+    out: dict = {"cam": cam, "pose": (_frozen(np.array(cam.pose.quat_wxyz)), _frozen(cam.pose.t.copy()))}
+    if isinstance(cam, PinholeCamera):
+        proj = cam.project(X)
+        visible = proj.in_front
+        ray = np.stack([X, np.broadcast_to(cam.center, X.shape)], axis=1)
+        out["frustum"] = {"fov": cam.intrinsics.fov_y, "aspect": cam.intrinsics.aspect}
+        rim = None
+        pts3 = np.full((len(X), 3), np.nan)
+        if visible.any():
+            pts3[visible] = cam.image_to_world(proj.pixels[visible], IMAGE_PLANE_DEPTH)
+        out["pts3"] = _frozen(pts3)
+    else:
+        proj = cam.project(X)
+        visible = proj.visible
+        mirror_world = cam.pose.to_world(np.nan_to_num(proj.mirror_points)) if len(X) else np.zeros((0, 3))
+        ray = np.stack([X, mirror_world, np.broadcast_to(cam.ccd_center_world, X.shape)], axis=1)
+        v, f = _mirror_mesh_local(spec.mirror, float(spec.a), float(spec.b))
+        out["mesh"] = (_frozen(cam.pose.to_world(v)), f)
+        out["ccd"] = _frozen(np.array(cam.ccd_center_world))
+        rim = _frozen(np.array(cam.rim_image(128)))
+    ray[~visible] = np.nan
+    out["ray"] = _frozen(ray)
+    out["plane"] = ImagePlane(
+        camera=spec.name,
+        kind=spec.kind,
+        width=spec.width,
+        height=spec.height,
+        points=_frozen(proj.pixels),
+        visible=_frozen(visible),
+        in_image=_frozen(proj.in_image),
+        n_hidden=int(len(visible) - np.count_nonzero(visible)),
+        rim=rim,
+    )
+    if len(_CAMERA_CACHE) >= _CAMERA_CACHE_SIZE:
+        _CAMERA_CACHE.pop(next(iter(_CAMERA_CACHE)))
+    _CAMERA_CACHE[key] = out
+    return out
+
+
 def compute_derived(scene: Scene) -> Derived:
     """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``."""
-    X = scene.points_array()
-    cams = {spec.name: spec.camera() for spec in scene.cameras}
-    specs = {spec.name: spec for spec in scene.cameras}
-    planes: dict[str, ImagePlane] = {}
-    rays: dict[str, np.ndarray] = {}
-    poses = {name: (cam.pose.quat_wxyz, cam.pose.t.copy()) for name, cam in cams.items()}
-    frustums: dict[str, dict[str, float]] = {}
+    X = _points_array(scene)
+    blocks = {spec.name: _camera_block(spec, scene.points, X) for spec in scene.cameras}
+    cams = {name: b["cam"] for name, b in blocks.items()}
+    planes: dict[str, ImagePlane] = {name: b["plane"] for name, b in blocks.items()}
+    rays: dict[str, np.ndarray] = {name: b["ray"] for name, b in blocks.items()}
+    poses = {name: b["pose"] for name, b in blocks.items()}
+    frustums: dict[str, dict[str, float]] = {name: dict(b["frustum"]) for name, b in blocks.items() if "frustum" in b}
     image_in_3d: dict[str, dict[str, np.ndarray]] = {}
-    meshes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    ccd: dict[str, np.ndarray] = {}
-
-    for name, cam in cams.items():
-        if isinstance(cam, PinholeCamera):
-            proj = cam.project(X)
-            visible = proj.in_front
-            ray = np.stack([X, np.broadcast_to(cam.center, X.shape)], axis=1).copy()
-            frustums[name] = {"fov": cam.intrinsics.fov_y, "aspect": cam.intrinsics.aspect}
-            rim = None
-        else:
-            proj = cam.project(X)
-            visible = proj.visible
-            mirror_world = cam.pose.to_world(np.nan_to_num(proj.mirror_points)) if len(X) else np.zeros((0, 3))
-            ray = np.stack([X, mirror_world, np.broadcast_to(cam.ccd_center_world, X.shape)], axis=1).copy()
-            s = specs[name]
-            v, f = _mirror_mesh_local(s.mirror, float(s.a), float(s.b))
-            meshes[name] = (cam.pose.to_world(v), f)
-            ccd[name] = cam.ccd_center_world
-            rim = cam.rim_image(128)
-        ray[~visible] = np.nan
-        rays[name] = ray
-        planes[name] = ImagePlane(
-            camera=name,
-            kind=specs[name].kind,
-            width=specs[name].width,
-            height=specs[name].height,
-            points=proj.pixels,
-            visible=visible,
-            in_image=proj.in_image,
-            n_hidden=int((~visible).sum()),
-            rim=rim,
-        )
+    meshes: dict[str, tuple[np.ndarray, np.ndarray]] = {name: b["mesh"] for name, b in blocks.items() if "mesh" in b}
+    ccd: dict[str, np.ndarray] = {name: b["ccd"] for name, b in blocks.items() if "ccd" in b}
 
     pair_names = scene.drawn_pair
     readout = PairReadout(pair_names)
@@ -183,11 +224,15 @@ def compute_derived(scene: Scene) -> Derived:
         else:
             normals = plane_eqs[:, :3]
             baseline = np.stack([o1, o2])
-            for name, cam, other in ((n1, c1, o2), (n2, c2, o1)):
-                planes[name] = _with(planes[name], in_pair=True, **_pair_content(cam, other, normals, planes[name], name == n1))
+            ep = None
             if isinstance(c1, PinholeCamera) and isinstance(c2, PinholeCamera):
                 ep = epipolar_pair(c1, c2)
                 readout = PairReadout(pair_names, ep.F, ep.E, int(np.linalg.matrix_rank(ep.F, tol=1e-9)), ep.e1, ep.e2)
+            for name, cam, other in ((n1, c1, o2), (n2, c2, o1)):
+                # The pair's epipoles are the images of the other centre (epipole_of_centre): reuse them.
+                e = None if ep is None else (ep.e1 if name == n1 else ep.e2)
+                planes[name] = _with(planes[name], in_pair=True,
+                                     **_pair_content(cam, other, normals, planes[name], name == n1, e))
             sel = scene.selected_point
             if sel is not None and np.all(np.isfinite(normals[sel])):
                 tri = np.stack([o1, o2, X[sel]])
@@ -197,16 +242,12 @@ def compute_derived(scene: Scene) -> Derived:
     for name, cam in cams.items():
         if isinstance(cam, PinholeCamera):
             ip = planes[name]
-            ok = ip.visible
-            pts3 = np.full((len(X), 3), np.nan)
-            if ok.any():
-                pts3[ok] = cam.image_to_world(ip.points[ok], IMAGE_PLANE_DEPTH)
             lines3 = np.full((len(X), 2, 3), np.nan)
             if ip.lines is not None and len(X):
-                good = np.all(np.isfinite(ip.lines.reshape(len(X), -1)), axis=1)
+                good = np.isfinite(ip.lines.reshape(len(X), -1)).all(axis=1)
                 if good.any():
                     lines3[good] = cam.image_to_world(ip.lines[good].reshape(-1, 2), IMAGE_PLANE_DEPTH).reshape(-1, 2, 3)
-            image_in_3d[name] = {"points": pts3, "lines": lines3}
+            image_in_3d[name] = {"points": blocks[name]["pts3"], "lines": lines3}
 
     return Derived(
         image_planes=planes,
@@ -223,16 +264,19 @@ def compute_derived(scene: Scene) -> Derived:
 
 
 def _with(plane: ImagePlane, **changes) -> ImagePlane:
-    import dataclasses
+    """``dataclasses.replace`` for these plain frozen records (no ``__post_init__``), without its overhead."""
+    new = object.__new__(ImagePlane)
+    new.__dict__.update(plane.__dict__)
+    new.__dict__.update(changes)
+    return new
 
-    return dataclasses.replace(plane, **changes)
 
-
-def _pair_content(cam, other_centre: np.ndarray, normals: np.ndarray, plane: ImagePlane, first: bool) -> dict:
-    """Epipoles and epipolar curves of one member of the drawn pair."""
+def _pair_content(cam, other_centre: np.ndarray, normals: np.ndarray, plane: ImagePlane, first: bool,
+                  epipole: np.ndarray | None = None) -> dict:
+    """Epipoles and epipolar curves of one member of the drawn pair (``epipole``: already known, pin-hole)."""
     idx = "1" if first else "2"
     if isinstance(cam, PinholeCamera):
-        e, _ = epipole_of_centre(cam, other_centre)
+        e = epipole if epipole is not None else epipole_of_centre(cam, other_centre)[0]
         lines = lines_of_planes(cam, normals) if len(normals) else np.zeros((0, 3))
         segs, _ = clip_lines_to_rect(lines, plane.width, plane.height) if len(lines) else (np.zeros((0, 2, 2)), None)
         return {"epipoles": (_epipole(f"e{idx}", e, plane.width, plane.height),), "lines": segs}

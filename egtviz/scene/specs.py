@@ -8,6 +8,7 @@ conventions: ``docs/conventions.md``.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, ClassVar, Literal
@@ -174,6 +175,12 @@ class PanoramicSpec:
 
     @staticmethod
     def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+        m = np.asarray(R_world, dtype=np.float64).tolist()
+        if abs(m[2][0]) < 0.999:  # away from the gimbal lock: closed form for R = rotz(yaw) roty(pitch) rotx(roll)
+            yaw = math.atan2(m[1][0], m[0][0])
+            pitch = math.atan2(-m[2][0], math.hypot(m[2][1], m[2][2]))
+            roll = math.atan2(m[2][1], m[2][2])
+            return math.degrees(yaw), math.degrees(pitch), math.degrees(roll)
         from scipy.spatial.transform import Rotation
 
         yaw, pitch, roll = Rotation.from_matrix(R_world).as_euler("ZYX")

@@ -126,6 +126,9 @@ class ClientView:
         self._panel_sig: tuple = ()
         self._pair_options: dict[str, tuple[str, str]] = {}
         self._panel_share: dict[str, float] = {}
+        self._synced_specs: dict[str, Any] = {}
+        self._synced_fields: dict[str, Any] = {}
+        self._point_options_n = -1
 
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event)
@@ -316,8 +319,8 @@ class ClientView:
             try:
                 if name not in self.model.scene.camera_names:
                     return
-                pose = self.model.scene.camera(name).pose
-                if np.allclose(pose.t, position, atol=1e-9) and np.allclose(pose.R, R, atol=1e-9):
+                pose = self.model.scene.camera(name).camera().pose  # the spec's cached camera: no new Pose
+                if _allclose(pose.t, position, 1e-9) and _allclose(pose.R, R, 1e-9):
                     if phase == "end":  # nothing moved since the last update: just resync the fields
                         self._render(self.model.scene, None)
                     return
@@ -447,7 +450,7 @@ class ClientView:
             t2 = time.perf_counter()
             self.readout = pair_html(derived)
             self.readout_md.content = self.readout
-            self._sync_fields(scene)
+            self._sync_fields(scene, force=False)
             t3 = time.perf_counter()
             self.scene3d.draw(scene, derived, moving=self._moving)
             t4 = time.perf_counter()
@@ -524,14 +527,21 @@ class ClientView:
         self._plan_split(names[:k], share / 2, plan)
         self._plan_split(names[k:], share / 2, plan)
 
-    def _sync_fields(self, scene: Scene) -> None:
-        """Write the model's values into the GUI (guarded: these writes are not user edits)."""
+    def _sync_fields(self, scene: Scene, *, force: bool = True) -> None:
+        """Write the model's values into the GUI (guarded: these writes are not user edits).
+
+        ``force=False`` (a render): a camera whose spec is the very object last written is skipped.
+        """
         self._syncing = True
         try:
             for spec in scene.cameras:
                 f = self._cam_fields.get(spec.name)
                 if f is None:
                     continue
+                if not force and self._synced_specs.get(spec.name) is spec and f is self._synced_fields.get(spec.name):
+                    continue
+                self._synced_specs[spec.name] = spec
+                self._synced_fields[spec.name] = f
                 _set(f["position"], tuple(spec.position))
                 _set(f["ypr"], tuple(round(a, 6) for a in spec.ypr_deg))
                 _set(f["pp"], tuple(spec.principal_point))
@@ -554,15 +564,20 @@ class ClientView:
             if tuple(self.pair_dropdown.options) != options:
                 self.pair_dropdown.options = options
             _set(self.pair_dropdown, f"{drawn[0]} & {drawn[1]}" if drawn else "-")
-            popts = ("none",) + tuple(f"point {i + 1}" for i in range(len(scene.points)))
-            if tuple(self.point_dropdown.options) != popts:
-                self.point_dropdown.options = popts
+            if self._point_options_n != len(scene.points):
+                popts = ("none",) + tuple(f"point {i + 1}" for i in range(len(scene.points)))
+                if tuple(self.point_dropdown.options) != popts:
+                    self.point_dropdown.options = popts
+                self._point_options_n = len(scene.points)
             sel = scene.selected_point
             _set(self.point_dropdown, "none" if sel is None else f"point {sel + 1}")
             for opt, cb in self.toggles.items():
                 _set(cb, getattr(scene.options, opt))
-            self.btn_undo.disabled = not self.model.can_undo
-            self.title.content = self._title_md()
+            if self.btn_undo.disabled != (not self.model.can_undo):
+                self.btn_undo.disabled = not self.model.can_undo
+            title = self._title_md()
+            if self.title.content != title:
+                self.title.content = title
         finally:
             self._syncing = False
 
@@ -575,6 +590,11 @@ class ClientView:
                 return
             self.closed = True
             self._unsubscribe()
+
+
+def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:
+    """``np.allclose(a, b, atol=atol)`` (rtol 1e-5) without its per-call overhead (runs on every drag event)."""
+    return bool((np.abs(a - b) <= atol + 1e-5 * np.abs(b)).all())
 
 
 def _set(handle: Any, value: Any) -> None:

@@ -306,12 +306,15 @@ class Scene3D:
                 _put(fru, "scale", scale)
                 content = derived.image_in_3d.get(name)
                 if content is not None:
-                    P = np.asarray(content["points"], float)
-                    ok = np.all(np.isfinite(P), axis=1) if len(P) else np.zeros(0, bool)
-                    if ok.any():
-                        _put(nodes["img_pts"], "points", P[ok].astype(np.float32))
-                        _put(nodes["img_pts"], "colors", colours[ok])
-                    _put(nodes["img_pts"], "visible", bool(ok.any()))
+                    P = content["points"]
+                    if nodes.get("_img_pts_src") is not P:  # the scene layer reuses an unchanged camera's arrays
+                        P = np.asarray(P, float)
+                        ok = np.all(np.isfinite(P), axis=1) if len(P) else np.zeros(0, bool)
+                        if ok.any():
+                            _put(nodes["img_pts"], "points", P[ok].astype(np.float32))
+                            _put(nodes["img_pts"], "colors", colours[ok])
+                        _put(nodes["img_pts"], "visible", bool(ok.any()))
+                        nodes["_img_pts_src"] = content["points"]
                     L = np.asarray(content["lines"], float)
                     seg, col = _segments(L, colours) if len(L) else (np.zeros((0, 2, 3)), None)
                     if len(seg):
@@ -320,19 +323,24 @@ class Scene3D:
                     _put(nodes["img_lines"], "visible", len(seg) > 0)
             else:
                 v, f = derived.mirror_meshes[name]
-                _put(nodes["mirror"], "vertices", np.asarray(v, np.float32))
-                _put(nodes["mirror"], "faces", np.asarray(f, np.uint32))
+                if nodes.get("_mesh_src") is not v or nodes.get("_faces_src") is not f:
+                    _put(nodes["mirror"], "vertices", np.asarray(v, np.float32))
+                    _put(nodes["mirror"], "faces", np.asarray(f, np.uint32))
+                    nodes["_mesh_src"], nodes["_faces_src"] = v, f
                 ccd = derived.ccd_centres.get(name)
                 if ccd is not None:
                     # The CCD is drawn in the camera's frame: its offset below the focus along the mirror axis.
                     off = float(np.linalg.norm(np.asarray(ccd) - np.asarray(position)))
                     _put(nodes["ccd"], "position", (0.0, 0.0, -off))
             rays = self._rays[name]
-            seg, col = _segments(derived.rays.get(name, np.zeros((0, 2, 3))), colours)
-            if len(seg):
-                _put(rays, "points", seg.astype(np.float32))
-                _put(rays, "colors", col)
-            _put(rays, "visible", opts.show_rays and len(seg) > 0)
+            src = derived.rays.get(name)
+            if src is None or nodes.get("_rays_src") is not src:  # unchanged camera: same array, same nodes
+                seg, col = _segments(src if src is not None else np.zeros((0, 2, 3)), colours)
+                if len(seg):
+                    _put(rays, "points", seg.astype(np.float32))
+                    _put(rays, "colors", col)
+                nodes["_rays_src"], nodes["_rays_n"] = src, len(seg)
+            _put(rays, "visible", opts.show_rays and nodes["_rays_n"] > 0)
 
         self._sync_points(scene)
 

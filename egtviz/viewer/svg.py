@@ -23,12 +23,16 @@ from __future__ import annotations
 
 import math
 import zlib
+from functools import lru_cache
 from html import escape
 from typing import Any
 
 import numpy as np
 
-from .palette import EPIPOLE_COLOUR, RIM_COLOUR, point_colour
+from .palette import EPIPOLE_COLOUR, POINT_COLOURS, RIM_COLOUR, point_colour
+
+_COLOURS = tuple(POINT_COLOURS)
+_N_COLOURS = len(_COLOURS)
 
 __all__ = ["image_plane_svg", "empty_svg"]
 
@@ -98,6 +102,87 @@ def _points_attr(P: np.ndarray, *, integer: bool) -> str:
     return (("%.5g,%.5g " * len(P)) % tuple(np.asarray(P, float).ravel().tolist()))[:-1]
 
 
+#: Whole numbers in ``[_INT_LO, _INT_HI)`` are written from lookup tables (a panel's pixels nearly always are).
+_INT_LO, _INT_HI = -8192, 16384
+_INT_TABLES: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+
+def _int_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Object arrays of ``"v,"``, ``"v "`` and ``"v"`` for every whole number v in the table range."""
+    global _INT_TABLES
+    if _INT_TABLES is None:
+        nums = [str(v) for v in range(_INT_LO, _INT_HI)]
+        tabs = []
+        for sep in (",", " ", ""):
+            t = np.empty(len(nums), dtype=object)
+            t[:] = [x + sep for x in nums]
+            tabs.append(t)
+        _INT_TABLES = (tabs[0], tabs[1], tabs[2])
+    return _INT_TABLES
+
+
+def _int_rows_joined(V: np.ndarray, prefixes: list[str], suffixes: list[str]) -> str:
+    """``prefix + "x,y x,y ..." + suffix`` for each row of whole numbers ``V`` (n, 2k), concatenated.
+
+    Exactly what ``"%d,%d "`` would write, but the numbers come from lookup
+    tables and the whole block is one ``join`` (a 200-conic panel has 10 000
+    numbers: one ``%d`` each costs several times more).
+    """
+    n, m = V.shape
+    if n == 0:
+        return ""
+    if m == 0 or V.min() < _INT_LO or V.max() >= _INT_HI:
+        tpl = ("%d,%d " * (m // 2))[:-1]
+        return "".join(p + tpl % tuple(r) + q for p, r, q in zip(prefixes, V.tolist(), suffixes))
+    comma, space, bare = _int_tables()
+    J = V - _INT_LO
+    out = np.empty((n, m + 2), dtype=object)
+    out[:, 0] = prefixes
+    out[:, 1:m:2] = comma[J[:, 0::2]]
+    out[:, 2:m:2] = space[J[:, 1:-1:2]]
+    out[:, m] = bare[J[:, -1]]
+    out[:, m + 1] = suffixes
+    return "".join(out.ravel().tolist())
+
+
+#: ``rint(x * 10**dp)`` in ``[_FIX_LO, _FIX_HI)`` is written from a lookup table (``"%.{dp}f"``).
+_FIX_LO, _FIX_HI = -32768, 65536
+_FIX_TABLES: dict[int, np.ndarray] = {}
+
+
+def _fixed_strs(X: Any, dp: int) -> np.ndarray:
+    """``"%.{dp}f" % x`` for every entry of ``X``, as an object array of the same shape.
+
+    The decimal rounding is done once in numpy: where ``x * 10**dp`` is not
+    within 1e-6 of a tie (so its correct rounding is certainly ``rint``) the
+    string comes from a table; the few others (ties, ``-0.0``, out of the table
+    range, non-finite) are formatted by ``%`` itself, so the text is identical.
+    """
+    X = np.asarray(X, float)
+    table = _FIX_TABLES.get(dp)
+    if table is None:
+        sc = 10**dp
+        strs = []
+        for r in range(_FIX_LO, _FIX_HI):
+            a = abs(r)
+            t = f"{a // sc}.{a % sc:0{dp}d}"
+            strs.append("-" + t if r < 0 else t)
+        table = np.empty(len(strs), dtype=object)
+        table[:] = strs
+        _FIX_TABLES[dp] = table
+    with np.errstate(invalid="ignore", over="ignore"):
+        y = X * float(10**dp)
+        r = np.rint(y)
+        ok = np.isfinite(y) & (r >= _FIX_LO) & (r < _FIX_HI) & (np.abs(np.abs(y - r) - 0.5) > 1e-6)
+        ok &= ~(np.signbit(X) & (r == 0))
+    out = np.empty(X.shape, dtype=object)
+    out[ok] = table[(r[ok] - _FIX_LO).astype(np.int64)]
+    if not ok.all():
+        fmt = f"%.{dp}f"
+        out[~ok] = [fmt % v for v in X[~ok].tolist()]
+    return out
+
+
 def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
     """Split a polyline at NaN rows into runs of at least two points."""
     P = np.asarray(P, float)
@@ -114,46 +199,67 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) ->
     """The ``epipolar-conic`` polylines of a panel, formatted in bulk.
 
     Arcs of equal length (the usual case: the scene layer samples every conic
-    alike) are stacked and rounded in one numpy pass; an arc with NaN vertices
-    is split into its finite runs first. Past ``CONIC_VERTEX_BUDGET`` vertices
-    only every k-th sample is kept (and each arc's last).
+    alike) are stacked and rounded in one numpy pass and written with one
+    %-template per block; an arc with NaN vertices is split into its finite runs
+    first. Past ``CONIC_VERTEX_BUDGET`` vertices only every k-th sample is kept
+    (and each arc's last).
     """
-    by_length: dict[int, list[tuple[int, Any]]] = {}
+    by_length: dict[int, tuple[list[int], list[Any]]] = {}
     for i, arcs in enumerate(conics):
         for piece in arcs:
-            if len(piece) >= 2:
-                by_length.setdefault(len(piece), []).append((i, piece))
-    total = sum(length * len(items) for length, items in by_length.items())
+            n = len(piece)
+            if n >= 2:
+                entry = by_length.get(n)
+                if entry is None:
+                    entry = by_length[n] = ([], [])
+                entry[0].append(i)
+                entry[1].append(piece)
+    total = sum(length * len(idx) for length, (idx, _) in by_length.items())
     stride = max(1, math.ceil(total / CONIC_VERTEX_BUDGET))
-    groups: dict[int, list[tuple[int, np.ndarray]]] = {}
-    for length, items in by_length.items():
-        stacked = np.asarray([piece for _, piece in items], float).reshape(len(items), length, 2)
+    # Blocks of equal-length runs: (indices, (n, length, 2) array), in the order the old per-run grouping gave.
+    blocks: dict[int, list[tuple[list[int], np.ndarray]]] = {}
+    for length, (idx, pieces) in by_length.items():
+        stacked = np.asarray(pieces, float).reshape(len(idx), length, 2)
         finite = np.isfinite(stacked).all(axis=(1, 2))
-        for (i, _), arc, ok in zip(items, stacked, finite.tolist()):
+        if finite.all():
+            blocks.setdefault(length, []).append((idx, stacked))
+            continue
+        for i, arc, ok in zip(idx, stacked, finite.tolist()):
             for run in [arc] if ok else _finite_runs(arc):
-                groups.setdefault(len(run), []).append((i, run))
+                blocks.setdefault(len(run), []).append(([i], run[None]))
     integer = s >= 200
     thick = f' stroke-width="{_f(lw * 3.0)}"'
     body: list[str] = []
-    for length, items in groups.items():
+    for length, parts in blocks.items():
         keep = np.arange(0, length, stride) if stride > 1 and length > 2 else np.arange(length)
         if keep[-1] != length - 1:
             keep = np.append(keep, length - 1)
-        arr = np.stack([run for _, run in items])[:, keep]
+        idx = [i for ids, _ in parts for i in ids]
+        arr = parts[0][1] if len(parts) == 1 else np.concatenate([a for _, a in parts])
+        if len(keep) != length:
+            arr = arr[:, keep]
+        k = len(keep)
+        n = len(idx)
+        colours = [_COLOURS[i % _N_COLOURS] for i in idx]
+        widths = [thick if i == selected_point else "" for i in idx]
         if integer:
-            flat = np.rint(arr).astype(np.int64).reshape(len(items), -1).tolist()
-            pts_tpl = ("%d,%d " * len(keep))[:-1]
-        else:
-            flat = arr.reshape(len(items), -1).tolist()
-            pts_tpl = ("%.5g,%.5g " * len(keep))[:-1]
-        for (i, _), row in zip(items, flat):
-            body.append(
-                f'<polyline data-kind="epipolar-conic" data-index="{i}" points="{pts_tpl % tuple(row)}" '
-                f'stroke="{point_colour(i)}"{thick if i == selected_point else ""}/>'
-            )
+            prefixes = [f'<polyline data-kind="epipolar-conic" data-index="{i}" points="' for i in idx]
+            suffixes = [f'" stroke="{c}"{w}/>' for c, w in zip(colours, widths)]
+            body.append(_int_rows_joined(np.rint(arr).astype(np.int64).reshape(n, 2 * k), prefixes, suffixes))
+            continue
+        pts_tpl = ("%.5g,%.5g " * k)[:-1]
+        # One object table (index, coordinates..., colour, width) and one %-format for the whole block.
+        table = np.empty((n, 2 * k + 3), dtype=object)
+        table[:, 0] = idx
+        table[:, 1:-2] = np.asarray(arr, float).reshape(n, 2 * k)
+        table[:, -2] = colours
+        table[:, -1] = widths
+        tpl = f'<polyline data-kind="epipolar-conic" data-index="%d" points="{pts_tpl}" stroke="%s"%s/>'
+        body.append((tpl * n) % tuple(table.ravel().tolist()))
     return "".join(body)
 
 
+@lru_cache(maxsize=64)
 def axes_svg(w: float, h: float, font: float, lw: float) -> str:
     """Pixel axes with ticks and labels: u along the top edge, v along the left edge (origin top-left)."""
     step = _nice_step(max(w, h))
@@ -181,6 +287,53 @@ def axes_svg(w: float, h: float, font: float, lw: float) -> str:
         f'<text x="{_f(-tick * 1.4)}" y="{_f(h + font * 1.2)}" font-size="{_f(font)}" font-style="italic" '
         f'text-anchor="end">v</text></g>'
     )
+
+
+_POINTS_CACHE: dict[tuple, str] = {}
+
+
+def _points_group(P: np.ndarray, in_image: np.ndarray, selected_point: int | None, highlighted: frozenset,
+                  show_labels: bool, c: str, r_pt: float, lw: float, font: float) -> str:
+    """The ``point`` group of a panel; reused while its pixels and marks are unchanged (the other camera's
+    panel during a camera drag)."""
+    key = (P.tobytes(), in_image.tobytes(), selected_point, highlighted, show_labels, c, r_pt, lw, font)
+    hit = _POINTS_CACHE.get(key)
+    if hit is not None:
+        return hit
+    idx = np.flatnonzero(in_image).tolist()
+    dl = r_pt * 1.4
+    dp = int(c[2:-1])
+    ring_tpl = (f'<circle cx="{c}" cy="{c}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
+                f'stroke-width="{_f(lw * 2)}" data-selected="%s"/>')
+    Q = P[in_image]
+    cols = 9 if show_labels else 5
+    table = np.empty((len(idx), cols), dtype=object)
+    if idx:
+        marks = {i: ring_tpl % (x, y, "true" if i == selected_point else "false")
+                 for i, (x, y) in zip(idx, Q.tolist()) if i == selected_point or i in highlighted}
+        colours = [_COLOURS[i % _N_COLOURS] for i in idx]
+        table[:, 0] = [f'<g data-kind="point" data-index="{i}">{marks.get(i, "")}<circle cx="' for i in idx]
+        table[:, 1:4:2] = _fixed_strs(Q, dp)
+        table[:, 2] = '" cy="'
+        disc = f'" r="{_f(r_pt)}" fill="'
+        if show_labels:
+            table[:, 4] = [f'{disc}{col}"/><text x="' for col in colours]
+            table[:, 5:8:2] = _fixed_strs(np.column_stack([Q[:, 0] + dl, Q[:, 1] - dl]), dp)
+            table[:, 6] = '" y="'
+            sw = _f(lw * 3)
+            table[:, 8] = [f'" fill="{col}" stroke="#fff" stroke-width="{sw}">{i + 1}</text></g>'
+                           for i, col in zip(idx, colours)]
+        else:
+            table[:, 4] = [f'{disc}{col}"/></g>' for col in colours]
+    body = ["".join(table.ravel().tolist())]
+    out = (
+        f'<g stroke="#000" stroke-width="{_f(lw * 0.6)}" font-size="{_f(font)}" font-weight="bold" '
+        f'paint-order="stroke">{"".join(body)}</g>'
+    )
+    if len(_POINTS_CACHE) >= 16:
+        _POINTS_CACHE.pop(next(iter(_POINTS_CACHE)))
+    _POINTS_CACHE[key] = out
+    return out
 
 
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
@@ -261,39 +414,24 @@ def image_plane_svg(
     if plane.lines is not None:
         L = np.asarray(plane.lines, float).reshape(-1, 4)
         ok = np.all(np.isfinite(L), axis=1)
-        tpl = (f'<line data-kind="epipolar-line" data-index="%d" x1="{c}" y1="{c}" x2="{c}" y2="{c}" '
-               f'stroke="%s"%s/>')
         thick = f' stroke-width="{_f(lw * 3.0)}"'
-        body = [
-            tpl % (i, x1, y1, x2, y2, point_colour(i), thick if i == selected_point else "")
-            for i, (x1, y1, x2, y2) in zip(np.flatnonzero(ok).tolist(), L[ok].tolist())
-        ]
-        out.append(f'<g stroke-width="{_f(lw * 1.2)}">{"".join(body)}</g>')
+        idx = np.flatnonzero(ok).tolist()
+        table = np.empty((len(idx), 9), dtype=object)
+        if idx:
+            table[:, 0] = [f'<line data-kind="epipolar-line" data-index="{i}" x1="' for i in idx]
+            table[:, 1:9:2] = _fixed_strs(L[ok], dp)
+            table[:, 2] = '" y1="'
+            table[:, 4] = '" x2="'
+            table[:, 6] = '" y2="'
+            table[:, 8] = [f'" stroke="{_COLOURS[i % _N_COLOURS]}"{thick if i == selected_point else ""}/>' for i in idx]
+        out.append(f'<g stroke-width="{_f(lw * 1.2)}">{"".join(table.ravel().tolist())}</g>')
 
     if plane.conics is not None:
         out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{_conics_svg(plane.conics, selected_point, lw, s)}</g>')
 
     P = np.asarray(plane.points, float).reshape(-1, 2)
     in_image = np.asarray(plane.in_image, bool).reshape(-1)
-    idx = np.flatnonzero(in_image).tolist()
-    xy = P[in_image].tolist()
-    dl = r_pt * 1.4
-    ring_tpl = (f'<circle cx="{c}" cy="{c}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
-                f'stroke-width="{_f(lw * 2)}" data-selected="%s"/>')
-    pt_tpl = f'<g data-kind="point" data-index="%d">%s<circle cx="{c}" cy="{c}" r="{_f(r_pt)}" fill="%s"/>%s</g>'
-    lab_tpl = f'<text x="{c}" y="{c}" fill="%s" stroke="#fff" stroke-width="{_f(lw * 3)}">%d</text>'
-    body = []
-    for i, (x, y) in zip(idx, xy):
-        colour = point_colour(i)
-        mark = ""
-        if i == selected_point or i in highlighted:
-            mark = ring_tpl % (x, y, "true" if i == selected_point else "false")
-        label = lab_tpl % (x + dl, y - dl, colour, i + 1) if show_labels else ""
-        body.append(pt_tpl % (i, mark, x, y, colour, label))
-    out.append(
-        f'<g stroke="#000" stroke-width="{_f(lw * 0.6)}" font-size="{_f(font)}" font-weight="bold" '
-        f'paint-order="stroke">{"".join(body)}</g>'
-    )
+    out.append(_points_group(P, in_image, selected_point, frozenset(highlighted), show_labels, c, r_pt, lw, font))
     out.append("</g>")  # end of clipped group
 
     # Epipoles: inside (a cross), outside (an arrow at the border), at infinity (an arrow and a label).
