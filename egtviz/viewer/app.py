@@ -672,7 +672,7 @@ class EgtvizApp:
         if view is not None:
             view.close()
         if demo is not None:
-            demo.close()
+            demo.close(client_gone=True)
 
     # -- visual-servoing demos (egtviz.viewer.servo_demo) ---------------------------------
 

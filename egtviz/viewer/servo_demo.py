@@ -531,8 +531,8 @@ class ServoDemo:
             if self.result is not None:
                 self._show(int(np.argmin(np.abs(self.result.time - float(t)))))
 
-    def close(self) -> None:
-        """Stop the threads and remove the demo's 3D nodes and GUI. Idempotent."""
+    def close(self, *, client_gone: bool = False) -> None:
+        """Stop the threads and remove the demo's 3D nodes and GUI (not when the tab is gone). Idempotent."""
         with self.lock:
             if self._closed.is_set():
                 return
@@ -543,6 +543,8 @@ class ServoDemo:
         for t in (self._play_thread, self._sim_thread):
             if t is not None and t is not threading.current_thread():
                 t.join(2.0)
+        if client_gone:
+            return  # nothing to remove in a page that no longer exists
         try:
             with self.client.atomic():
                 self.client.scene.remove_by_name("/servo")
