@@ -394,3 +394,23 @@ def test_all_coplanar_scene_is_refused_by_every_estimator(robust):
         estimator(u1, u2)
     with pytest.raises(GeometryError, match="degenerate configuration"):
         fundamental_normalized_8point(u1, u2)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_essential_from_calibrated_correspondences(seed):
+    from egtviz.geometry.estimation import essential_from_correspondences
+
+    scene = make_two_view(np.random.default_rng(seed), 40)
+    E = essential_from_correspondences(scene.U1, scene.U2, scene.K1, scene.K2)
+    s = np.linalg.svd(E, compute_uv=False)
+    np.testing.assert_allclose(s, [np.sqrt(0.5), np.sqrt(0.5), 0.0], atol=1e-12)  # on the essential manifold
+    E_true = scene.E / np.linalg.norm(scene.E)
+    assert min(np.linalg.norm(E - E_true), np.linalg.norm(E + E_true)) < 1e-6
+    # The four-fold decomposition and cheirality give back the true motion.
+    x1 = np.linalg.solve(scene.K1, np.column_stack([scene.U1, np.ones(40)]).T).T[:, :2]
+    x2 = np.linalg.solve(scene.K2, np.column_stack([scene.U2, np.ones(40)]).T).T[:, :2]
+    R, t, in_front = pose_from_essential(E, x1, x2)
+    np.testing.assert_allclose(R, scene.R, atol=1e-6)
+    np.testing.assert_allclose(t / np.linalg.norm(t), scene.t / np.linalg.norm(scene.t), atol=1e-6)
+    assert in_front.all()

@@ -16,7 +16,8 @@ has them and the robust estimators and error measures a lesson needs:
 
 Essential matrices (H&Z section 9.6; the E <-> F conversions live in
 :mod:`egtviz.geometry.epipolar`): :func:`decompose_essential`,
-:func:`pose_from_essential`.
+:func:`pose_from_essential`; :func:`essential_from_correspondences`
+estimates E from calibrated correspondences.
 
 Conventions (``docs/conventions.md``): points are rows, pixels ``(N, 2)``;
 :math:`m_2^T F m_1 = 0`; the pose between the cameras maps camera-1
@@ -38,6 +39,7 @@ from scipy.optimize import least_squares
 from ._validate import (
     DegenerateConfigurationError,
     GeometryError,
+    as_calibration,
     as_matrix,
     as_points,
 )
@@ -45,6 +47,7 @@ from ._validate import (
 __all__ = [
     "RobustEstimate",
     "decompose_essential",
+    "essential_from_correspondences",
     "fundamental_7point",
     "fundamental_8point",
     "fundamental_lmeds",
@@ -362,6 +365,42 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
     T1, n1, _, T2, n2, _ = _hartley(u1, u2)
     Fn = _rank2(_null_vector_normal(_design(n1, n2)).reshape(3, 3))
     return _canonical(_denormalize(Fn, T1, T2))
+
+
+def essential_from_correspondences(
+    U1: npt.ArrayLike, U2: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike
+) -> np.ndarray:
+    r"""Essential matrix from calibrated correspondences (H&Z 2nd ed., sections 9.6 and 11.1).
+
+    The pixels are normalised, :math:`\hat x = K^{-1} m`, the normalised
+    8-point algorithm gives :math:`E_0` with :math:`\hat x_2^T E_0 \hat x_1 = 0`,
+    and :math:`E_0 = U \Sigma V^T` is projected onto the essential matrices
+    (two equal singular values, one zero, H&Z Result 9.17):
+
+    .. math:: E = U \operatorname{diag}(1, 1, 0) V^T / \sqrt 2 .
+
+    Decompose it with :func:`decompose_essential` / :func:`pose_from_essential`.
+
+    Args:
+        U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
+        U2: ``(N, 2)`` corresponding pixels in image 2.
+        K1: ``(3, 3)`` calibration of camera 1.
+        K2: ``(3, 3)`` calibration of camera 2.
+
+    Returns:
+        ``(3, 3)`` ``E``, unit Frobenius norm, largest entry positive.
+
+    Raises:
+        GeometryError: bad shapes, NaN/inf, ``N < 8``, mismatched ``N`` or a
+            non-invertible calibration.
+        DegenerateConfigurationError: coincident points or rank-deficient data.
+    """
+    u1, u2 = _pair(U1, U2, 8)
+    x1 = np.linalg.solve(as_calibration(K1, "K1"), _homogeneous(u1).T).T
+    x2 = np.linalg.solve(as_calibration(K2, "K2"), _homogeneous(u2).T).T
+    E0 = fundamental_normalized_8point(x1[:, :2] / x1[:, 2:], x2[:, :2] / x2[:, 2:])
+    U, _, Vt = np.linalg.svd(E0)
+    return _canonical(U @ np.diag([1.0, 1.0, 0.0]) @ Vt)
 
 
 def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]:
