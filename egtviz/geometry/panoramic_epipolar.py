@@ -294,7 +294,16 @@ def _circle_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _on_circle(u: np.ndarray, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    return np.cos(theta)[..., None] * u + np.sin(theta)[..., None] * v
+    r"""Directions :math:`\cos\theta\,u + \sin\theta\,v`: ``u``, ``v`` (R, 3), ``theta`` (R, n) -> (R, n, 3).
+
+    Written per coordinate: broadcasting over a trailing axis of 3 costs more than the arithmetic.
+    """
+    c, s = np.cos(theta), np.sin(theta)
+    d = np.empty(theta.shape + (3,))
+    for k in range(3):
+        np.multiply(c, u[:, k, None], out=d[..., k])
+        d[..., k] += s * v[:, k, None]
+    return d
 
 
 def _sample_circles(camera: CatadioptricCamera, normals: np.ndarray, n: int) -> list[list[np.ndarray]]:
@@ -335,11 +344,11 @@ def _sample_circles(camera: CatadioptricCamera, normals: np.ndarray, n: int) -> 
     if len(rows) == 0:
         return out
     theta = start[rows, None] + span[rows, None] * np.linspace(0.0, 1.0, n)[None, :]
-    d = _on_circle(u[rows, None, :], v[rows, None, :], theta)
+    d = _on_circle(u[rows], v[rows], theta)
     pixels = camera.project_directions(d.reshape(-1, 3)).pixels.reshape(len(rows), n, 2)
-    closed = np.concatenate([pixels, pixels[:, :1]], axis=1)
-    for j, k in enumerate(rows):
-        out[good[k]] = [closed[j] if full[k] else pixels[j]]
+    closed = np.concatenate([pixels, pixels[:, :1]], axis=1) if full.any() else pixels
+    for j, k, is_full in zip(range(len(rows)), good[rows].tolist(), full[rows].tolist()):
+        out[k] = [closed[j] if is_full else pixels[j]]
     return out
 
 
