@@ -413,3 +413,22 @@ def test_bad_arguments():
         biconic(cam1, np.ones((2, 3)), np.ones((3, 3)))
     with pytest.raises(GeometryError, match="cam2: expected a CatadioptricCamera"):
         panoramic_essential(cam1, "camera 2")
+
+
+def test_sampled_biconics_pass_through_both_features():
+    from egtviz.geometry.panoramic_epipolar import sample_biconics
+
+    rng = np.random.default_rng(11)
+    cam = CatadioptricCamera(Pose(), HyperbolicMirror(3.0, 1.0), K_EGT)
+    d_cur = np.column_stack([rng.normal(size=(6, 2)), rng.uniform(-1.0, 0.5, 6)])
+    d_des = np.column_stack([rng.normal(size=(6, 2)), rng.uniform(-1.0, 0.5, 6)])
+    d_des[0] = 2.0 * d_cur[0]  # parallel rays: no plane, no arc
+    arcs = sample_biconics(cam, d_cur, d_des, n=400)
+    assert arcs[0] == []
+    m_cur = cam.project_directions(d_cur).pixels
+    m_des = cam.project_directions(d_des).pixels
+    for i in range(1, 6):
+        pts = np.concatenate(arcs[i])
+        for m in (m_cur[i], m_des[i]):
+            if np.all(np.isfinite(m)):
+                assert np.min(np.linalg.norm(pts - m, axis=1)) < 2.0  # within a sample step of the arc

@@ -256,10 +256,29 @@ def epipolar_conics(
     return _conics_from_normals(cam1, n @ cam1.pose.R), _conics_from_normals(cam2, n @ cam2.pose.R)
 
 
+def biconic_normals(d_current: npt.ArrayLike, d_desired: npt.ArrayLike) -> np.ndarray:
+    r"""Normals :math:`n = d_c \times d_d` (N, 3) of the bi-conic planes; zero rows where the rays are parallel.
+
+    Args:
+        d_current: (N, 3) current viewing directions, mirror frame.
+        d_desired: (N, 3) desired viewing directions, mirror frame.
+    """
+    dc = as_points(d_current, "d_current", 3)
+    dd = as_points(d_desired, "d_desired", 3)
+    if dc.shape != dd.shape:
+        raise GeometryError(f"d_desired: expected shape {dc.shape} like d_current, got {dd.shape}")
+    n = np.cross(dc, dd)
+    degenerate = np.linalg.norm(n, axis=1) <= _DEGENERATE_REL * np.linalg.norm(dc, axis=1) * np.linalg.norm(
+        dd, axis=1
+    )
+    n[degenerate] = 0.0
+    return n
+
+
 def biconic(camera: CatadioptricCamera, d_current: npt.ArrayLike, d_desired: npt.ArrayLike) -> np.ndarray:
     r"""Bi-conics: images of the planes through the focus containing two viewing rays.
 
-    For each pair, :math:`n = d_c \times d_d` (mirror frame) and
+    For each pair, :math:`n = d_c \times d_d` (mirror frame, :func:`biconic_normals`) and
     :math:`C = ` :func:`conic_from_plane` (``camera``, :math:`n`); used by the
     panoramic visual-servoing demo (EGT reference, section 7), where all
     bi-conics meet in the epipoles once the rotation is compensated.
@@ -273,16 +292,15 @@ def biconic(camera: CatadioptricCamera, d_current: npt.ArrayLike, d_desired: npt
         (N, 3, 3) conics; NaN rows where the two directions are parallel.
     """
     camera = _check_camera(camera, "camera")
-    dc = as_points(d_current, "d_current", 3)
-    dd = as_points(d_desired, "d_desired", 3)
-    if dc.shape != dd.shape:
-        raise GeometryError(f"d_desired: expected shape {dc.shape} like d_current, got {dd.shape}")
-    n = np.cross(dc, dd)
-    degenerate = np.linalg.norm(n, axis=1) <= _DEGENERATE_REL * np.linalg.norm(dc, axis=1) * np.linalg.norm(
-        dd, axis=1
-    )
-    n[degenerate] = 0.0
-    return _conics_from_normals(camera, n)
+    return _conics_from_normals(camera, biconic_normals(d_current, d_desired))
+
+
+def sample_biconics(
+    camera: CatadioptricCamera, d_current: npt.ArrayLike, d_desired: npt.ArrayLike, n: int = 96
+) -> list[list[np.ndarray]]:
+    """Visible arcs of the bi-conics (:func:`sample_plane_conics` of :func:`biconic_normals`); empty where parallel."""
+    camera = _check_camera(camera, "camera")
+    return _sample_circles(camera, biconic_normals(d_current, d_desired), n)
 
 
 def _circle_basis(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -15,7 +15,7 @@ bi-conics (panoramic). This module derives them by calling
   (:meth:`~egtviz.geometry.catadioptric.CatadioptricCamera.back_project`, the
   plane normal ``d x d*`` as in :func:`~egtviz.geometry.panoramic_epipolar.biconic`),
   sampled into polylines with
-  :func:`~egtviz.geometry.panoramic_epipolar.sample_plane_conics`; the true
+  :func:`~egtviz.geometry.panoramic_epipolar.sample_biconics`; the true
   epipoles of the current image come from
   :func:`~egtviz.geometry.panoramic_epipolar.panoramic_epipoles`.
 """
@@ -28,7 +28,7 @@ import numpy as np
 
 from egtviz.geometry.catadioptric import CatadioptricCamera
 from egtviz.geometry.epipolar import clipped_epipolar_lines, epipolar_lines_in_first, epipolar_pair
-from egtviz.geometry.panoramic_epipolar import panoramic_epipoles, sample_plane_conics
+from egtviz.geometry.panoramic_epipolar import panoramic_epipoles, sample_biconics
 from egtviz.geometry.pinhole import Intrinsics, PinholeCamera
 from egtviz.geometry.poses import Pose
 
@@ -125,11 +125,10 @@ class ServoFrames:
         cam = self.camera
         d = cam.back_project(r.features[k])
         d_star = cam.back_project(r.desired_features)
-        normals = np.cross(d, d_star)  # the bi-conic plane normal, as in panoramic_epipolar.biconic
-        ok = np.all(np.isfinite(normals), axis=1) & (np.linalg.norm(normals, axis=1) > 1e-9)
-        conics: list[list[np.ndarray]] = [[] for _ in range(len(normals))]
+        ok = np.all(np.isfinite(d), axis=1) & np.all(np.isfinite(d_star), axis=1)  # features the mirror shows
+        conics: list[list[np.ndarray]] = [[] for _ in range(len(d))]
         if ok.any():
-            arcs = sample_plane_conics(cam, normals[ok], n=CONIC_SAMPLES)
+            arcs = sample_biconics(cam, d[ok], d_star[ok], n=CONIC_SAMPLES)
             for i, a in zip(np.flatnonzero(ok), arcs):
                 conics[int(i)] = a
         eps: list[tuple[str, np.ndarray]] = []
