@@ -395,25 +395,10 @@ def simulate_panoramic(
 
     def failure(reason: str) -> ServoResult:
         r0, t0 = errors_of(state)
-        return ServoResult(
-            demo="panoramic",
-            time=np.zeros(1),
-            camera_poses=mirror_pose(state).matrix[None],
-            features=np.full((1, n_feat, 2), np.nan),
-            desired_features=np.full((n_feat, 2), np.nan),
-            controls={"robot_velocity": np.zeros((1, 3))},
-            errors={"rotation_error_rad": np.array([r0]), "translation_error": np.array([t0])},
-            converged=False,
-            reason=reason,
-            initial_rotation_error_rad=r0,
-            initial_translation_error=t0,
-            final_rotation_error_rad=r0,
-            final_translation_error=t0,
-            steps=0,
-            sim_time_s=0.0,
-            wall_time_s=_time.perf_counter() - wall0,
-            states=state[None].copy(),
-            params=params,
+        return ServoResult.not_run(
+            "panoramic", reason, rotation_error=r0, translation_error=t0,
+            camera_poses=mirror_pose(state).matrix[None], n_features=n_feat, controls={"robot_velocity": 3},
+            wall_time_s=_time.perf_counter() - wall0, states=state[None].copy(), params=params,
         )
 
     if n_feat < 4:

@@ -510,28 +510,14 @@ def simulate_pinhole(
     }
 
     def failure(reason: str, pose0: Pose | None = None, goal: Pose | None = None) -> ServoResult:
-        r0 = rotation_angle(goal.R.T @ pose0.R) if pose0 is not None and goal is not None else float("nan")
-        t0 = float(np.linalg.norm(pose0.t - goal.t)) if pose0 is not None and goal is not None else float("nan")
-        H0 = pose0.matrix[None] if pose0 is not None else np.zeros((0, 4, 4))
-        return ServoResult(
-            demo="pinhole",
-            time=np.zeros(len(H0)),
-            camera_poses=H0,
-            features=np.zeros((len(H0), 0, 2)),
-            desired_features=np.zeros((0, 2)),
-            controls={"camera_twist": np.zeros((len(H0), 6)), "joint_velocities": np.zeros((len(H0), 6))},
-            errors={"rotation_error_rad": np.full(len(H0), r0), "translation_error": np.full(len(H0), t0)},
-            converged=False,
-            reason=reason,
-            initial_rotation_error_rad=r0,
-            initial_translation_error=t0,
-            final_rotation_error_rad=r0,
-            final_translation_error=t0,
-            steps=0,
-            sim_time_s=0.0,
-            wall_time_s=_time.perf_counter() - wall0,
-            translation_servoed=beta > 0,
-            params=params,
+        known = pose0 is not None and goal is not None
+        return ServoResult.not_run(
+            "pinhole", reason,
+            rotation_error=rotation_angle(goal.R.T @ pose0.R) if known else float("nan"),
+            translation_error=float(np.linalg.norm(pose0.t - goal.t)) if known else float("nan"),
+            camera_poses=pose0.matrix[None] if pose0 is not None else np.zeros((0, 4, 4)),
+            n_features=0, controls={"camera_twist": 6, "joint_velocities": 6},
+            wall_time_s=_time.perf_counter() - wall0, translation_servoed=beta > 0, params=params,
         )
 
     # --- target

@@ -96,6 +96,45 @@ class ServoResult:
     params: dict[str, Any] = field(default_factory=dict)
     """The parameters of the run (seed, gains, tolerances, ...), JSON-friendly."""
 
+    @classmethod
+    def not_run(
+        cls,
+        demo: Literal["pinhole", "panoramic"],
+        reason: str,
+        *,
+        rotation_error: float,
+        translation_error: float,
+        camera_poses: np.ndarray,
+        n_features: int,
+        controls: dict[str, int],
+        **fields: Any,
+    ) -> ServoResult:
+        """A run that ended before its first step: the start pose only (if any), errors unchanged.
+
+        ``controls`` names each control series and its width; ``fields`` sets the
+        remaining attributes (``wall_time_s``, ``params``, ``states``, ...).
+        """
+        T = len(camera_poses)
+        r0, t0 = float(rotation_error), float(translation_error)
+        return cls(
+            demo=demo,
+            time=np.zeros(T),
+            camera_poses=camera_poses,
+            features=np.full((T, n_features, 2), np.nan),
+            desired_features=np.full((n_features, 2), np.nan),
+            controls={name: np.zeros((T, k)) for name, k in controls.items()},
+            errors={"rotation_error_rad": np.full(T, r0), "translation_error": np.full(T, t0)},
+            converged=False,
+            reason=reason,
+            initial_rotation_error_rad=r0,
+            initial_translation_error=t0,
+            final_rotation_error_rad=r0,
+            final_translation_error=t0,
+            steps=0,
+            sim_time_s=0.0,
+            **fields,
+        )
+
     @property
     def n_samples(self) -> int:
         """``T``, the number of recorded samples."""
