@@ -21,7 +21,7 @@ import numpy.typing as npt
 from numpy import eye  # noqa: F401
 
 from .geometry import estimation
-from .geometry._validate import GeometryError, as_array, as_calibration, as_matrix, as_positive
+from .geometry._validate import GeometryError, as_array, as_matrix, as_positive
 from .geometry.catadioptric import CatadioptricCamera
 from .geometry.epipolar import epipolar_lines, epipolar_lines_in_first, epipolar_pair
 from .geometry.mirrors import HyperbolicMirror, ParabolicMirror
@@ -76,10 +76,11 @@ def f_Rt2H(R: npt.ArrayLike, t: npt.ArrayLike) -> np.ndarray:
 
 
 def _pinhole(H: npt.ArrayLike, K: npt.ArrayLike, name: str = "K") -> PinholeCamera:
-    K = as_calibration(K, name)
-    if K[0, 0] <= 0 or K[1, 1] <= 0:
-        raise GeometryError(f"{name}: expected positive focal lengths K[0,0] and K[1,1]")
-    return PinholeCamera(Pose.from_matrix(H), Intrinsics.from_K(K))
+    try:
+        intrinsics = Intrinsics.from_K(K)
+    except GeometryError as exc:  # name the facade's argument (K1, K2), not Intrinsics'
+        raise GeometryError(str(exc).replace("K:", f"{name}:", 1)) from exc
+    return PinholeCamera(Pose.from_matrix(H), intrinsics)
 
 
 def f_perspproj(Xw: npt.ArrayLike, H: npt.ArrayLike, K: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:

@@ -8,6 +8,7 @@ camera-2 frame), :math:`E = [t]_\times R`, :math:`F = K_2^{-T} E K_1^{-1}` and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -90,23 +91,18 @@ def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
     return F / n
 
 
-_INV_K_CACHE: dict[bytes, np.ndarray] = {}
-
-
 def _inverse_calibration(K: npt.ArrayLike, name: str) -> np.ndarray:
     """``inv(as_calibration(K))``, remembered per matrix (a camera drag keeps both calibrations)."""
-    arr = np.asarray(K)
-    key = arr.tobytes() if arr.dtype == np.float64 and arr.shape == (3, 3) else None
-    if key is not None:
-        hit = _INV_K_CACHE.get(key)
-        if hit is not None:
-            return hit
-    inv = np.linalg.inv(as_calibration(K, name))
-    if key is not None:
-        if len(_INV_K_CACHE) >= 64:
-            _INV_K_CACHE.clear()
-        inv.setflags(write=False)
-        _INV_K_CACHE[key] = inv
+    arr = np.ascontiguousarray(K, dtype=np.float64)
+    if arr.shape != (3, 3):
+        as_calibration(arr, name)  # raises with the shape in the message
+    return _inverse_of(arr.tobytes(), name)
+
+
+@lru_cache(maxsize=64)
+def _inverse_of(K_bytes: bytes, name: str) -> np.ndarray:
+    inv = np.linalg.inv(as_calibration(np.frombuffer(K_bytes).reshape(3, 3), name))
+    inv.setflags(write=False)
     return inv
 
 

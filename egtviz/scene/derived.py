@@ -123,38 +123,22 @@ def _epipole(label: str, e: np.ndarray, width: int, height: int) -> Epipole:
     return Epipole(label, xy, None, False, inside)
 
 
-#: Per-camera results that depend only on the camera's spec and the points (a drag changes one camera:
-#: the others' projections, rays, meshes and image content are reused). Keys hold the frozen spec and
-#: the points tuple; values are read-only arrays.
-_CAMERA_CACHE: dict[tuple, dict] = {}
-_CAMERA_CACHE_SIZE = 64
-_POINTS_CACHE: dict[int, tuple[tuple, np.ndarray]] = {}
-
-
 def _frozen(a: np.ndarray) -> np.ndarray:
     a.setflags(write=False)
     return a
 
 
-def _points_array(scene: Scene) -> np.ndarray:
-    """``scene.points_array()``, reused while the points tuple is the same object (read-only)."""
-    pts = scene.points
-    hit = _POINTS_CACHE.get(id(pts))
-    if hit is not None and hit[0] is pts:
-        return hit[1]
-    X = _frozen(scene.points_array())
-    if len(_POINTS_CACHE) >= 8:
-        _POINTS_CACHE.clear()
-    _POINTS_CACHE[id(pts)] = (pts, X)
-    return X
+@lru_cache(maxsize=8)
+def _points_array(points: tuple) -> np.ndarray:
+    """The scene's points as a read-only (N, 3) array, built once per points tuple."""
+    return _frozen(np.array(points, dtype=np.float64).reshape(-1, 3))
 
 
-def _camera_block(spec, points: tuple, X: np.ndarray) -> dict:
-    """Everything about one camera that does not depend on the other cameras (cached)."""
-    key = (spec, points)
-    hit = _CAMERA_CACHE.get(key)
-    if hit is not None:
-        return hit
+@lru_cache(maxsize=64)
+def _camera_block(spec, points: tuple) -> dict:
+    """Everything about one camera that depends only on its spec and the points (cached: a drag changes one
+    camera, so the others' projections, rays, meshes and image content are reused). Arrays are read-only."""
+    X = _points_array(points)
     cam = spec.camera()
     out: dict = {"cam": cam, "pose": (_frozen(np.array(cam.pose.quat_wxyz)), _frozen(cam.pose.t.copy()))}
     if isinstance(cam, PinholeCamera):
@@ -189,16 +173,13 @@ def _camera_block(spec, points: tuple, X: np.ndarray) -> dict:
         n_hidden=int(len(visible) - np.count_nonzero(visible)),
         rim=rim,
     )
-    if len(_CAMERA_CACHE) >= _CAMERA_CACHE_SIZE:
-        _CAMERA_CACHE.pop(next(iter(_CAMERA_CACHE)))
-    _CAMERA_CACHE[key] = out
     return out
 
 
 def compute_derived(scene: Scene) -> Derived:
     """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``."""
-    X = _points_array(scene)
-    blocks = {spec.name: _camera_block(spec, scene.points, X) for spec in scene.cameras}
+    X = _points_array(scene.points)
+    blocks = {spec.name: _camera_block(spec, scene.points) for spec in scene.cameras}
     cams = {name: b["cam"] for name, b in blocks.items()}
     planes: dict[str, ImagePlane] = {name: b["plane"] for name, b in blocks.items()}
     rays: dict[str, np.ndarray] = {name: b["ray"] for name, b in blocks.items()}

@@ -289,17 +289,21 @@ def axes_svg(w: float, h: float, font: float, lw: float) -> str:
     )
 
 
-_POINTS_CACHE: dict[tuple, str] = {}
-
-
 def _points_group(P: np.ndarray, in_image: np.ndarray, selected_point: int | None, highlighted: frozenset,
                   show_labels: bool, c: str, r_pt: float, lw: float, font: float) -> str:
     """The ``point`` group of a panel; reused while its pixels and marks are unchanged (the other camera's
     panel during a camera drag)."""
-    key = (P.tobytes(), in_image.tobytes(), selected_point, highlighted, show_labels, c, r_pt, lw, font)
-    hit = _POINTS_CACHE.get(key)
-    if hit is not None:
-        return hit
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    in_image = np.ascontiguousarray(in_image, dtype=bool)
+    return _points_group_of(P.tobytes(), in_image.tobytes(), selected_point, frozenset(highlighted), show_labels,
+                            c, r_pt, lw, font)
+
+
+@lru_cache(maxsize=16)
+def _points_group_of(P_bytes: bytes, in_image_bytes: bytes, selected_point: int | None, highlighted: frozenset,
+                     show_labels: bool, c: str, r_pt: float, lw: float, font: float) -> str:
+    P = np.frombuffer(P_bytes).reshape(-1, 2)
+    in_image = np.frombuffer(in_image_bytes, dtype=bool)
     idx = np.flatnonzero(in_image).tolist()
     dl = r_pt * 1.4
     dp = int(c[2:-1])
@@ -330,9 +334,6 @@ def _points_group(P: np.ndarray, in_image: np.ndarray, selected_point: int | Non
         f'<g stroke="#000" stroke-width="{_f(lw * 0.6)}" font-size="{_f(font)}" font-weight="bold" '
         f'paint-order="stroke">{"".join(body)}</g>'
     )
-    if len(_POINTS_CACHE) >= 16:
-        _POINTS_CACHE.pop(next(iter(_POINTS_CACHE)))
-    _POINTS_CACHE[key] = out
     return out
 
 
