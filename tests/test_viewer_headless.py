@@ -326,3 +326,16 @@ def test_panoramic_and_mixed_pairs(tabs):
     view.pair_dropdown.value = f"cam1 & {panos[0]}"
     assert view.model.scene.drawn_pair == ("cam1", panos[0])
     assert not kinds(view.svgs["cam1"], "message") or "cannot draw" not in kinds(view.svgs["cam1"], "message")[0].text
+
+
+def test_gizmo_quaternion_matrix_matches_viser():
+    from viser.transforms import SO3
+
+    from egtviz.viewer.app import _quat_matrix
+
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        np.testing.assert_allclose(_quat_matrix(q), SO3(q).as_matrix(), atol=1e-12)
+    np.testing.assert_allclose(_quat_matrix((1.0, 0.0, 0.0, 0.0)), np.eye(3))

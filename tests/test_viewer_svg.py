@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from egtviz.scene import Epipole, ImagePlane, compute_derived, default_scene
-from egtviz.viewer.svg import image_plane_svg
+from egtviz.viewer.svg import MAX_NUMBERED_POINTS, image_plane_svg
 
 NS = "{http://www.w3.org/2000/svg}"
 
@@ -64,6 +64,27 @@ def test_point_labels_are_one_based_and_optional():
     assert labels == ["1", "2"]
     svg = image_plane_svg(plane(), show_labels=False)
     assert not [t for p in kinds(svg, "point") for t in p.iter(NS + "text")]
+
+
+def test_many_points_are_numbered_only_when_selected():
+    rng = np.random.default_rng(1)
+    n = MAX_NUMBERED_POINTS + 10
+    pts = rng.uniform(10, 470, size=(n, 2))
+    many = plane(points=pts, visible=np.ones(n, bool), in_image=np.ones(n, bool), n_hidden=0)
+    svg = image_plane_svg(many, selected_point=7)
+    pts_el = kinds(svg, "point")
+    assert [int(p.get("data-index")) for p in pts_el] == list(range(n))
+    labels = [t.text for p in pts_el for t in p.iter(NS + "text")]
+    assert labels == ["8"]
+    # Every disc still sits at its pixel, in its colour.
+    discs = [next(c for c in p.iter(NS + "circle") if c.get("fill") != "none") for p in pts_el]
+    assert np.allclose([[float(d.get("cx")), float(d.get("cy"))] for d in discs], pts, atol=0.051)
+    assert "numbers shown for the selected point only" in kinds(svg, "hidden-count")[0].text
+    # At the limit every point is numbered again.
+    few = plane(points=pts[:MAX_NUMBERED_POINTS], visible=np.ones(MAX_NUMBERED_POINTS, bool),
+                in_image=np.ones(MAX_NUMBERED_POINTS, bool), n_hidden=0)
+    labels = [t.text for p in kinds(image_plane_svg(few), "point") for t in p.iter(NS + "text")]
+    assert labels == [str(i + 1) for i in range(MAX_NUMBERED_POINTS)]
 
 
 def test_selected_point_gets_a_ring():

@@ -29,6 +29,7 @@ with :math:`\xi`, :math:`\gamma` from the mirror (:attr:`HyperbolicMirror.xi`,
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -144,22 +145,102 @@ class CatadioptricCamera:
             A :class:`PanoramicProjection`; points in the blind cone, above the
             rim or at the focus itself have NaN pixels and ``visible = False``.
         """
-        X = self.pose.to_local(as_points(X_world, "X_world", 3))
-        return self._project_mirror_frame(X)
+        return self._project_world(as_points(X_world, "X_world", 3))
+
+    def _project_world(self, X: np.ndarray) -> PanoramicProjection:
+        """:meth:`project` of checked (N, 3) float64 world points (internal: no conversion, no check)."""
+        return self._project_mirror_frame((X - self.pose.t) @ self.pose.R)
 
     def project_directions(self, d_mirror: npt.ArrayLike) -> PanoramicProjection:
         """Like :meth:`project` for ray directions ``d_mirror`` (N, 3) already in the mirror frame."""
         return self._project_mirror_frame(as_points(d_mirror, "d_mirror", 3))
 
     def _project_mirror_frame(self, d: np.ndarray) -> PanoramicProjection:
-        lam, visible = self.mirror.intersect(d)
+        dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
+        lam, visible = self.mirror._intersect_xyz(dx, dy, dz)
         Xh = lam[:, None] * d  # NaN rows where not visible
-        if isinstance(self.mirror, HyperbolicMirror):
-            P = Xh + np.array([0.0, 0.0, self.mirror.ccd_offset])
-        else:
-            P = np.column_stack([Xh[:, 0], Xh[:, 1], np.ones(len(Xh))])
-        pixels = self._pixels(P)
+        pixels = np.empty((len(d), 2))
+        self._ray_pixels(lam, dx, dy, dz, pixels[:, 0], pixels[:, 1])
         return PanoramicProjection(pixels, Xh, visible, visible & self._inside(pixels))
+
+    @cached_property
+    def _ccd_constants(self) -> tuple[float | None, tuple[float, ...]]:
+        """``(ccd_offset or None for the orthographic CCD, (K00, K01, K02, K10, K11, K12))`` as floats."""
+        offset = self.mirror.ccd_offset if isinstance(self.mirror, HyperbolicMirror) else None
+        return offset, tuple(self.K[:2].ravel().tolist())
+
+    def _ray_pixels(self, lam: np.ndarray, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray,
+                    u: np.ndarray, v: np.ndarray) -> None:
+        r"""Pixels of the mirror points :math:`X_h = \lambda d` (coordinates as arrays of one shape) into ``u``, ``v``.
+
+        The CCD point is :math:`P = X_h + (0, 0, 2e)` (hyperbolic) or :math:`(x_h, y_h, 1)` (orthographic),
+        then :math:`m \sim K P`: the arithmetic of :meth:`_pixels`, per coordinate (no (N, 3) temporaries).
+        """
+        offset = self._ccd_constants[0]
+        x = lam * dx
+        y = lam * dy
+        if offset is not None:
+            pz = lam * dz
+            pz += offset
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x /= pz
+                y /= pz
+        self._affine_pixels(x, y, u, v)
+
+    def _affine_pixels(self, x: np.ndarray, y: np.ndarray, u: np.ndarray, v: np.ndarray) -> None:
+        """``u = K00 x + K01 y + K02``, ``v = K10 x + K11 y + K12`` (into ``u``, ``v``); zero entries are skipped."""
+        _, (k00, k01, k02, k10, k11, k12) = self._ccd_constants
+        np.multiply(x, k00, out=u)
+        if k01 != 0.0:
+            u += k01 * y
+        u += k02
+        np.multiply(y, k11, out=v)
+        if k10 != 0.0:
+            v += k10 * x
+        v += k12
+
+    def _direction_pixel(self, dx: float, dy: float, dz: float) -> tuple[float, float] | None:
+        """:meth:`project_directions` of one mirror-frame direction in plain floats (the epipoles, on every drag):
+        its pixel ``(u, v)``, or None where the mirror does not show it. The arithmetic of :meth:`_ray_pixels`."""
+        lam = self.mirror._hit_parameter(dx, dy, dz)
+        if lam is None:
+            return None
+        offset, (k00, k01, k02, k10, k11, k12) = self._ccd_constants
+        x, y = lam * dx, lam * dy
+        if offset is not None:
+            pz = lam * dz + offset
+            x, y = x / pz, y / pz
+        return k00 * x + k01 * y + k02, k10 * x + k11 * y + k12
+
+    def _unit_ray_pixels(self, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray, u: np.ndarray, v: np.ndarray) -> None:
+        r"""Pixels of unit directions (mirror frame, coordinates as arrays of one shape) known to be visible, into
+        ``u`` and ``v`` (arrays of that shape, maybe strided views).
+
+        Internal, for the epipolar conics' samples (visible by construction, so there is no rim test): the mirror
+        path of :meth:`project_directions` with :math:`|d| = 1` and the ray parameter :math:`\lambda` divided out
+        of the CCD point, which keeps its accuracy near the blind cone:
+
+        .. math:: P \sim d + \Big(0, 0, \frac{2e}{\lambda}\Big), \ \frac{2e}{\lambda} = \frac{2e}{b^2}(a - e d_z)
+            \ \text{(hyperbolic)}, \qquad
+            P \sim \Big(d_x, d_y, \frac{1}{\lambda}\Big), \ \frac{1}{\lambda} = \frac{1 - d_z}{h}
+            = \frac{d_x^2 + d_y^2}{(1 + d_z)\,h} \ \text{(parabolic)},
+
+        then :math:`m \sim K P`.
+        """
+        if isinstance(self.mirror, HyperbolicMirror):
+            a, b2, e = self.mirror._ray_constants
+            w = dz * -e
+            w += a
+            w *= 2.0 * e / b2
+            w += dz
+        else:
+            rho2 = dx * dx
+            rho2 += dy * dy
+            with np.errstate(divide="ignore", invalid="ignore"):
+                # 1 - d_z without cancellation when the ray points up (d_z > 0).
+                w = np.where(dz > 0, rho2 / (1.0 + dz), 1.0 - dz)
+            w /= self.mirror.h
+        self._affine_pixels(dx / w, dy / w, u, v)
 
     def _pixels(self, P: np.ndarray) -> np.ndarray:
         """Pixels of CCD-frame points ``P`` (N, 3): ``K P`` dehomogenised (element-wise, no BLAS)."""

@@ -7,6 +7,7 @@ camera-2 frame), :math:`E = [t]_\times R`, :math:`F = K_2^{-T} E K_1^{-1}` and
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -14,9 +15,9 @@ import numpy as np
 import numpy.typing as npt
 
 from ._validate import DegenerateConfigurationError, GeometryError, as_calibration, as_matrix, as_points
-from .homogeneous import clip_lines_to_rect, homogeneous, normalize_homogeneous
+from .homogeneous import _normalize_homogeneous3, clip_lines_to_rect, homogeneous, normalize_homogeneous
 from .pinhole import PinholeCamera
-from .poses import Pose, skew
+from .poses import Pose
 
 #: Two centres closer than this (relative to the scene scale 1) have no epipolar geometry.
 COINCIDENT_CENTRES_TOL = 1e-9
@@ -31,23 +32,48 @@ def relative_pose(pose1: Pose, pose2: Pose) -> tuple[np.ndarray, np.ndarray]:
 
 def check_distinct_centres(c1: np.ndarray, c2: np.ndarray) -> None:
     """Raise :class:`DegenerateConfigurationError` when two centres coincide."""
-    scale = max(1.0, float(np.linalg.norm(c1)), float(np.linalg.norm(c2)))
-    if np.linalg.norm(np.asarray(c1) - np.asarray(c2)) <= COINCIDENT_CENTRES_TOL * scale:
+    if _centres_coincide(np.asarray(c1, dtype=np.float64), np.asarray(c2, dtype=np.float64)):
         raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
+
+
+def _centres_coincide(c1: np.ndarray, c2: np.ndarray) -> bool:
+    """``|c1 - c2| <= COINCIDENT_CENTRES_TOL * max(1, |c1|, |c2|)``; plain floats for two 3-vectors (every drag)."""
+    if c1.shape == c2.shape == (3,):
+        a, b = c1.tolist(), c2.tolist()
+        scale = max(1.0, math.hypot(*a), math.hypot(*b))
+        return math.dist(a, b) <= COINCIDENT_CENTRES_TOL * scale
+    scale = max(1.0, float(np.linalg.norm(c1)), float(np.linalg.norm(c2)))
+    return bool(np.linalg.norm(c1 - c2) <= COINCIDENT_CENTRES_TOL * scale)
 
 
 def unit_frobenius(M: np.ndarray) -> np.ndarray:
     """Scale a matrix to unit Frobenius norm with its largest-magnitude entry positive (a canonical sign)."""
-    M = M / np.linalg.norm(M)
+    M = M / _frobenius(M)
     k = np.argmax(np.abs(M))
     return M if M.flat[k] >= 0 else -M
+
+
+def _frobenius(M: np.ndarray) -> float:
+    """``np.linalg.norm(M)`` (the same arithmetic, ``sqrt(x . x)``) without its wrapper."""
+    x = M.ravel()
+    return math.sqrt(x.dot(x))
+
+
+def _skew(x: float, y: float, z: float) -> np.ndarray:
+    """:func:`~egtviz.geometry.poses.skew` of an already checked vector."""
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def essential_from_poses(pose1: Pose, pose2: Pose) -> np.ndarray:
     r""":math:`E = [t]_\times R` with ``(R, t)`` from :func:`relative_pose`, unit Frobenius norm."""
     check_distinct_centres(pose1.t, pose2.t)
+    return _essential(pose1, pose2)
+
+
+def _essential(pose1: Pose, pose2: Pose) -> np.ndarray:
+    """:func:`essential_from_poses` of poses whose centres are known to be distinct."""
     R, t = relative_pose(pose1, pose2)
-    return unit_frobenius(skew(t) @ R)
+    return unit_frobenius(_skew(*t.tolist()) @ R)
 
 
 def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
@@ -132,24 +158,45 @@ def epipolar_pair(cam1: PinholeCamera, cam2: PinholeCamera) -> EpipolarPair:
     :math:`e_1 \sim K_1 R_1^T (t_2 - t_1)`, which is exact and handles the
     epipole at infinity (baseline parallel to the image plane) without a division.
 
+    With :math:`b = t_1 - t_2`, so that :math:`t = R_2^T b` and :math:`[R_2^T b]_\times = R_2^T [b]_\times R_2`,
+
+    .. math:: E = [t]_\times R_2^T R_1 = R_2^T [b]_\times R_1, \qquad
+        F \sim K_2^{-T} E K_1^{-1} = (R_2 K_2^{-1})^T [b]_\times (R_1 K_1^{-1}),
+
+    both one stacked product of per-camera matrices (this runs on every drag of a
+    pin-hole pair), each scaled to unit Frobenius norm with the canonical sign of
+    :func:`unit_frobenius`.
+
     Raises:
         DegenerateConfigurationError: the two centres coincide.
     """
-    check_distinct_centres(cam1.center, cam2.center)
-    E = essential_from_poses(cam1.pose, cam2.pose)
-    F = unit_frobenius(fundamental_from_essential(E, cam1.K, cam2.K))
-    e1, e1_in_front = epipole_of_centre(cam1, cam2.center)
-    e2, e2_in_front = epipole_of_centre(cam2, cam1.center)
+    c1, c2 = cam1.center, cam2.center
+    if _centres_coincide(c1, c2):
+        raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
+    b = c1 - c2
+    EF = np.matmul(cam2._frames.transpose(0, 2, 1) @ _skew(*b.tolist()), cam1._frames)  # (E, F) unscaled
+    flat = EF.reshape(2, 9)
+    norm = np.sqrt(np.einsum("ij,ij->i", flat, flat))
+    largest = flat[(0, 1), np.abs(flat).argmax(axis=1)]
+    flat *= np.copysign(1.0 / norm, largest)[:, None]
+    (x1, y1, z1), (x2, y2, z2) = (cam1._K_Rt @ b).tolist(), (cam2._K_Rt @ b).tolist()
+    e1, e2 = _normalize_homogeneous3(-x1, -y1, -z1), _normalize_homogeneous3(x2, y2, z2)  # K R^T (c' - c)
     return EpipolarPair(
-        E=E,
-        F=F,
+        E=EF[0],
+        F=EF[1],
         e1=e1,
         e2=e2,
         e1_at_infinity=bool(e1[2] == 0.0),
         e2_at_infinity=bool(e2[2] == 0.0),
-        e1_in_front=e1_in_front,
-        e2_in_front=e2_in_front,
+        e1_in_front=-z1 > 0,
+        e2_in_front=z2 > 0,
     )
+
+
+def _epipole_of_centre(camera: PinholeCamera, other_centre: np.ndarray) -> tuple[np.ndarray, bool]:
+    """:func:`epipole_of_centre` of a checked (3,) centre known to differ from the camera's."""
+    x, y, z = (camera._K_Rt @ (other_centre - camera.center)).tolist()
+    return _normalize_homogeneous3(x, y, z), z > 0
 
 
 def epipole_of_centre(camera: PinholeCamera, other_centre: npt.ArrayLike) -> tuple[np.ndarray, bool]:
@@ -161,8 +208,54 @@ def epipole_of_centre(camera: PinholeCamera, other_centre: npt.ArrayLike) -> tup
     """
     c = as_points(other_centre, "other_centre", 3)[0]
     check_distinct_centres(camera.center, c)
-    raw = camera.K @ camera.pose.R.T @ (c - camera.center)
-    return normalize_homogeneous(raw), bool(raw[2] > 0)
+    return _epipole_of_centre(camera, c)
+
+
+def _matrix_rank3(M: np.ndarray, tol: float) -> int:
+    r"""``np.linalg.matrix_rank(M, tol)`` of a 3x3 matrix, decided from its invariants when that is conclusive.
+
+    The singular values :math:`\sigma_1 \ge \sigma_2 \ge \sigma_3` satisfy
+    :math:`\|M\|_F / \sqrt 3 \le \sigma_1 \le \|M\|_F`,
+    :math:`\|\mathrm{adj}\,M\|_F / \sqrt 3 \le \sigma_1 \sigma_2 \le \|\mathrm{adj}\,M\|_F` (the singular
+    values of the adjugate are :math:`\sigma_1\sigma_2, \sigma_1\sigma_3, \sigma_2\sigma_3`) and
+    :math:`\sigma_1\sigma_2\sigma_3 = |\det M|`, which bound each :math:`\sigma_k`. When every bound,
+    widened by generous rounding allowances, is on one side of ``tol`` by a factor 2, the rank follows
+    without an SVD (a fundamental matrix on every drag: rank 2 with :math:`\sigma_3` at rounding level);
+    otherwise the SVD decides.
+    """
+    (a, b, c), (d, e, f), (g, h, i) = M.tolist()
+    # Adjugate entries (cofactors, p - q) and the determinant along the first row, with the sizes |p| + |q|
+    # of their terms for the rounding allowances (over ten times the worst case of these formulas).
+    pairs = ((e * i, f * h), (f * g, d * i), (d * h, e * g),
+             (c * h, b * i), (a * i, c * g), (b * g, a * h),
+             (b * f, c * e), (c * d, a * f), (a * e, b * d))
+    cof = [p - q for p, q in pairs]
+    size = [abs(p) + abs(q) for p, q in pairs]
+    norm = math.sqrt(a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i)
+    adj = math.sqrt(sum(x * x for x in cof))
+    det = abs(a * cof[0] + b * cof[1] + c * cof[2])
+    err_adj = 1e-14 * sum(size)
+    err_det = 1e-14 * (abs(a) * size[0] + abs(b) * size[1] + abs(c) * size[2])
+    r3 = math.sqrt(3.0)
+    bounds = [(norm / r3, norm)]  # sigma_1
+    if adj > err_adj:
+        bounds.append(((adj - err_adj) / (r3 * norm), r3 * (adj + err_adj) / norm))  # sigma_1 sigma_2 / sigma_1
+        bounds.append(((det - err_det) / (adj + err_adj), r3 * (det + err_det) / (adj - err_adj)))  # det / (s1 s2)
+    # The SVD's own singular values are off by up to a few ulps of |M|: decide only beyond that as well.
+    above, below = 2.0 * tol + 1e-13 * norm, 0.5 * tol - 1e-13 * norm
+    rank = 0
+    for lo, hi in bounds:  # sigma_1, sigma_2, sigma_3 in turn
+        if lo > above:
+            rank += 1
+        elif hi < below:
+            return rank  # this and every smaller singular value are below tol
+        else:
+            break  # too close to tol to tell
+    else:
+        if len(bounds) == 3:
+            return rank
+    # Inconclusive (or adj M at rounding level: sigma_2 not bounded away from 0): the SVD decides.
+    return int(np.linalg.matrix_rank(M, tol=tol))
 
 
 def lines_of_planes(camera: PinholeCamera, normals_world: npt.ArrayLike) -> np.ndarray:
@@ -174,7 +267,7 @@ def lines_of_planes(camera: PinholeCamera, normals_world: npt.ArrayLike) -> np.n
     point itself is visible. NaN normals give NaN lines.
     """
     n = np.atleast_2d(np.asarray(normals_world, dtype=np.float64))
-    return np.linalg.solve(camera.K.T, camera.pose.R.T @ n.T).T
+    return n @ camera._plane_to_line.T
 
 
 def fundamental_from_cameras(cam1: PinholeCamera, cam2: PinholeCamera) -> np.ndarray:
@@ -220,13 +313,33 @@ def epipolar_planes(c1: npt.ArrayLike, c2: npt.ArrayLike, X_world: npt.ArrayLike
     c2 = as_points(c2, "c2", 3)[0]
     check_distinct_centres(c1, c2)
     X = as_points(X_world, "X_world", 3)
-    n = np.cross(c2 - c1, X - c1)
-    norm = np.linalg.norm(n, axis=1, keepdims=True)
-    scale = np.linalg.norm(c2 - c1) * np.maximum(np.linalg.norm(X - c1, axis=1, keepdims=True), 1e-300)
+    n = _epipolar_normals(c1, c2, X.T).T
+    return np.column_stack([n, -n @ c1])
+
+
+def _epipolar_normals(c1: np.ndarray, c2: np.ndarray, XT: np.ndarray) -> np.ndarray:
+    r"""The unit normals of :func:`epipolar_planes`, coordinate-major: (3, N) from checked ``c1``, ``c2`` (3,)
+    and the points as ``XT`` (3, N) (best contiguous).
+
+    :math:`n = [b]_\times v` with :math:`b = c_2 - c_1`, :math:`v = X - c_1` (one matrix product for all
+    points). NaN columns for points on the baseline, :math:`|n| \le 10^{-12} |b|\,|v|`.
+
+    Raises:
+        DegenerateConfigurationError: the centres coincide.
+    """
+    if _centres_coincide(c1, c2):
+        raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
+    bx, by, bz = (c2 - c1).tolist()
+    v = XT - c1[:, None]
+    n = _skew(bx, by, bz) @ v
+    norm2 = np.add.reduce(n * n, axis=0)
+    # Points on the baseline: |n| <= 1e-12 |b| |v|, compared squared.
+    on_baseline = norm2 <= np.add.reduce(v * v, axis=0) * (1e-24 * (bx * bx + by * by + bz * bz))
     with np.errstate(divide="ignore", invalid="ignore"):
-        n = np.where(norm > 1e-12 * scale, n / norm, np.nan)
-    d = -n @ c1
-    return np.column_stack([n, d])
+        n /= np.sqrt(norm2)
+    if on_baseline.any():
+        n[:, on_baseline] = np.nan
+    return n
 
 
 def clipped_epipolar_lines(lines: npt.ArrayLike, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:

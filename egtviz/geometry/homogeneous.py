@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
@@ -24,13 +26,7 @@ def normalize_homogeneous(v: npt.ArrayLike) -> np.ndarray:
     """
     a = np.array(v, dtype=np.float64)
     if a.shape == (3,):
-        # One vector (epipoles, on every drag): plain floats, the same arithmetic as below.
-        x, y, z = a.tolist()
-        norm = float(np.linalg.norm(a))
-        if abs(z) <= AT_INFINITY_TOL * norm:
-            safe = norm if norm > 0 else 1.0
-            return np.array([x / safe, y / safe, 0.0])
-        return np.array([x / z, y / z, 1.0])
+        return _normalize_homogeneous3(*a.tolist())
     single = a.ndim == 1
     a = np.atleast_2d(a)
     norm = np.linalg.norm(a, axis=1)
@@ -42,6 +38,15 @@ def normalize_homogeneous(v: npt.ArrayLike) -> np.ndarray:
     out[at_inf] = a[at_inf] / safe[:, None]
     out[at_inf, 2] = 0.0
     return out[0] if single else out
+
+
+def _normalize_homogeneous3(x: float, y: float, z: float) -> np.ndarray:
+    """:func:`normalize_homogeneous` of one vector given as plain floats (epipoles, on every drag): the same rule."""
+    norm = math.sqrt(x * x + y * y + z * z)
+    if abs(z) <= AT_INFINITY_TOL * norm:
+        safe = norm if norm > 0 else 1.0
+        return np.array([x / safe, y / safe, 0.0])
+    return np.array([x / z, y / z, 1.0])
 
 
 def is_at_infinity(v: npt.ArrayLike) -> np.ndarray | bool:
@@ -68,42 +73,79 @@ def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float) -> tup
     r"""Clip infinite lines :math:`a u + b v + c = 0` (N, 3) to the rectangle ``[0, w] x [0, h]``.
 
     Returns ``(segments (N, 2, 2), hit (N,) bool)``; rows that miss the
-    rectangle are NaN. Vectorised: each line is intersected with the four
-    border lines and the two extreme points inside the rectangle are kept.
+    rectangle are NaN. Vectorised: each line, scaled as by :func:`normalize_lines`,
+    is intersected with the four border lines,
+
+    .. math:: v = -\frac{a u + c}{b} \ (u \in \{0, w\}), \qquad u = -\frac{b v + c}{a} \ (v \in \{0, h\}),
+
+    and of the candidates inside the rectangle (up to ``eps``) the two extreme
+    ones along the line direction :math:`(-b, a)` are kept.
     """
-    L = normalize_lines(lines)
-    a, b, c = L[:, 0:1], L[:, 1:2], L[:, 2:3]
+    return _clip_lines(normalize_lines(lines).T, float(width), float(height))
+
+
+def _clip_lines(lines_T: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`clip_lines_to_rect` of float64 lines given coordinate-major, ``(a, b, c)`` rows (3, N); unchecked.
+
+    Internal (both images of a pin-hole pair, on every drag): a fixed, small number of numpy calls over
+    contiguous rows ((2, 4, N) candidates: coordinate, border, line). The lines need not be normalised: the
+    candidates, and their order along the line, do not depend on the scale of ``(a, b, c)`` (but it should
+    be moderate, as for image lines of unit plane normals; the public function normalises first).
+    """
+    n = lines_T.shape[1]
     eps = 1e-9 * max(width, height, 1.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xs = np.array([0.0, width])[None, :]
-        v_at_x = -(a * xs + c) / b  # crossing u = 0 and u = w
-        ys = np.array([0.0, height])[None, :]
-        u_at_y = -(b * ys + c) / a  # crossing v = 0 and v = h
-    cand_u = np.concatenate([np.broadcast_to(xs, v_at_x.shape), u_at_y], axis=1)
-    cand_v = np.concatenate([v_at_x, np.broadcast_to(ys, u_at_y.shape)], axis=1)
-    ok = (
-        np.isfinite(cand_u) & np.isfinite(cand_v)
-        & (cand_u >= -eps) & (cand_u <= width + eps)
-        & (cand_v >= -eps) & (cand_v <= height + eps)
-    )
-    # Parametrise candidates along the line direction (-b, a) and keep the extremes.
-    s = np.where(ok, cand_u * -b + cand_v * a, np.nan)
-    any_ok = ok.any(axis=1)
-    s_fill_lo = np.where(ok, s, np.inf)
-    s_fill_hi = np.where(ok, s, -np.inf)
-    i_lo = np.argmin(s_fill_lo, axis=1)
-    i_hi = np.argmax(s_fill_hi, axis=1)
-    rows = np.arange(len(L))
-    seg = np.stack(
-        [
-            np.column_stack([cand_u[rows, i_lo], cand_v[rows, i_lo]]),
-            np.column_stack([cand_u[rows, i_hi], cand_v[rows, i_hi]]),
-        ],
-        axis=1,
-    )
-    with np.errstate(invalid="ignore"):
-        length = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1)
-        hit = any_ok & (length > eps)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        if max(width, height) > 1e9:
+            # normalize_lines makes the line at infinity, |(a, b)| <= AT_INFINITY_TOL |(a, b, c)|, NaN. It lies
+            # 1 / AT_INFINITY_TOL or more from the origin: only so large a rectangle needs that done here.
+            a, b, c = _normalized_line_rows(lines_T)
+        else:
+            a, b, c = lines_T
+        # Candidates (u, v) on the borders u = 0, u = w (v = -(a u + c) / b) and v = 0, v = h (u = -(b v + c) / a).
+        cand = np.empty((2, 4, n))
+        u, v = cand
+        borders_u, borders_v = np.array([[0.0], [width]]), np.array([[0.0], [height]])
+        u[0:2] = borders_u
+        v[2:4] = borders_v
+        nc = -c
+        np.divide(nc - a * borders_u, b, out=v[0:2])
+        np.divide(nc - b * borders_v, a, out=u[2:4])
+        # A candidate counts when its computed coordinate is inside (up to eps; NaN and inf are not).
+        ok = np.empty((4, n), dtype=bool)
+        np.greater_equal(v[0:2], -eps, out=ok[0:2])
+        ok[0:2] &= v[0:2] <= height + eps
+        np.greater_equal(u[2:4], -eps, out=ok[2:4])
+        ok[2:4] &= u[2:4] <= width + eps
+        # Parametrise candidates along the line direction (-b, a) and keep the extremes (the first on ties).
+        s = u * -b
+        s += v * a
+        ends = np.empty((n, 2), dtype=np.intp)
+        np.where(ok, s, np.inf).argmin(axis=0, out=ends[:, 0])
+        np.where(ok, s, -np.inf).argmax(axis=0, out=ends[:, 1])
+        seg = cand.transpose(2, 1, 0)[np.arange(n)[:, None], ends]  # (line, end, coordinate)
+        # A line that meets the rectangle in one corner only, or not at all (both ends are then the same
+        # candidate, maybe NaN), has no segment: length <= eps, compared squared.
+        d = seg[:, 1] - seg[:, 0]
+        d *= d
+        hit = d[:, 0] + d[:, 1] > eps * eps
     seg[~hit] = np.nan
-    seg = np.clip(seg, [0.0, 0.0], [width, height])
+    np.maximum(seg, 0.0, out=seg)
+    np.minimum(seg[:, :, 0], width, out=seg[:, :, 0])
+    np.minimum(seg[:, :, 1], height, out=seg[:, :, 1])
     return seg, hit
+
+
+def _normalized_line_rows(lines_T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``a, b, c`` (each (N,)) of :func:`normalize_lines` of lines given as rows (3, N): NaN at infinity."""
+    a, b, c = lines_T
+    n = np.hypot(a, b)
+    raw_norm = a * a
+    raw_norm += b * b
+    raw_norm += c * c
+    np.sqrt(raw_norm, out=raw_norm)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b, c = a / n, b / n, c / n
+    at_inf = n <= AT_INFINITY_TOL * raw_norm
+    if at_inf.any():
+        a[at_inf] = b[at_inf] = c[at_inf] = np.nan
+    return a, b, c

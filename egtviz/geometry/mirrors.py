@@ -23,7 +23,9 @@ plane, followed by a scaling by :math:`\gamma` (:attr:`HyperbolicMirror.xi`,
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar, Literal, NamedTuple
 
 import numpy as np
@@ -206,15 +208,46 @@ class HyperbolicMirror:
             the blind cone (above the rim, at or beyond the asymptote) are not hit.
         """
         d = as_points(directions, "directions", 3)
-        norm = np.linalg.norm(d, axis=1)
-        rho = np.hypot(d[:, 0], d[:, 1])
-        denom = self.a * norm - self.e * d[:, 2]
-        ok = (norm > 0) & (denom > 0)
+        return self._intersect_xyz(d[:, 0], d[:, 1], d[:, 2], rim_tol)
+
+    @cached_property
+    def _ray_constants(self) -> tuple[float, float, float]:
+        """``(a, b^2, e)`` as plain floats (the properties recompute them on every access)."""
+        return self.a, self.b**2, self.e
+
+    def _intersect_xyz(self, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray, rim_tol: float = 1e-12) -> MirrorHit:
+        """:meth:`intersect` of directions given by their coordinates (arrays of any one shape), unchecked.
+
+        Internal fast path (the epipolar conics project thousands of directions per drag): no
+        validation and no (N, 3) temporaries. ``rho = sqrt(dx^2 + dy^2)`` shares its squares with ``|d|``.
+        """
+        a, b2, e = self._ray_constants
+        rho2 = dx * dx
+        rho2 += dy * dy
+        norm = dz * dz
+        norm += rho2
+        np.sqrt(norm, out=norm)
+        denom = a * norm
+        denom -= e * dz
         with np.errstate(divide="ignore", invalid="ignore"):
-            lam = np.where(ok, self.b**2 / np.where(ok, denom, 1.0), np.nan)
-        hit = ok & (lam * rho <= self.rim_radius * (1.0 + rim_tol))
-        lam = np.where(hit, lam, np.nan)
+            lam = b2 / denom
+            # denom > 0 also excludes |d| = 0 (then denom = 0) and NaN directions.
+            hit = denom > 0
+            np.sqrt(rho2, out=rho2)
+            rho2 *= lam
+            hit &= rho2 <= self.rim_radius * (1.0 + rim_tol)
+        lam[~hit] = np.nan
         return MirrorHit(lam, hit)
+
+    def _hit_parameter(self, dx: float, dy: float, dz: float, rim_tol: float = 1e-12) -> float | None:
+        """:meth:`intersect` of one direction in plain floats: ``lam``, or None where not hit (the same formulas)."""
+        a, b2, e = self._ray_constants
+        rho2 = dx * dx + dy * dy
+        denom = a * math.sqrt(rho2 + dz * dz) - e * dz
+        if not denom > 0:
+            return None
+        lam = b2 / denom
+        return lam if lam * math.sqrt(rho2) <= self.rim_radius * (1.0 + rim_tol) else None
 
     def surface(self, n_radial: int = 24, n_angular: int = 64) -> tuple[np.ndarray, np.ndarray]:
         """Triangle mesh of the visible sheet from the apex to the rim (mirror frame).
@@ -334,15 +367,31 @@ class ParabolicMirror:
             the rim.
         """
         d = as_points(directions, "directions", 3)
-        norm = np.linalg.norm(d, axis=1)
-        rho2 = d[:, 0] ** 2 + d[:, 1] ** 2
+        return self._intersect_xyz(d[:, 0], d[:, 1], d[:, 2], rim_tol)
+
+    def _intersect_xyz(self, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray, rim_tol: float = 1e-12) -> MirrorHit:
+        """:meth:`intersect` of directions given by their coordinates (arrays of any one shape), unchecked."""
+        rho2 = dx * dx
+        rho2 += dy * dy
+        norm = np.sqrt(rho2 + dz * dz)
         with np.errstate(divide="ignore", invalid="ignore"):
-            denom = np.where(d[:, 2] > 0, rho2 / (norm + d[:, 2]), norm - d[:, 2])
-            ok = (norm > 0) & (denom > 0)
-            lam = np.where(ok, self.h / np.where(ok, denom, 1.0), np.nan)
-        hit = ok & (lam * np.sqrt(rho2) <= self.rim_radius * (1.0 + rim_tol))
-        lam = np.where(hit, lam, np.nan)
+            denom = np.where(dz > 0, rho2 / (norm + dz), norm - dz)
+            lam = self.h / denom
+            # denom > 0 also excludes |d| = 0 (then denom is 0 or NaN) and NaN directions.
+            hit = denom > 0
+            hit &= lam * np.sqrt(rho2) <= self.rim_radius * (1.0 + rim_tol)
+        lam[~hit] = np.nan
         return MirrorHit(lam, hit)
+
+    def _hit_parameter(self, dx: float, dy: float, dz: float, rim_tol: float = 1e-12) -> float | None:
+        """:meth:`intersect` of one direction in plain floats: ``lam``, or None where not hit (the same formulas)."""
+        rho2 = dx * dx + dy * dy
+        norm = math.sqrt(rho2 + dz * dz)
+        denom = rho2 / (norm + dz) if dz > 0 else norm - dz
+        if not denom > 0:
+            return None
+        lam = self.h / denom
+        return lam if lam * math.sqrt(rho2) <= self.rim_radius * (1.0 + rim_tol) else None
 
     def surface(self, n_radial: int = 24, n_angular: int = 64) -> tuple[np.ndarray, np.ndarray]:
         """Triangle mesh of the mirror from the apex to the rim; see :meth:`HyperbolicMirror.surface`."""

@@ -10,12 +10,18 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
 
 from ._validate import GeometryError, as_calibration, as_points, as_positive
 from .poses import Pose
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
 
 
 @dataclass(frozen=True)
@@ -110,6 +116,38 @@ class PinholeCamera:
     def K(self) -> np.ndarray:
         return self.intrinsics.K
 
+    # Read-only matrices of this (immutable) camera, built once: the epipolar geometry of a pair
+    # uses them on every drag of the other camera.
+    @cached_property
+    def _K_inv(self) -> np.ndarray:
+        """:math:`K^{-1}` (read-only; the same array as ``epipolar._inverse_calibration(K)``)."""
+        from .epipolar import _inverse_calibration
+
+        return _inverse_calibration(self.K, "K")
+
+    @cached_property
+    def _K_Rt(self) -> np.ndarray:
+        r""":math:`K R^T` (read-only): a world direction :math:`d` images to :math:`m \sim K R^T d`."""
+        return _read_only(self.K @ self.pose.R.T)
+
+    @cached_property
+    def _plane_to_line(self) -> np.ndarray:
+        r""":math:`K^{-T} R^T` (read-only): a plane through the centre with world normal :math:`n` images to the line
+        :math:`l = K^{-T} R^T n`."""
+        return _read_only(self._R_K_inv.T.copy())
+
+    @cached_property
+    def _R_K_inv(self) -> np.ndarray:
+        r""":math:`R K^{-1}` (read-only): pixel :math:`m` at depth :math:`z_c` is the world point
+        :math:`z_c R K^{-1} m + t`."""
+        return _read_only(self.pose.R @ self._K_inv)
+
+    @cached_property
+    def _frames(self) -> np.ndarray:
+        r"""(2, 3, 3) read-only stack :math:`(R, R K^{-1})`: directions of the camera frame and of pixels in the world
+        (both epipolar matrices of a pair are built from them in one product, ``epipolar.epipolar_pair``)."""
+        return _read_only(np.array([self.pose.R, self._R_K_inv]))
+
     @property
     def center(self) -> np.ndarray:
         """(3,) camera centre in world coordinates."""
@@ -133,8 +171,11 @@ class PinholeCamera:
 
         Points with :math:`z_c \le 0` are behind the camera: NaN pixel, ``in_front`` False.
         """
-        X = as_points(X_world, "X_world", 3)
-        M = self.K @ self.pose.R.T
+        return self._project(as_points(X_world, "X_world", 3))
+
+    def _project(self, X: np.ndarray) -> PinholeProjection:
+        """:meth:`project` of checked (N, 3) float64 points (internal: no conversion, no check)."""
+        M = self._K_Rt
         c = M @ self.pose.t
         # K R^T (X - t) = K R^T X - K R^T t: one thin product, then per-column work (no (N, 3) temporaries).
         m = X @ M.T

@@ -137,7 +137,7 @@ class Pose:
     @cached_property
     def quat_wxyz(self) -> np.ndarray:
         """Orientation as a unit quaternion ``(w, x, y, z)`` (viser's order)."""
-        return quat_wxyz_from_matrix(self.R)
+        return _quat_wxyz(self.R)  # R is a rotation already
 
     def __repr__(self) -> str:
         return f"Pose(R={np.round(self.R, 6).tolist()}, t={np.round(self.t, 6).tolist()})"
@@ -152,7 +152,11 @@ class Pose:
 
 def quat_wxyz_from_matrix(R: npt.ArrayLike) -> np.ndarray:
     """Unit quaternion ``(w, x, y, z)`` of a rotation matrix, with ``w >= 0``."""
-    R = as_rotation(R, "R")
+    return _quat_wxyz(as_rotation(R, "R"))
+
+
+def _quat_wxyz(R: np.ndarray) -> np.ndarray:
+    """:func:`quat_wxyz_from_matrix` of a checked rotation."""
     # Shepperd's method as scipy's ``Rotation.from_matrix`` does it, in plain floats (no per-call
     # numpy overhead: this runs on every camera drag).
     m = R.tolist()

@@ -7,14 +7,16 @@ pixel arrays are rows, NaN where nothing is drawn.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 
 from ..geometry import GeometryError, PinholeCamera
-from ..geometry.epipolar import epipolar_pair, epipolar_planes, epipole_of_centre, lines_of_planes
-from ..geometry.homogeneous import clip_lines_to_rect
+from ..geometry.epipolar import _epipolar_normals, _epipole_of_centre, _matrix_rank3, epipolar_pair
+from ..geometry.homogeneous import _clip_lines
+from ..geometry.panoramic_epipolar import _circle_arcs
 from .scene import Scene
 from .specs import PanoramicSpec
 
@@ -115,12 +117,16 @@ def _mirror_mesh_local(mirror_kind: str, a: float, b: float) -> tuple[np.ndarray
 
 
 def _epipole(label: str, e: np.ndarray, width: int, height: int) -> Epipole:
-    if e[2] == 0.0:
-        d = e[:2] / max(np.linalg.norm(e[:2]), 1e-300)
-        return Epipole(label, None, d, True, False)
-    xy = e[:2] / e[2]
-    inside = bool(0 <= xy[0] <= width and 0 <= xy[1] <= height)
-    return Epipole(label, xy, None, False, inside)
+    """A homogeneous epipole ``e`` (3,) (``normalize_homogeneous``: last coordinate 1, or 0 at infinity)."""
+    x, y, z = e.tolist()
+    if z == 0.0:
+        n = max(math.sqrt(x * x + y * y), 1e-300)
+        return Epipole(label, None, np.array([x / n, y / n]), True, False)
+    return _finite_epipole(label, x / z, y / z, width, height)
+
+
+def _finite_epipole(label: str, u: float, v: float, width: int, height: int) -> Epipole:
+    return Epipole(label, np.array([u, v]), None, False, bool(0 <= u <= width and 0 <= v <= height))
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -128,38 +134,88 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
+class _Points:
+    """The scene's points, read-only: ``X`` (N, 3) and ``XT`` (3, N) contiguous (the coordinate-major layout of the
+    pair computations). Hashed by identity: a cache key that is cheap to hash, where the points tuple itself costs
+    a hash of all its floats on every lookup."""
+
+    __slots__ = ("X", "XT")
+
+    def __init__(self, X: np.ndarray) -> None:
+        self.X = _frozen(X)
+        self.XT = _frozen(np.ascontiguousarray(X.T))
+
+
 @lru_cache(maxsize=8)
+def _points_by_value(points: tuple) -> _Points:
+    return _Points(np.array(points, dtype=np.float64).reshape(-1, 3))
+
+
+#: The last points tuple seen and its entry: a drag of a camera keeps the scene's very tuple, so it is found by
+#: identity. (Replaced as a whole, so concurrent readers see a consistent pair; the strong reference keeps the
+#: tuple's id from being reused.)
+_last_points: tuple[tuple, _Points] | None = None
+
+
+def _points(points: tuple) -> _Points:
+    """The (cached) :class:`_Points` of a scene's points tuple: by identity first, then by value."""
+    global _last_points
+    last = _last_points
+    if last is not None and last[0] is points:
+        return last[1]
+    entry = _points_by_value(points)
+    _last_points = (points, entry)
+    return entry
+
+
 def _points_array(points: tuple) -> np.ndarray:
     """The scene's points as a read-only (N, 3) array, built once per points tuple."""
-    return _frozen(np.array(points, dtype=np.float64).reshape(-1, 3))
+    return _points(points).X
 
 
 @lru_cache(maxsize=64)
-def _camera_block(spec, points: tuple) -> dict:
+def _camera_block(spec, pts: _Points) -> dict:
     """Everything about one camera that depends only on its spec and the points (cached: a drag changes one
-    camera, so the others' projections, rays, meshes and image content are reused). Arrays are read-only."""
-    X = _points_array(points)
+    camera, so the others' projections, rays, meshes and image content are reused). Arrays are read-only.
+
+    Built on every drag of this camera: the points and the camera come checked from the core, so its
+    internal (unchecked) projections are used."""
+    X = pts.X
+    n = len(X)
     cam = spec.camera()
-    out: dict = {"cam": cam, "pose": (_frozen(np.array(cam.pose.quat_wxyz)), _frozen(cam.pose.t.copy()))}
+    pose = cam.pose
+    out: dict = {"cam": cam, "pose": (_frozen(np.array(pose.quat_wxyz)), _frozen(pose.t.copy()))}
     if isinstance(cam, PinholeCamera):
-        proj = cam.project(X)
+        proj = cam._project(X)
         visible = proj.in_front
-        ray = np.stack([X, np.broadcast_to(cam.center, X.shape)], axis=1)
+        ray = np.empty((n, 2, 3))
+        ray[:, 1] = pose.t
         out["frustum"] = {"fov": cam.intrinsics.fov_y, "aspect": cam.intrinsics.aspect}
         rim = None
-        pts3 = np.full((len(X), 3), np.nan)
-        if visible.any():
-            pts3[visible] = cam.image_to_world(proj.pixels[visible], IMAGE_PLANE_DEPTH)
+        # Pixel (u, v) on the drawn image plane, image_to_world(., IMAGE_PLANE_DEPTH):
+        # IMAGE_PLANE_DEPTH R K^-1 (u, v, 1) + t = (u, v) @ A + b.
+        G = IMAGE_PLANE_DEPTH * cam._R_K_inv
+        to_plane = (_frozen(G[:, :2].T.copy()), _frozen(G[:, 2] + pose.t))
+        out["to_plane"] = to_plane
+        pts3 = proj.pixels @ to_plane[0]
+        pts3 += to_plane[1]
+        pts3[~visible] = np.nan
         out["pts3"] = _frozen(pts3)
     else:
-        proj = cam.project(X)
+        proj = cam._project_world(X)
         visible = proj.visible
-        mirror_world = cam.pose.to_world(np.nan_to_num(proj.mirror_points)) if len(X) else np.zeros((0, 3))
-        ray = np.stack([X, mirror_world, np.broadcast_to(cam.ccd_center_world, X.shape)], axis=1)
+        ray = np.empty((n, 3, 3))
+        ccd = _frozen(pose.to_world([0.0, 0.0, -cam.mirror.ccd_offset])[0])  # cam.ccd_center_world
+        np.matmul(proj.mirror_points, pose.R.T, out=ray[:, 1])  # mirror points in the world (NaN rows: invisible)
+        ray[:, 1] += pose.t
+        ray[:, 2] = ccd
         v, f = _mirror_mesh_local(spec.mirror, float(spec.a), float(spec.b))
-        out["mesh"] = (_frozen(cam.pose.to_world(v)), f)
-        out["ccd"] = _frozen(np.array(cam.ccd_center_world))
-        rim = _frozen(np.array(cam.rim_image(128)))
+        mesh = v @ pose.R.T
+        mesh += pose.t
+        out["mesh"] = (_frozen(mesh), f)
+        out["ccd"] = ccd
+        rim = _rim_image(cam.mirror, cam.K.tobytes())  # independent of the pose
+    ray[:, 0] = X
     ray[~visible] = np.nan
     out["ray"] = _frozen(ray)
     out["plane"] = ImagePlane(
@@ -170,24 +226,39 @@ def _camera_block(spec, points: tuple) -> dict:
         points=_frozen(proj.pixels),
         visible=_frozen(visible),
         in_image=_frozen(proj.in_image),
-        n_hidden=int(len(visible) - np.count_nonzero(visible)),
+        n_hidden=int(n - np.count_nonzero(visible)),
         rim=rim,
     )
     return out
 
 
+@lru_cache(maxsize=16)
+def _rim_image(mirror, K_bytes: bytes) -> np.ndarray:
+    """``rim_image(128)`` of a camera with this mirror and calibration: the rim's pixels do not depend on the pose."""
+    from ..geometry.catadioptric import CatadioptricCamera
+
+    return _frozen(np.array(CatadioptricCamera(mirror=mirror, K=np.frombuffer(K_bytes).reshape(3, 3)).rim_image(128)))
+
+
 def compute_derived(scene: Scene) -> Derived:
-    """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``."""
-    X = _points_array(scene.points)
-    blocks = {spec.name: _camera_block(spec, scene.points) for spec in scene.cameras}
+    """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``.
+
+    On a drag only the pair-dependent part below is new work (the per-camera blocks are cached); it calls the
+    geometry core's unchecked internal functions, since every array here was built and checked by the core.
+    """
+    pts = _points(scene.points)
+    X = pts.X
+    n_points = len(X)
+    blocks = {spec.name: _camera_block(spec, pts) for spec in scene.cameras}
     cams = {name: b["cam"] for name, b in blocks.items()}
     planes: dict[str, ImagePlane] = {name: b["plane"] for name, b in blocks.items()}
     rays: dict[str, np.ndarray] = {name: b["ray"] for name, b in blocks.items()}
     poses = {name: b["pose"] for name, b in blocks.items()}
     frustums: dict[str, dict[str, float]] = {name: dict(b["frustum"]) for name, b in blocks.items() if "frustum" in b}
-    image_in_3d: dict[str, dict[str, np.ndarray]] = {}
     meshes: dict[str, tuple[np.ndarray, np.ndarray]] = {name: b["mesh"] for name, b in blocks.items() if "mesh" in b}
     ccd: dict[str, np.ndarray] = {name: b["ccd"] for name, b in blocks.items() if "ccd" in b}
+    # Pin-hole cameras of the drawn pair: clipped epipolar segments and which rows hit the image.
+    segments: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
     pair_names = scene.drawn_pair
     readout = PairReadout(pair_names)
@@ -197,38 +268,54 @@ def compute_derived(scene: Scene) -> Derived:
         c1, c2 = cams[n1], cams[n2]
         o1, o2 = c1.pose.t, c2.pose.t
         try:
-            plane_eqs = epipolar_planes(o1, o2, X) if len(X) else np.zeros((0, 4))
+            # (3, N) unit world normals of the epipolar planes, NaN columns for points on the baseline.
+            normals_T = _epipolar_normals(o1, o2, pts.XT)
         except GeometryError:
             for n in pair_names:
                 planes[n] = _with(planes[n], message=COINCIDENT_MESSAGE, in_pair=True)
             readout = PairReadout(pair_names, message=COINCIDENT_MESSAGE)
         else:
-            normals = plane_eqs[:, :3]
-            baseline = np.stack([o1, o2])
-            ep = None
-            if isinstance(c1, PinholeCamera) and isinstance(c2, PinholeCamera):
+            baseline = np.array([o1, o2])
+            content = {n1: {}, n2: {}}
+            pinholes = [(n, c) for n, c in ((n1, c1), (n2, c2)) if isinstance(c, PinholeCamera)]
+            if len(pinholes) == 2:
                 ep = epipolar_pair(c1, c2)
-                readout = PairReadout(pair_names, ep.F, ep.E, int(np.linalg.matrix_rank(ep.F, tol=1e-9)), ep.e1, ep.e2)
-            for name, cam, other in ((n1, c1, o2), (n2, c2, o1)):
+                rank = _matrix_rank3(ep.F, 1e-9)
+                readout = PairReadout(pair_names, ep.F, ep.E, rank, ep.e1, ep.e2)
                 # The pair's epipoles are the images of the other centre (epipole_of_centre): reuse them.
-                e = None if ep is None else (ep.e1 if name == n1 else ep.e2)
-                planes[name] = _with(planes[name], in_pair=True,
-                                     **_pair_content(cam, other, normals, planes[name], name == n1, e))
+                epipoles = {n1: ep.e1, n2: ep.e2}
+            else:
+                epipoles = {n: _epipole_of_centre(c, o2 if n == n1 else o1)[0] for n, c in pinholes}
+            segments = _pinhole_segments(pinholes, normals_T, planes)
+            for name, seg_hit in segments.items():
+                idx = "1" if name == n1 else "2"
+                ip = planes[name]
+                content[name] = {"epipoles": (_epipole(f"e{idx}", epipoles[name], ip.width, ip.height),),
+                                 "lines": seg_hit[0]}
+            for name, cam, other in ((n1, c1, o2), (n2, c2, o1)):
+                if not isinstance(cam, PinholeCamera):
+                    content[name] = _panoramic_content(cam, other, normals_T, planes[name], name == n1)
+            for name in (n1, n2):
+                planes[name] = _with(planes[name], in_pair=True, **content[name])
             sel = scene.selected_point
-            if sel is not None and np.all(np.isfinite(normals[sel])):
-                tri = np.stack([o1, o2, X[sel]])
-                centroid = tri.mean(axis=0)
+            if sel is not None and not math.isnan(normals_T[0, sel]):  # a normal is all NaN or all finite
+                tri = np.array([o1, o2, X[sel]])
+                centroid = (tri[0] + tri[1] + tri[2]) / 3.0  # tri.mean(axis=0)
                 epi_plane = centroid + PLANE_MARGIN * (tri - centroid)
 
-    for name, cam in cams.items():
-        if isinstance(cam, PinholeCamera):
-            ip = planes[name]
-            lines3 = np.full((len(X), 2, 3), np.nan)
-            if ip.lines is not None and len(X):
-                good = np.isfinite(ip.lines.reshape(len(X), -1)).all(axis=1)
-                if good.any():
-                    lines3[good] = cam.image_to_world(ip.lines[good].reshape(-1, 2), IMAGE_PLANE_DEPTH).reshape(-1, 2, 3)
-            image_in_3d[name] = {"points": blocks[name]["pts3"], "lines": lines3}
+    image_in_3d: dict[str, dict[str, np.ndarray]] = {}
+    for name, b in blocks.items():
+        if "pts3" in b:
+            if name in segments:
+                seg, hit = segments[name]
+                A, t = b["to_plane"]
+                lines3 = seg.reshape(-1, 2) @ A
+                lines3 += t
+                lines3 = lines3.reshape(n_points, 2, 3)
+                lines3[~hit] = np.nan  # (seg is NaN there; set anyway rather than rely on BLAS propagating NaN)
+            else:
+                lines3 = np.full((n_points, 2, 3), np.nan)
+            image_in_3d[name] = {"points": b["pts3"], "lines": lines3}
 
     return Derived(
         image_planes=planes,
@@ -252,25 +339,44 @@ def _with(plane: ImagePlane, **changes) -> ImagePlane:
     return new
 
 
-def _pair_content(cam, other_centre: np.ndarray, normals: np.ndarray, plane: ImagePlane, first: bool,
-                  epipole: np.ndarray | None = None) -> dict:
-    """Epipoles and epipolar curves of one member of the drawn pair (``epipole``: already known, pin-hole)."""
-    idx = "1" if first else "2"
-    if isinstance(cam, PinholeCamera):
-        e = epipole if epipole is not None else epipole_of_centre(cam, other_centre)[0]
-        lines = lines_of_planes(cam, normals) if len(normals) else np.zeros((0, 3))
-        segs, _ = clip_lines_to_rect(lines, plane.width, plane.height) if len(lines) else (np.zeros((0, 2, 2)), None)
-        return {"epipoles": (_epipole(f"e{idx}", e, plane.width, plane.height),), "lines": segs}
-    from ..geometry.panoramic_epipolar import sample_plane_conics
+def _pinhole_segments(pinholes: list, normals_T: np.ndarray, planes: dict[str, ImagePlane]
+                      ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    r"""Epipolar lines :math:`l = K^{-T} R^T n` of the planes with world normals ``normals_T`` (3, N) in each
+    pin-hole camera of the pair, clipped to its image: ``{name: (segments (N, 2, 2), hit (N,))}``.
 
-    d = cam.pose.R.T @ (other_centre - cam.pose.t)
-    proj = cam.project_directions(np.stack([d, -d]))
+    Images of the same size are clipped in one call (the lines are independent).
+    """
+    n = normals_T.shape[1]
+    sizes = {(planes[name].width, planes[name].height) for name, _ in pinholes}
+    if len(pinholes) == 2 and len(sizes) == 1:
+        (w, h), = sizes
+        (na, ca), (nb, cb) = pinholes
+        lines_T = np.empty((3, 2 * n))
+        np.matmul(ca._plane_to_line, normals_T, out=lines_T[:, :n])
+        np.matmul(cb._plane_to_line, normals_T, out=lines_T[:, n:])
+        seg, hit = _clip_lines(lines_T, float(w), float(h))
+        return {na: (seg[:n], hit[:n]), nb: (seg[n:], hit[n:])}
+    return {name: _clip_lines(cam._plane_to_line @ normals_T, float(planes[name].width), float(planes[name].height))
+            for name, cam in pinholes}
+
+
+def _panoramic_content(cam, other_centre: np.ndarray, normals_T: np.ndarray, plane: ImagePlane, first: bool) -> dict:
+    """Epipoles and epipolar conics of a panoramic member of the drawn pair.
+
+    The baseline meets the mirror twice: ``e`` is the image of the direction :math:`d = R^T (o' - o)` towards
+    the other centre, ``e'`` of :math:`-d`; each is drawn when the mirror shows it. The conics are the visible
+    arcs of the epipolar planes' great circles (normals :math:`R^T n` in the mirror frame).
+    """
+    idx = "1" if first else "2"
+    R = cam.pose.R
+    dx, dy, dz = (R.T @ (other_centre - cam.pose.t)).tolist()
     epis = []
-    for label, px, vis in zip((f"e{idx}", f"e{idx}'"), proj.pixels, proj.visible):
-        if vis:
-            epis.append(_epipole(label, np.append(px, 1.0), plane.width, plane.height))
-    n_mirror = normals @ cam.pose.R
+    for label, sign in ((f"e{idx}", 1.0), (f"e{idx}'", -1.0)):
+        px = cam._direction_pixel(sign * dx, sign * dy, sign * dz)
+        if px is not None:
+            epis.append(_finite_epipole(label, *px, plane.width, plane.height))
+    n_normals = normals_T.shape[1]
     lo, hi = CONIC_SAMPLES
-    n_samples = int(np.clip(CONIC_VERTEX_BUDGET // max(len(normals), 1), lo, hi))
-    arcs = sample_plane_conics(cam, n_mirror, n_samples) if len(normals) else []
-    return {"epipoles": tuple(epis), "conics": tuple(tuple(a) for a in arcs)}
+    n_samples = min(max(CONIC_VERTEX_BUDGET // max(n_normals, 1), lo), hi)
+    arcs = _circle_arcs(cam, R.T @ normals_T, n_samples) if n_normals else ()
+    return {"epipoles": tuple(epis), "conics": tuple(arcs)}

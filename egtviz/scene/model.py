@@ -8,6 +8,7 @@ subscribers once (or once per :meth:`SceneModel.batch`).
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -22,6 +23,7 @@ from .scene import Scene, SceneFileError
 from .specs import CAMERA_KINDS, DisplayOptions, PanoramicSpec, PinholeSpec, SceneError, SurfaceSpec, _triple
 
 UNDO_DEPTH = 100
+_POSE_FIELDS = frozenset({"position", "ypr_deg"})
 
 
 @dataclass(frozen=True)
@@ -136,7 +138,10 @@ class SceneModel:
         scene = self._scene
         spec = scene.camera(name)
         try:
-            new_spec = dataclasses.replace(spec, **fields)
+            if fields.keys() <= _POSE_FIELDS:  # a drag: only the new position and angles need checking
+                new_spec = spec.with_pose(**fields)
+            else:
+                new_spec = dataclasses.replace(spec, **fields)
         except TypeError as exc:
             raise SceneError(f"camera {name!r}: {exc}") from exc
         except GeometryError as exc:
@@ -157,7 +162,7 @@ class SceneModel:
         """
         spec = self._scene.camera(name)
         R = np.asarray(R_world, dtype=np.float64)
-        if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        if R.shape != (3, 3) or (not math.isfinite(R.sum()) and not np.isfinite(R).all()):
             raise SceneError("R_world: expected a finite 3x3 rotation")
         merge = None if drag_id is None else ("camera", name, drag_id)
         self.update_camera(
@@ -212,15 +217,15 @@ class SceneModel:
 
     def set_point(self, index: int, xyz: Any, *, drag_id: object = None) -> None:
         """Move point ``index``; successive calls with the same non-None ``drag_id`` are one undo step."""
-        points = list(self._scene.points)
+        scene = self._scene
+        points = scene.points
         if not 0 <= index < len(points):
             raise SceneError(f"index: no point {index} (have {len(points)})")
         p = _triple(xyz, f"point {index}")
         if p == points[index]:
             return
-        points[index] = p
         merge = None if drag_id is None else ("point", index, drag_id)
-        self._replace(Change("points", (f"point:{index}",)), merge, points=tuple(points))
+        self._commit(scene.with_point(index, p), Change("points", (f"point:{index}",)), merge_key=merge)
 
     def set_points(self, points: Any) -> None:
         """Replace all points at once ((N, 3) array-like)."""

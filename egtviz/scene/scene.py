@@ -49,7 +49,8 @@ class Scene:
         names = [c.name for c in self.cameras]
         if len(set(names)) != len(names):
             raise SceneError(f"cameras: names must be unique, got {names}")
-        object.__setattr__(self, "points", _points_tuple(self.points))
+        if type(self.points) is not _Points:  # a camera change keeps the previous scene's checked points
+            object.__setattr__(self, "points", _points_tuple(self.points))
         if self.pair is not None:
             pair = tuple(self.pair)
             if len(pair) != 2 or pair[0] == pair[1] or any(n not in names for n in pair):
@@ -80,7 +81,21 @@ class Scene:
         return None
 
     def points_array(self) -> np.ndarray:
-        return np.array(self.points, dtype=np.float64).reshape(-1, 3)
+        """The points as a read-only (N, 3) float64 array (made once per set of points, shared by the scenes
+        that keep them; copy it to change it)."""
+        return self.points.array  # type: ignore[attr-defined]
+
+    def with_point(self, index: int, xyz: Any) -> Scene:
+        """This scene with point ``index`` moved to ``xyz`` (checked); one row changes, the rest is not re-checked."""
+        points = self.points
+        if not 0 <= index < len(points):
+            raise SceneError(f"index: no point {index} (have {len(points)})")
+        p = _triple(xyz, f"point {index}")
+        arr = points.array.copy()  # type: ignore[attr-defined]
+        arr[index] = p
+        new = list(points)
+        new[index] = p
+        return self.replace(points=_Points.trusted(new, arr))
 
     def surface_points(self) -> tuple[np.ndarray, np.ndarray]:
         """All surfaces sampled: ``(points (M, 3), normals (M, 3))``."""
@@ -92,7 +107,10 @@ class Scene:
         return np.concatenate(pts), np.concatenate(nrm)
 
     def replace(self, **changes: Any) -> Scene:
-        return dataclasses.replace(self, **changes)
+        """``dataclasses.replace(self, **changes)`` (a new, checked scene)."""
+        if type(self) is not Scene:
+            return dataclasses.replace(self, **changes)
+        return Scene(**{**{name: getattr(self, name) for name in _SCENE_FIELDS}, **changes})
 
     # -- file format ---------------------------------------------------------
 
@@ -205,15 +223,58 @@ class Scene:
         return cls.from_dict(data, source=str(path))
 
 
-def _points_tuple(points: Any) -> tuple[tuple[float, float, float], ...]:
-    """Points as a tuple of float triples, checked in one vectorised pass (cheap on every drag)."""
-    if isinstance(points, tuple) and all(type(p) is tuple and len(p) == 3 for p in points):
-        arr = np.array(points, dtype=np.float64).reshape(-1, 3)
-        if np.all(np.isfinite(arr)):
-            return points if all(type(c) is float for p in points[:1] for c in p) else tuple(map(tuple, arr.tolist()))
+_SCENE_FIELDS = tuple(f.name for f in dataclasses.fields(Scene))
+
+
+class _Points(tuple):
+    """A scene's checked points: a tuple of float triples that carries them as a read-only (N, 3) array.
+
+    Only :func:`_points_tuple` and :meth:`Scene.with_point` make one, so a :class:`Scene` built with a
+    ``_Points`` (every change that leaves the points alone) skips checking them again. The hash is
+    remembered too (caches keyed on the points hash them on every update).
+    """
+
+    array: np.ndarray
+
+    @classmethod
+    def trusted(cls, points: Any, arr: np.ndarray) -> _Points:
+        """``points`` (float triples) and the same values as ``arr``, both already checked."""
+        out = cls(points)
+        arr.setflags(write=False)
+        out.array = arr
+        return out
+
+    def __hash__(self) -> int:
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = self.__dict__["_hash"] = tuple.__hash__(self)
+        return h
+
+    def __getattr__(self, name: str) -> Any:
+        if name == "array":  # a copy made by copy/pickle/asdict: rebuild the array
+            arr = np.array(tuple(self), dtype=np.float64).reshape(-1, 3)
+            arr.setflags(write=False)
+            self.__dict__["array"] = arr
+            return arr
+        raise AttributeError(name)
+
+
+def _points_tuple(points: Any) -> _Points:
+    """Points as a tuple of float triples, checked in one vectorised pass."""
+    try:
+        seq = points if isinstance(points, (tuple, list)) else list(points)
+        if all(type(p) is tuple and len(p) == 3 for p in seq):
+            arr = np.array(seq, dtype=np.float64).reshape(-1, 3)
+            if np.isfinite(arr).all():
+                if all(type(c) is float for p in seq for c in p):
+                    return _Points.trusted(seq, arr)
+                return _Points.trusted(map(tuple, arr.tolist()), arr)
+    except (TypeError, ValueError):
+        pass
     for i, p in enumerate(points):
         _triple(p, f"points[{i}]")
-    return tuple(map(tuple, np.array(points, dtype=np.float64).reshape(-1, 3).tolist()))
+    arr = np.array(points, dtype=np.float64).reshape(-1, 3)
+    return _Points.trusted(map(tuple, arr.tolist()), arr)
 
 
 def _from_json(value: Any) -> Any:

@@ -10,13 +10,16 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from ..geometry import GeometryError, Intrinsics, PinholeCamera, Pose
-from ..geometry.poses import egt_rotation_from_ypr, rotx, roty, rotz, ypr_from_egt_rotation
+from ..geometry.poses import EGT_CAMERA_BASE, rotx, roty, rotz, ypr_from_egt_rotation
+
+_isfinite = math.isfinite
+_BASE_T = EGT_CAMERA_BASE.T.tolist()
 
 
 class SceneError(ValueError):
@@ -24,23 +27,93 @@ class SceneError(ValueError):
 
 
 def _triple(value: Any, name: str) -> tuple[float, float, float]:
-    try:
-        x = tuple(float(v) for v in value)
-    except (TypeError, ValueError) as exc:
-        raise SceneError(f"{name}: expected three numbers, got {value!r}") from exc
-    if len(x) != 3 or not all(np.isfinite(x)):
+    if type(value) is tuple and len(value) == 3 and all(type(v) is float for v in value):
+        x = value  # the usual case (every drag): nothing to convert
+    else:
+        try:
+            x = tuple(float(v) for v in value)
+        except (TypeError, ValueError) as exc:
+            raise SceneError(f"{name}: expected three numbers, got {value!r}") from exc
+    if len(x) != 3 or not all(map(_isfinite, x)):
         raise SceneError(f"{name}: expected three finite numbers, got {value!r}")
     return x  # type: ignore[return-value]
 
 
 def _pair(value: Any, name: str) -> tuple[float, float]:
-    try:
-        x = tuple(float(v) for v in value)
-    except (TypeError, ValueError) as exc:
-        raise SceneError(f"{name}: expected two numbers, got {value!r}") from exc
-    if len(x) != 2 or not all(np.isfinite(x)):
+    if type(value) is tuple and len(value) == 2 and all(type(v) is float for v in value):
+        x = value
+    else:
+        try:
+            x = tuple(float(v) for v in value)
+        except (TypeError, ValueError) as exc:
+            raise SceneError(f"{name}: expected two numbers, got {value!r}") from exc
+    if len(x) != 2 or not all(map(_isfinite, x)):
         raise SceneError(f"{name}: expected two finite numbers, got {value!r}")
     return x  # type: ignore[return-value]
+
+
+def _trusted_pose(R: Any, t: tuple[float, float, float]) -> Pose:
+    """A :class:`Pose` of a rotation this module built from angles (orthonormal to rounding) and a checked position.
+
+    ``Pose(R, t)`` would check both again and re-orthonormalise ``R`` by an SVD, which is most of the cost of a
+    camera drag's new camera; here nothing can be wrong, so the arrays are set as ``Pose.__post_init__`` leaves
+    them (float64, read-only).
+    """
+    R = np.array(R, dtype=np.float64)
+    t = np.array(t, dtype=np.float64)
+    R.setflags(write=False)
+    t.setflags(write=False)
+    pose = object.__new__(Pose)
+    object.__setattr__(pose, "R", R)
+    object.__setattr__(pose, "t", t)
+    return pose
+
+
+def _egt_rotation(yaw: float, pitch: float, roll: float) -> list[list[float]]:
+    """``egt_rotation_from_ypr`` (``roty(yaw) rotx(pitch) rotz(roll)``, radians) in plain floats."""
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    rows = ((cy, sy * sp, sy * cp), (0.0, cp, -sp), (-sy, cy * sp, cy * cp))  # roty(yaw) rotx(pitch)
+    return [[a0 * cr + a1 * sr, a1 * cr - a0 * sr, a2] for a0, a1, a2 in rows]
+
+
+def _panoramic_rotation(yaw: float, pitch: float, roll: float) -> list[list[float]]:
+    """:func:`panoramic_rotation_from_ypr` (``rotz(yaw) roty(pitch) rotx(roll)``, radians) in plain floats."""
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    rows = ((cy * cp, -sy, cy * sp), (sy * cp, cy, sy * sp), (-sp, 0.0, cp))  # rotz(yaw) roty(pitch)
+    return [[a0, a1 * cr + a2 * sr, a2 * cr - a1 * sr] for a0, a1, a2 in rows]
+
+
+def _is_rotation(m: list[list[float]], tol: float = 1e-6) -> bool:
+    """``R^T R = I`` within ``tol`` and ``det R > 0`` (what ``as_rotation`` checks), in plain floats."""
+    (a, b, c), (d, e, f), (g, h, i) = m
+    if (
+        abs(a * a + d * d + g * g - 1.0) > tol
+        or abs(b * b + e * e + h * h - 1.0) > tol
+        or abs(c * c + f * f + i * i - 1.0) > tol
+        or abs(a * b + d * e + g * h) > tol
+        or abs(a * c + d * f + g * i) > tol
+        or abs(b * c + e * f + h * i) > tol
+    ):
+        return False
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
+
+
+@lru_cache(maxsize=64, typed=True)
+def _intrinsics_cached(*args: Any) -> Intrinsics:
+    return Intrinsics(*args)
+
+
+def _intrinsics(*args: Any) -> Intrinsics:
+    """``Intrinsics(*args)``, one shared (immutable) object per distinct set of values: a drag re-validates none."""
+    try:
+        hash(args)
+    except TypeError:
+        return Intrinsics(*args)
+    return _intrinsics_cached(*args)
 
 
 def _check_name(name: Any) -> str:
@@ -82,14 +155,23 @@ class PinholeSpec:
 
     @property
     def intrinsics(self) -> Intrinsics:
-        return Intrinsics(
+        return _intrinsics(
             self.focal_length, self.pixels_per_metre, self.principal_point, self.skew, self.width, self.height
         )
 
     @property
     def pose(self) -> Pose:
-        yaw, pitch, roll = np.radians(self.ypr_deg)
-        return Pose.from_egt(egt_rotation_from_ypr(yaw, pitch, roll), self.position)
+        """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
+        yaw, pitch, roll = (math.radians(a) for a in self.ypr_deg)
+        return _trusted_pose(EGT_CAMERA_BASE @ np.array(_egt_rotation(yaw, pitch, roll)), self.position)
+
+    def with_pose(self, position: Any = None, ypr_deg: Any = None) -> PinholeSpec:
+        """This spec at another place (``dataclasses.replace(spec, position=..., ypr_deg=...)``, for a drag).
+
+        Only the new values are checked (the rest was checked when this spec was made); the intrinsics
+        are shared.
+        """
+        return _with_pose(self, position, ypr_deg)
 
     def camera(self) -> PinholeCamera:
         return self._camera
@@ -102,6 +184,26 @@ class PinholeSpec:
     @staticmethod
     def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
         """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
+        try:
+            R = np.asarray(R_world, dtype=np.float64)
+        except (TypeError, ValueError):
+            R = None  # Pose below raises the error
+        if R is not None and R.shape == (3, 3):
+            w = R.tolist()
+            if _isfinite(sum(w[0]) + sum(w[1]) + sum(w[2])) and _is_rotation(w):
+                # The entries of R_egt = EGT_CAMERA_BASE^T R_world that ypr_from_egt_rotation's closed form
+                # (away from the gimbal lock) reads, in plain floats.
+                def egt(i: int, j: int) -> float:
+                    b = _BASE_T[i]
+                    return b[0] * w[0][j] + b[1] * w[1][j] + b[2] * w[2][j]
+
+                m02, m12, m22 = egt(0, 2), egt(1, 2), egt(2, 2)
+                if abs(m12) < 0.999:
+                    yaw = math.atan2(m02, m22)
+                    pitch = math.atan2(-m12, math.hypot(m02, m22))
+                    roll = math.atan2(egt(1, 0), egt(1, 1))
+                    return math.degrees(yaw), math.degrees(pitch), math.degrees(roll)
+        # Not a clean rotation (Pose raises the error) or near the gimbal lock (scipy).
         R_egt = Pose(R_world, np.zeros(3)).egt_rotation
         return tuple(float(np.degrees(a)) for a in ypr_from_egt_rotation(R_egt))  # type: ignore[return-value]
 
@@ -151,7 +253,17 @@ class PanoramicSpec:
 
     @property
     def pose(self) -> Pose:
-        return Pose(panoramic_rotation_from_ypr(*np.radians(self.ypr_deg)), self.position)
+        """``Pose(panoramic_rotation_from_ypr(*radians(ypr_deg)), position)``."""
+        yaw, pitch, roll = (math.radians(a) for a in self.ypr_deg)
+        return _trusted_pose(_panoramic_rotation(yaw, pitch, roll), self.position)
+
+    def with_pose(self, position: Any = None, ypr_deg: Any = None) -> PanoramicSpec:
+        """This spec at another place (``dataclasses.replace(spec, position=..., ypr_deg=...)``, for a drag).
+
+        Only the new values are checked (the rest was checked when this spec was made), and the new spec's
+        camera is this camera moved: mirror and calibration are shared, not built and checked again.
+        """
+        return _with_pose(self, position, ypr_deg)
 
     def mirror_model(self):
         from ..geometry.mirrors import HyperbolicMirror, ParabolicMirror
@@ -166,6 +278,10 @@ class PanoramicSpec:
     @cached_property
     def _camera(self):
         from ..geometry.catadioptric import CatadioptricCamera
+
+        elsewhere = self.__dict__.pop("_camera_elsewhere", None)
+        if elsewhere is not None:  # made by with_pose: the same mirror and CCD, moved
+            return _moved_camera(elsewhere, self.pose)
 
         for name in ("focal_pixels", "a", "b"):
             value = getattr(self, name)
@@ -189,6 +305,39 @@ class PanoramicSpec:
 
 CameraSpec = PinholeSpec | PanoramicSpec
 CAMERA_KINDS: dict[str, type] = {"pinhole": PinholeSpec, "panoramic": PanoramicSpec}
+
+
+@lru_cache(maxsize=None)
+def _field_names(cls: type) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls))
+
+
+def _with_pose(spec: Any, position: Any, ypr_deg: Any) -> Any:
+    """``spec.with_pose``: a new spec object made without ``__post_init__`` (nothing else changed)."""
+    cls = type(spec)
+    new = object.__new__(cls)
+    state = new.__dict__
+    old = spec.__dict__
+    for name in _field_names(cls):  # the fields only: cached values (the camera) belong to the old pose
+        state[name] = old[name]
+    if position is not None:
+        state["position"] = _triple(position, "position")
+    if ypr_deg is not None:
+        state["ypr_deg"] = _triple(ypr_deg, "ypr_deg")
+    if cls is PanoramicSpec:
+        built = old.get("_camera", old.get("_camera_elsewhere"))
+        if built is not None:
+            state["_camera_elsewhere"] = built  # moved to the new pose on first use
+    return new
+
+
+def _moved_camera(cam: Any, pose: Pose) -> Any:
+    """``cam`` at ``pose``: its other (checked, immutable) fields are shared, its ``__post_init__`` not run again."""
+    new = object.__new__(type(cam))
+    for f in dataclasses.fields(cam):
+        object.__setattr__(new, f.name, getattr(cam, f.name))
+    object.__setattr__(new, "pose", pose)
+    return new
 
 
 @dataclass(frozen=True)

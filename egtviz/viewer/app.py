@@ -15,6 +15,8 @@ written back under a guard so that the write does not look like a user edit.
 
 from __future__ import annotations
 
+import atexit
+import gc
 import itertools
 import threading
 import time
@@ -24,7 +26,6 @@ from typing import Any
 
 import numpy as np
 import viser
-from viser.transforms import SO3
 
 from ..scene import (
     Scene,
@@ -129,6 +130,7 @@ class ClientView:
         self._synced_specs: dict[str, Any] = {}
         self._synced_fields: dict[str, Any] = {}
         self._point_options_n = -1
+        self._synced_rest: tuple | None = None
 
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event)
@@ -313,7 +315,7 @@ class ClientView:
                 self._drag_seq[name] = self._drag_seq.get(name, 0) + 1  # one drag = one undo step
                 return
             self._t_event = t0
-            R = SO3(np.asarray(target.wxyz, float)).as_matrix()
+            R = _quat_matrix(target.wxyz)
             position = np.asarray(target.position, float)
             self._moving = name if phase == "update" else None
             try:
@@ -454,6 +456,8 @@ class ClientView:
             t3 = time.perf_counter()
             self.scene3d.draw(scene, derived, moving=self._moving)
             t4 = time.perf_counter()
+        # Send now: viser otherwise holds a finished atomic batch for up to one 1/60 s window.
+        self.client.flush()
         t5 = time.perf_counter()
         self.last_update_wall = time.time()
         self.breakdown = {"model": t0 - self._t_event if self._t_event is not None else 0.0, "derived": t1 - t0, "svg": t2 - t1, "fields": t3 - t2, "scene3d": t4 - t3, "flush": t5 - t4}
@@ -554,6 +558,13 @@ class ClientView:
                     _set(f["a"], float(spec.a))
                     _set(f["b"], float(spec.b))
                     _set(f["focal_px"], float(spec.focal_pixels))
+            title = self._title_md()
+            # A drag changes one camera's pose and nothing below: skip the rest when its inputs are unchanged.
+            rest_key = (scene.camera_names, scene.drawn_pair, len(scene.points), scene.selected_point, scene.options,
+                        self.model.can_undo, title)
+            if not force and rest_key == self._synced_rest:
+                return
+            self._synced_rest = rest_key
             names = scene.camera_names
             pairs = {f"{a} & {b}": (a, b) for a, b in itertools.combinations(names, 2)}
             drawn = scene.drawn_pair
@@ -575,7 +586,6 @@ class ClientView:
                 _set(cb, getattr(scene.options, opt))
             if self.btn_undo.disabled != (not self.model.can_undo):
                 self.btn_undo.disabled = not self.model.can_undo
-            title = self._title_md()
             if self.title.content != title:
                 self.title.content = title
         finally:
@@ -590,6 +600,18 @@ class ClientView:
                 return
             self.closed = True
             self._unsubscribe()
+
+
+def _quat_matrix(wxyz: Any) -> np.ndarray:
+    """The rotation matrix of a unit quaternion ``(w, x, y, z)`` (plain floats: it runs on every drag event)."""
+    w, x, y, z = (float(v) for v in wxyz)
+    n = w * w + x * x + y * y + z * z
+    s = 2.0 / n if n > 0.0 else 0.0
+    return np.array([
+        [1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
+        [s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x)],
+        [s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y)],
+    ])
 
 
 def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:
@@ -633,6 +655,11 @@ class EgtvizApp:
         self._lock = threading.Lock()
         self._gone: set[int] = set()
         self._frame_view(self.initial_scene)
+        # The long-lived objects (numpy, scipy, trimesh, viser, the scene) are never garbage: a full
+        # collection walking them all would stall a drag update for tens of milliseconds.
+        gc.collect()
+        gc.freeze()
+        atexit.register(gc.unfreeze)  # let the interpreter's last collection reach them at exit
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
 

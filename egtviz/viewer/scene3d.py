@@ -3,7 +3,22 @@
 Nothing here computes geometry: positions, rays, planes, meshes and image
 content come from :func:`egtviz.scene.compute_derived`. This module only turns
 arrays into nodes, keeps the nodes between updates (so a drag re-sends only what
-changed: viser skips assignments of equal values) and wires the gizmos.
+changed) and wires the gizmos.
+
+What is drawn, and what is skipped, to keep a frame cheap:
+
+* projection rays, and the epipolar lines on a frustum's image plane, of every
+  point while there are at most :data:`MAX_RAY_POINTS` points; above that only
+  the selected point's (none when no point is selected): hundreds of fat
+  segments cost a software-WebGL browser over 100 ms a frame, and read as a
+  blur anyway. Likewise, above :data:`MAX_POINT_GIZMOS` points only the
+  selected point has a gizmo;
+* a node property is assigned only when its value changed: arrays from
+  ``compute_derived`` that are the same objects as last time (an unchanged
+  camera's) are skipped by identity, other arrays by comparing them with what
+  the node holds; small values through a per-node cache (viser's own check
+  runs only after a cast that costs tens of microseconds per property);
+* the camera being dragged keeps its gizmo pose (the browser moves it).
 
 Scene tree (per client)::
 
@@ -22,59 +37,141 @@ Scene tree (per client)::
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 import viser
+
+try:  # what a handle's assignment runs (see _put_array); without it, assignments go the ordinary way
+    from viser._assignable_props_api import props_setattr as _props_setattr
+except ImportError:  # pragma: no cover - another viser
+    _props_setattr = None
 
 from ..scene.derived import IMAGE_PLANE_DEPTH
 from .palette import BASELINE_COLOUR, CAMERA_COLOURS, POINT_COLOURS, hex_to_rgb, point_rgb
 
 #: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
 MAX_POINT_GIZMOS = 16
+#: Above this many points only the selected point's projection rays are drawn (see the module docstring).
+MAX_RAY_POINTS = 30
 _POINT_RGB = np.array([hex_to_rgb(c) for c in POINT_COLOURS], dtype=np.uint8)
+_MISSING = object()
+
+
+@lru_cache(maxsize=16)
+def _colours(n: int) -> np.ndarray:
+    out = _POINT_RGB[np.arange(n) % len(_POINT_RGB)]
+    out.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=16)
+def _pair_colours(n: int) -> np.ndarray:
+    """(n, 2, 3) uint8: both ends of a segment of point i in its colour (read-only)."""
+    out = np.repeat(_colours(n)[:, None, :], 2, axis=1)
+    out.setflags(write=False)
+    return out
 
 
 def point_colours(n: int) -> np.ndarray:
     """(n, 3) uint8 colours of points 0..n-1."""
-    return _POINT_RGB[np.arange(n) % len(_POINT_RGB)]
+    return _colours(n).copy()
 
 
-def _segments(polylines: np.ndarray, colours: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(N, k, 3) polylines -> (S, 2, 3) segments and (S, 2, 3) colours, without NaN segments."""
-    P = np.asarray(polylines, float)
-    if P.size == 0 or P.ndim != 3 or P.shape[1] < 2:
-        return np.zeros((0, 2, 3)), np.zeros((0, 2, 3), np.uint8)
+def _segments(polylines: np.ndarray, rows: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """(N, k, 3) polylines (row i: point i) -> float32 (S, 2, 3) segments without NaN and the (S,) point of each.
+
+    ``rows``: only these points (indices); None: all.
+    """
+    P = np.asarray(polylines)
+    if P.ndim != 3 or P.shape[1] < 2 or P.shape[2] != 3:
+        return np.zeros((0, 2, 3), np.float32), np.zeros(0, np.intp)
+    if rows is not None:
+        if not len(rows):
+            return np.zeros((0, 2, 3), np.float32), np.zeros(0, np.intp)
+        idx = np.asarray(rows, np.intp)
+        P = P[idx]
+    else:
+        idx = np.arange(len(P))
+    if P.shape[1] == 2:  # a polyline of two points is one segment
+        ok = np.isfinite(P).all(axis=(1, 2))
+        return P[ok].astype(np.float32), idx[ok]
     seg = np.stack([P[:, :-1], P[:, 1:]], axis=2)  # (N, k-1, 2, 3)
-    col = np.broadcast_to(colours[:, None, None, :], seg.shape).astype(np.uint8)
-    seg = seg.reshape(-1, 2, 3)
-    col = col.reshape(-1, 2, 3)
-    ok = np.all(np.isfinite(seg), axis=(1, 2))
-    return seg[ok], col[ok]
+    ok = np.isfinite(seg).all(axis=(2, 3))  # (N, k-1)
+    point = np.broadcast_to(idx[:, None], ok.shape)[ok]
+    return seg[ok].astype(np.float32), point
 
 
 def _same(a: Any, b: Any) -> bool:
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+    if type(a) is np.ndarray or type(b) is np.ndarray:
         a, b = np.asarray(a), np.asarray(b)
         return a.shape == b.shape and bool(np.array_equal(a, b))
-    return a == b
+    return bool(a == b)
 
 
 def _put(handle: Any, prop: str, value: Any) -> None:
-    """Assign a node property unless it already holds ``value``.
+    """Assign a node property unless it already holds ``value`` (for small values: flags, colours, poses).
 
     viser would skip an equal value too, but only after casting it (tens of
     microseconds per property); this cache makes an unchanged node free.
     """
-    cache = handle.__dict__.setdefault("_egt_cache", {})
-    if prop in cache and _same(cache[prop], value):
+    cache = handle.__dict__.get("_egt_cache")
+    if cache is None:
+        cache = handle.__dict__["_egt_cache"] = {}
+    old = cache.get(prop, _MISSING)
+    if old is not _MISSING and _same(old, value):
         return
     setattr(handle, prop, value)
     cache[prop] = value.copy() if isinstance(value, np.ndarray) else value
 
 
+def _put_array(handle: Any, prop: str, value: np.ndarray) -> bool:
+    """Assign an array property (points, colours, vertices) unless the node holds the same bytes; True: sent.
+
+    The comparison is with what the node holds, so no copy is cached here. When ``value`` already has the
+    node's dtype, this does what viser's ``props_setattr`` does for a changed array (viser 1.1.1: refuse a
+    removed node, store a private copy, queue another copy, run ``_on_prop_assigned``) without its cast, its
+    type-hint checks and its second comparison; otherwise (an unexpected handle or dtype) it assigns the
+    ordinary way.
+    """
+    impl = handle._impl
+    current = getattr(impl.props, prop)
+    if type(current) is np.ndarray and current.dtype != value.dtype and current.dtype.kind == value.dtype.kind == "f":
+        value = value.astype(current.dtype)  # as viser would store it (a point cloud keeps float16 points)
+    if (
+        type(current) is np.ndarray
+        and current.dtype == value.dtype
+        and current.shape == value.shape
+        and current.tobytes() == value.tobytes()
+    ):
+        return False
+    if (
+        _props_setattr is not None
+        and type(handle).__setattr__ is _props_setattr
+        and not impl.removed
+        and type(current) is np.ndarray
+        and current.dtype == value.dtype
+        and prop in handle._prop_hints
+    ):
+        setattr(impl.props, prop, np.array(value, copy=True))
+        handle._queue_update(prop, np.array(value, copy=True))
+        handle._on_prop_assigned(prop)
+    else:
+        setattr(handle, prop, value)
+    return True
+
+
 def _moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
-    return float(np.max(np.abs(np.asarray(current, float) - np.asarray(new, float)))) > tol
+    """Any coordinate differs by more than ``tol`` (plain floats: this runs for every camera on every frame)."""
+    return any(abs(a - b) > tol for a, b in zip(np.asarray(current, float).tolist(), np.asarray(new, float).tolist()))
+
+
+def _quat_moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
+    """The orientation differs (``q`` and ``-q`` are the same rotation)."""
+    c = np.asarray(current, float).tolist()
+    n = np.asarray(new, float).tolist()
+    return any(abs(a - b) > tol for a, b in zip(c, n)) and any(abs(a + b) > tol for a, b in zip(c, n))
 
 
 HIGHLIGHT_RGB = (230, 159, 0)
@@ -82,6 +179,14 @@ HIGHLIGHT_RGB = (230, 159, 0)
 
 def _slug(k: int) -> str:
     return f"/egt/cam_{k}"
+
+
+@lru_cache(maxsize=8)
+def _fan(k: int) -> np.ndarray:
+    """Faces (k - 2, 3) uint32 of a convex polygon of ``k`` vertices, fanned from vertex 0."""
+    out = np.array([[0, i, i + 1] for i in range(1, k - 1)], np.uint32).reshape(-1, 3)
+    out.setflags(write=False)
+    return out
 
 
 _EMPTY_SEG = np.zeros((1, 2, 3), np.float32)
@@ -131,6 +236,8 @@ class Scene3D:
 
     def _static(self) -> None:
         api = self.api
+        # Shadows add nothing to lines, points and frustums, and cost most of a frame in software WebGL.
+        api.configure_default_lights(enabled=True, cast_shadow=False)
         api.add_grid("/egt/grid", width=20.0, height=20.0, plane="xy", cell_size=1.0, section_size=5.0)
         api.add_frame("/egt/world", axes_length=1.0, axes_radius=0.03, origin_radius=0.06)
         api.add_label("/egt/world/x", "x", position=(1.15, 0.0, 0.0), font_screen_scale=0.9)
@@ -211,15 +318,14 @@ class Scene3D:
         X = scene.points_array()
         n = len(X)
         opts = scene.options
-        key = (X.tobytes(), opts.show_labels, scene.selected_point,
-               frozenset(k for k in scene.locked if k.startswith("point:")))
-        if key == self._points_key:
-            return  # a camera moved: nothing about the points changed
         prev = self._points_prev
+        key = (opts.show_labels, scene.selected_point, frozenset(k for k in scene.locked if k.startswith("point:")))
+        if key == self._points_key and (X is prev or (X.shape == prev.shape and X.tobytes() == prev.tobytes())):
+            return  # a camera moved: nothing about the points changed
         self._points_key, self._points_prev = key, X
         if n:
-            _put(self.points, "points", X.astype(np.float32))
-            _put(self.points, "colors", point_colours(n))
+            _put_array(self.points, "points", X.astype(np.float32))
+            _put_array(self.points, "colors", np.array(_colours(n)))
         _put(self.points, "visible", n > 0)
         # Labels: one per point, 1-based.
         while len(self._point_labels) > n:
@@ -270,9 +376,10 @@ class Scene3D:
         """Bring every node up to date. ``moving``: the camera whose gizmo the user is dragging (not re-posed)."""
         opts = scene.options
         self._sync_cameras(scene)
-        X = scene.points_array()
-        n = len(X)
-        colours = point_colours(n)
+        n = len(scene.points)
+        sel = scene.selected_point
+        # Rays of every point while there are few, else only the selected point's (see the module docstring).
+        ray_rows = None if n <= MAX_RAY_POINTS else ((sel,) if sel is not None and sel < n else ())
         for spec in scene.cameras:
             name = spec.name
             nodes = self._cams[name]
@@ -282,70 +389,65 @@ class Scene3D:
                 # Compare with the gizmo's live pose (a drag changes it), never with a cache.
                 if _moved(gizmo.position, position):
                     gizmo.position = position
-                if _moved(gizmo.wxyz, wxyz) and _moved(gizmo.wxyz, -np.asarray(wxyz)):
+                if _quat_moved(gizmo.wxyz, wxyz):
                     gizmo.wxyz = wxyz
-            locked = name in scene.locked
-            _put(gizmo, "disable_axes", locked)
-            _put(gizmo, "disable_sliders", locked)
-            _put(gizmo, "disable_rotations", locked)
-            _put(nodes["axes"], "visible", opts.show_frames)
-            _put(nodes["label"], "visible", opts.show_labels)
-            # A camera a lesson highlights is drawn in orange.
             body = nodes.get("frustum", nodes.get("ccd"))
-            _put(body, "color", HIGHLIGHT_RGB if name in scene.highlighted else nodes["colour"])
+            look = (name in scene.locked, opts.show_frames, opts.show_labels, name in scene.highlighted)
+            if nodes.get("_look") != look:
+                locked, show_frames, show_labels, highlighted = look
+                _put(gizmo, "disable_axes", locked)
+                _put(gizmo, "disable_sliders", locked)
+                _put(gizmo, "disable_rotations", locked)
+                _put(nodes["axes"], "visible", show_frames)
+                _put(nodes["label"], "visible", show_labels)
+                # A camera a lesson highlights is drawn in orange.
+                _put(body, "color", HIGHLIGHT_RGB if highlighted else nodes["colour"])
+                nodes["_look"] = look
             if spec.kind == "pinhole":
                 fr = derived.frustums[name]
-                fov, aspect = float(fr["fov"]), float(fr["aspect"])
-                y = np.tan(fov / 2.0)
-                x = y * aspect
-                # viser normalises the frustum to unit volume; undo that so the image plane sits at IMAGE_PLANE_DEPTH.
-                scale = IMAGE_PLANE_DEPTH * float(np.cbrt(x * y / 3.0))
-                fru = nodes["frustum"]
-                _put(fru, "fov", fov)
-                _put(fru, "aspect", aspect)
-                _put(fru, "scale", scale)
+                shape = (float(fr["fov"]), float(fr["aspect"]))
+                if nodes.get("_shape") != shape:
+                    fov, aspect = shape
+                    y = np.tan(fov / 2.0)
+                    x = y * aspect
+                    # viser normalises the frustum to unit volume; undo that so the image plane sits at
+                    # IMAGE_PLANE_DEPTH.
+                    scale = IMAGE_PLANE_DEPTH * float(np.cbrt(x * y / 3.0))
+                    fru = nodes["frustum"]
+                    _put(fru, "fov", fov)
+                    _put(fru, "aspect", aspect)
+                    _put(fru, "scale", scale)
+                    nodes["_shape"] = shape
                 content = derived.image_in_3d.get(name)
                 if content is not None:
-                    P = content["points"]
-                    if nodes.get("_img_pts_src") is not P:  # the scene layer reuses an unchanged camera's arrays
-                        P = np.asarray(P, float)
-                        ok = np.all(np.isfinite(P), axis=1) if len(P) else np.zeros(0, bool)
-                        if ok.any():
-                            _put(nodes["img_pts"], "points", P[ok].astype(np.float32))
-                            _put(nodes["img_pts"], "colors", colours[ok])
-                        _put(nodes["img_pts"], "visible", bool(ok.any()))
-                        nodes["_img_pts_src"] = content["points"]
-                    L = np.asarray(content["lines"], float)
-                    seg, col = _segments(L, colours) if len(L) else (np.zeros((0, 2, 3)), None)
-                    if len(seg):
-                        _put(nodes["img_lines"], "points", seg.astype(np.float32))
-                        _put(nodes["img_lines"], "colors", col)
-                    _put(nodes["img_lines"], "visible", len(seg) > 0)
+                    self._draw_image_content(nodes, content, n, ray_rows)
             else:
                 v, f = derived.mirror_meshes[name]
                 if nodes.get("_mesh_src") is not v or nodes.get("_faces_src") is not f:
-                    _put(nodes["mirror"], "vertices", np.asarray(v, np.float32))
-                    _put(nodes["mirror"], "faces", np.asarray(f, np.uint32))
+                    _put_array(nodes["mirror"], "vertices", np.asarray(v, np.float32))
+                    _put_array(nodes["mirror"], "faces", np.asarray(f, np.uint32))
                     nodes["_mesh_src"], nodes["_faces_src"] = v, f
                 ccd = derived.ccd_centres.get(name)
-                if ccd is not None:
+                if ccd is not None and nodes.get("_ccd_src") is not ccd:
                     # The CCD is drawn in the camera's frame: its offset below the focus along the mirror axis.
                     off = float(np.linalg.norm(np.asarray(ccd) - np.asarray(position)))
                     _put(nodes["ccd"], "position", (0.0, 0.0, -off))
+                    nodes["_ccd_src"] = ccd
             rays = self._rays[name]
             src = derived.rays.get(name)
-            if src is None or nodes.get("_rays_src") is not src:  # unchanged camera: same array, same nodes
-                seg, col = _segments(src if src is not None else np.zeros((0, 2, 3)), colours)
+            if src is None or nodes.get("_rays_src") is not src or nodes.get("_rays_rows") != ray_rows:
+                # An unchanged camera brings the same array: same rows, same node.
+                seg, point = _segments(src, ray_rows) if src is not None else _segments(np.zeros((0, 2, 3)))
                 if len(seg):
-                    _put(rays, "points", seg.astype(np.float32))
-                    _put(rays, "colors", col)
-                nodes["_rays_src"], nodes["_rays_n"] = src, len(seg)
+                    _put_array(rays, "points", seg)
+                    _put_array(rays, "colors", _pair_colours(n)[point])
+                nodes["_rays_src"], nodes["_rays_rows"], nodes["_rays_n"] = src, ray_rows, len(seg)
             _put(rays, "visible", opts.show_rays and nodes["_rays_n"] > 0)
 
         self._sync_points(scene)
 
         if derived.baseline is not None:
-            _put(self.baseline, "points", np.asarray(derived.baseline, np.float32)[None])
+            _put_array(self.baseline, "points", np.asarray(derived.baseline, np.float32)[None])
             _put(self.baseline, "visible", True)
         else:
             _put(self.baseline, "visible", False)
@@ -353,10 +455,8 @@ class Scene3D:
         plane = derived.epipolar_plane
         if plane is not None and opts.show_planes:
             V = np.asarray(plane, np.float32)
-            faces = np.array([[0, i, i + 1] for i in range(1, len(V) - 1)], np.uint32)
-            _put(self.epiplane, "vertices", V)
-            _put(self.epiplane, "faces", faces)
-            sel = scene.selected_point
+            _put_array(self.epiplane, "vertices", V)
+            _put_array(self.epiplane, "faces", _fan(len(V)))
             _put(self.epiplane, "color", point_rgb(sel) if sel is not None else (120, 120, 120))
             _put(self.epiplane, "visible", True)
         else:
@@ -365,11 +465,34 @@ class Scene3D:
         if scene.surfaces and opts.show_surfaces:
             if self._surf_key is not scene.surfaces:
                 self._surf_key, self._surf_pts = scene.surfaces, scene.surface_points()[0]
-            S = self._surf_pts
-            _put(self.surfaces, "points", np.asarray(S, np.float32))
-            _put(self.surfaces, "visible", len(S) > 0)
+                _put_array(self.surfaces, "points", np.asarray(self._surf_pts, np.float32))
+            _put(self.surfaces, "visible", len(self._surf_pts) > 0)
         else:
             _put(self.surfaces, "visible", False)
+
+    def _draw_image_content(self, nodes: dict[str, Any], content: dict[str, Any], n: int,
+                            line_rows: tuple[int, ...] | None) -> None:
+        """A pin-hole camera's image points and epipolar lines on its image plane in 3D.
+
+        ``line_rows``: the points whose epipolar lines are drawn (None: all), the same rule as the rays.
+        """
+        P = content["points"]
+        if nodes.get("_img_pts_src") is not P:  # the scene layer reuses an unchanged camera's arrays
+            P = np.asarray(P)
+            ok = np.isfinite(P).all(axis=1) if P.ndim == 2 and len(P) else np.zeros(0, bool)
+            if ok.any():
+                _put_array(nodes["img_pts"], "points", P[ok].astype(np.float32))
+                _put_array(nodes["img_pts"], "colors", _colours(n)[ok])
+            _put(nodes["img_pts"], "visible", bool(ok.any()))
+            nodes["_img_pts_src"] = content["points"]
+        L = content["lines"]
+        if nodes.get("_img_lines_src") is not L or nodes.get("_img_lines_rows") != line_rows:
+            seg, point = _segments(L, line_rows) if len(L) else _segments(np.zeros((0, 2, 3)))
+            if len(seg):
+                _put_array(nodes["img_lines"], "points", seg)
+                _put_array(nodes["img_lines"], "colors", _pair_colours(n)[point])
+            _put(nodes["img_lines"], "visible", len(seg) > 0)
+            nodes["_img_lines_src"], nodes["_img_lines_rows"] = L, line_rows
 
     def remove_all(self) -> None:
         """Remove every node (client teardown)."""

@@ -10,13 +10,17 @@ Testability contract (the browser tests rely on it):
 * the root ``<svg>`` carries ``data-egtviz="image-plane"`` and
   ``data-camera="<camera name>"``;
 * drawn elements carry ``data-kind``: ``border``, ``point`` (with
-  ``data-index``, 0-based, one per point inside the image), ``epipole`` (with
+  ``data-index``, 0-based, one per point inside the image: a ``<g>`` holding
+  the disc and its number, or a bare disc when the point is not numbered),
+  ``epipole`` (with
   ``data-label`` and ``data-where`` = ``inside`` | ``outside`` | ``infinity``),
   ``epipolar-line`` (with ``data-index``, one per drawn line),
   ``epipolar-conic`` (with ``data-index``; a conic may have several pieces),
   ``rim``, ``message``, ``hidden-count``.
 
 Point labels are 1-based, like EGT's ``f_3Dwfenum``; ``data-index`` is 0-based.
+Above ``MAX_NUMBERED_POINTS`` points in an image only the selected and
+highlighted points are numbered.
 """
 
 from __future__ import annotations
@@ -35,6 +39,9 @@ _COLOURS = tuple(POINT_COLOURS)
 _N_COLOURS = len(_COLOURS)
 
 __all__ = ["image_plane_svg", "empty_svg"]
+
+#: Above this many points in an image only the selected and highlighted points are numbered (more are unreadable).
+MAX_NUMBERED_POINTS = 40
 
 #: Most conic vertices drawn in one panel (200 conics x 129 samples would be ~260 kB of SVG per update).
 CONIC_VERTEX_BUDGET = 10_000
@@ -196,67 +203,55 @@ def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
 
 
 def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) -> str:
-    """The ``epipolar-conic`` polylines of a panel, formatted in bulk.
+    """The ``epipolar-conic`` polylines of a panel, in index order, formatted in bulk.
 
-    Arcs of equal length (the usual case: the scene layer samples every conic
-    alike) are stacked and rounded in one numpy pass and written with one
-    %-template per block; an arc with NaN vertices is split into its finite runs
-    first. Past ``CONIC_VERTEX_BUDGET`` vertices only every k-th sample is kept
-    (and each arc's last).
+    An arc with NaN vertices is split into its finite runs. Past
+    ``CONIC_VERTEX_BUDGET`` vertices only every k-th sample is kept (and each
+    run's last). On a large image (whole pixels) all runs are rounded in one
+    numpy pass and written as one stream of table strings.
     """
-    by_length: dict[int, tuple[list[int], list[Any]]] = {}
-    for i, arcs in enumerate(conics):
-        for piece in arcs:
-            n = len(piece)
-            if n >= 2:
-                entry = by_length.get(n)
-                if entry is None:
-                    entry = by_length[n] = ([], [])
-                entry[0].append(i)
-                entry[1].append(piece)
-    total = sum(length * len(idx) for length, (idx, _) in by_length.items())
-    stride = max(1, math.ceil(total / CONIC_VERTEX_BUDGET))
-    # Blocks of equal-length runs: (indices, (n, length, 2) array), in the order the old per-run grouping gave.
-    blocks: dict[int, list[tuple[list[int], np.ndarray]]] = {}
-    for length, (idx, pieces) in by_length.items():
-        stacked = np.asarray(pieces, float).reshape(len(idx), length, 2)
-        finite = np.isfinite(stacked).all(axis=(1, 2))
-        if finite.all():
-            blocks.setdefault(length, []).append((idx, stacked))
-            continue
-        for i, arc, ok in zip(idx, stacked, finite.tolist()):
-            for run in [arc] if ok else _finite_runs(arc):
-                blocks.setdefault(len(run), []).append(([i], run[None]))
-    integer = s >= 200
+    idx = [i for i, arcs in enumerate(conics) for piece in arcs if len(piece) >= 2]
+    runs = [piece for arcs in conics for piece in arcs if len(piece) >= 2]
+    if not runs:
+        return ""
+    V = np.concatenate(runs).astype(float, copy=False)
+    if not np.isfinite(V).all():  # rare: split the arcs with NaN vertices into their finite runs
+        pairs = [(i, run) for i, piece in zip(idx, runs) for run in _finite_runs(piece)]
+        if not pairs:
+            return ""
+        idx, runs = [i for i, _ in pairs], [r for _, r in pairs]
+        V = np.concatenate(runs)
+    lengths = np.array([len(r) for r in runs])
+    stride = max(1, math.ceil(int(lengths.sum()) / CONIC_VERTEX_BUDGET))
+    if stride > 1:
+        # Keep every stride-th sample of each run, and its last.
+        ends = np.cumsum(lengths)
+        local = np.arange(len(V)) - np.repeat(ends - lengths, lengths)
+        keep = (local % stride == 0) | (local == np.repeat(lengths - 1, lengths))
+        V = V[keep]
+        lengths = np.add.reduceat(keep, ends - lengths)
     thick = f' stroke-width="{_f(lw * 3.0)}"'
-    body: list[str] = []
-    for length, parts in blocks.items():
-        keep = np.arange(0, length, stride) if stride > 1 and length > 2 else np.arange(length)
-        if keep[-1] != length - 1:
-            keep = np.append(keep, length - 1)
-        idx = [i for ids, _ in parts for i in ids]
-        arr = parts[0][1] if len(parts) == 1 else np.concatenate([a for _, a in parts])
-        if len(keep) != length:
-            arr = arr[:, keep]
-        k = len(keep)
-        n = len(idx)
-        colours = [_COLOURS[i % _N_COLOURS] for i in idx]
-        widths = [thick if i == selected_point else "" for i in idx]
-        if integer:
-            prefixes = [f'<polyline data-kind="epipolar-conic" data-index="{i}" points="' for i in idx]
-            suffixes = [f'" stroke="{c}"{w}/>' for c, w in zip(colours, widths)]
-            body.append(_int_rows_joined(np.rint(arr).astype(np.int64).reshape(n, 2 * k), prefixes, suffixes))
-            continue
-        pts_tpl = ("%.5g,%.5g " * k)[:-1]
-        # One object table (index, coordinates..., colour, width) and one %-format for the whole block.
-        table = np.empty((n, 2 * k + 3), dtype=object)
-        table[:, 0] = idx
-        table[:, 1:-2] = np.asarray(arr, float).reshape(n, 2 * k)
-        table[:, -2] = colours
-        table[:, -1] = widths
-        tpl = f'<polyline data-kind="epipolar-conic" data-index="%d" points="{pts_tpl}" stroke="%s"%s/>'
-        body.append((tpl * n) % tuple(table.ravel().tolist()))
-    return "".join(body)
+    prefixes = [f'<polyline data-kind="epipolar-conic" data-index="{i}" points="' for i in idx]
+    suffixes = [f'" stroke="{_COLOURS[i % _N_COLOURS]}"{thick if i == selected_point else ""}/>' for i in idx]
+    Q = np.rint(V).astype(np.int64) if s >= 200 else None
+    if Q is None or Q.min() < _INT_LO or Q.max() >= _INT_HI:
+        ends = np.cumsum(lengths)
+        return "".join(p + _points_attr(V[e - k:e], integer=Q is not None) + q
+                       for p, q, e, k in zip(prefixes, suffixes, ends.tolist(), lengths.tolist()))
+    # One token stream: per run [prefix, "x,", "y ", ..., "x,", "y", suffix].
+    comma, space, bare = _int_tables()
+    n, T = len(lengths), len(Q)
+    first = 2 * (np.cumsum(lengths) - lengths) + 2 * np.arange(n)  # where each run's prefix goes
+    vertex = np.repeat(first + 1, lengths) + 2 * (np.arange(T) - np.repeat(np.cumsum(lengths) - lengths, lengths))
+    last = np.cumsum(lengths) - 1
+    Q -= _INT_LO
+    tokens = np.empty(2 * T + 2 * n, dtype=object)
+    tokens[first] = prefixes
+    tokens[first + 2 * lengths + 1] = suffixes
+    tokens[vertex] = comma[Q[:, 0]]
+    tokens[vertex + 1] = space[Q[:, 1]]
+    tokens[vertex[last] + 1] = bare[Q[last, 1]]
+    return "".join(tokens.tolist())
 
 
 @lru_cache(maxsize=64)
@@ -299,42 +294,59 @@ def _points_group(P: np.ndarray, in_image: np.ndarray, selected_point: int | Non
                             c, r_pt, lw, font)
 
 
+def numbered_points(n_in_image: int, show_labels: bool) -> bool:
+    """Whether every point in the image gets its number (else only the selected and highlighted ones)."""
+    return show_labels and n_in_image <= MAX_NUMBERED_POINTS
+
+
 @lru_cache(maxsize=16)
 def _points_group_of(P_bytes: bytes, in_image_bytes: bytes, selected_point: int | None, highlighted: frozenset,
                      show_labels: bool, c: str, r_pt: float, lw: float, font: float) -> str:
+    """Numbered points are ``<g data-kind="point">`` (a disc and its number); the others a bare disc.
+
+    A bare ``<circle>`` per point keeps a 200-point panel at a third of the DOM
+    elements: the browser parses and lays out every panel on every update.
+    """
     P = np.frombuffer(P_bytes).reshape(-1, 2)
     in_image = np.frombuffer(in_image_bytes, dtype=bool)
     idx = np.flatnonzero(in_image).tolist()
-    dl = r_pt * 1.4
-    dp = int(c[2:-1])
-    ring_tpl = (f'<circle cx="{c}" cy="{c}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
-                f'stroke-width="{_f(lw * 2)}" data-selected="%s"/>')
     Q = P[in_image]
-    cols = 9 if show_labels else 5
-    table = np.empty((len(idx), cols), dtype=object)
+    dp = int(c[2:-1])
+    disc = f'" r="{_f(r_pt)}" fill="'
+    body = ""
     if idx:
-        marks = {i: ring_tpl % (x, y, "true" if i == selected_point else "false")
-                 for i, (x, y) in zip(idx, Q.tolist()) if i == selected_point or i in highlighted}
-        colours = [_COLOURS[i % _N_COLOURS] for i in idx]
-        table[:, 0] = [f'<g data-kind="point" data-index="{i}">{marks.get(i, "")}<circle cx="' for i in idx]
+        # Bare discs for all, in one table: index, cx, cy, colour.
+        table = np.empty((len(idx), 7), dtype=object)
+        table[:, 0] = [f'<circle data-kind="point" data-index="{i}" cx="' for i in idx]
         table[:, 1:4:2] = _fixed_strs(Q, dp)
         table[:, 2] = '" cy="'
-        disc = f'" r="{_f(r_pt)}" fill="'
-        if show_labels:
-            table[:, 4] = [f'{disc}{col}"/><text x="' for col in colours]
-            table[:, 5:8:2] = _fixed_strs(np.column_stack([Q[:, 0] + dl, Q[:, 1] - dl]), dp)
-            table[:, 6] = '" y="'
-            sw = _f(lw * 3)
-            table[:, 8] = [f'" fill="{col}" stroke="#fff" stroke-width="{sw}">{i + 1}</text></g>'
-                           for i, col in zip(idx, colours)]
-        else:
-            table[:, 4] = [f'{disc}{col}"/></g>' for col in colours]
-    body = ["".join(table.ravel().tolist())]
-    out = (
+        table[:, 4] = disc
+        table[:, 5] = [_COLOURS[i % _N_COLOURS] for i in idx]
+        table[:, 6] = '"/>'
+        rows = table.sum(axis=1).tolist()
+        number_all = numbered_points(len(idx), show_labels)
+        marked = {i for i in idx if i == selected_point or i in highlighted}
+        dl = r_pt * 1.4
+        sw = _f(lw * 3)
+        for k, (i, (x, y)) in enumerate(zip(idx, Q.tolist())):
+            if not (number_all or i in marked):
+                continue
+            col = _COLOURS[i % _N_COLOURS]
+            ring = ""
+            if i in marked:
+                ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
+                        f'stroke-width="{_f(lw * 2)}" data-selected="{"true" if i == selected_point else "false"}"/>')
+            label = ""
+            if show_labels:
+                label = (f'<text x="{c % (x + dl)}" y="{c % (y - dl)}" fill="{col}" stroke="#fff" '
+                         f'stroke-width="{sw}">{i + 1}</text>')
+            rows[k] = (f'<g data-kind="point" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{col}"/>'
+                       f"{label}</g>")
+        body = "".join(rows)
+    return (
         f'<g stroke="#000" stroke-width="{_f(lw * 0.6)}" font-size="{_f(font)}" font-weight="bold" '
-        f'paint-order="stroke">{"".join(body)}</g>'
+        f'paint-order="stroke">{body}</g>'
     )
-    return out
 
 
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
@@ -486,6 +498,8 @@ def image_plane_svg(
         status += f"; {n_hidden} hidden ({why})"
     if n_outside > 0:
         status += f"; {n_outside} outside the image"
+    if show_labels and not numbered_points(int(in_image.sum()), True):
+        status += f"; numbers shown for the selected point only (more than {MAX_NUMBERED_POINTS} points)"
     ty = h + margin * (0.85 + 0.55 * n_inf)
     out.append(
         f'<text data-kind="hidden-count" data-hidden="{n_hidden}" x="{_f(w)}" y="{_f(ty)}" text-anchor="end" '
