@@ -9,7 +9,7 @@ Method (also in ``docs/viewer.md``):
   pose and timestamp are set, then ``on_update`` fires); the time is measured
   from the callback's entry to the exit of the ``client.atomic()`` block that
   carries the 3D scene, both panels, the read-out and the fields. 200 events,
-  5 ms apart; p50 and p99.
+  5 ms apart, each to a new place (no cached result is reused); p50 and p99.
 * **Browser.** The same with headless Chromium as the tab. Each update gives
   the SVGs a new ``data-rev``; a ``MutationObserver`` in the page records
   ``performance.timeOrigin + performance.now()`` when an SVG with a new
@@ -17,7 +17,10 @@ Method (also in ``docs/viewer.md``):
   the atomic update for that revision. Both clocks are the same machine's
   wall clock, so the difference is the time from the end of the server update
   to the changed SVG in the page (websocket, decoding, React). 60 events,
-  150 ms apart so that each update is rendered on its own; median.
+  150 ms apart; median. Measured twice: with the 3D view drawn, and with its
+  canvas hidden. Without a GPU Chromium draws WebGL in software (SwiftShader)
+  and every frame blocks the page's main thread for 30-100 ms, the panels'
+  update waiting behind it; the second figure is the panel path alone.
 """
 
 from __future__ import annotations

@@ -147,30 +147,10 @@ class _Points:
 
 
 @lru_cache(maxsize=8)
-def _points_by_value(points: tuple) -> _Points:
-    return _Points(np.array(points, dtype=np.float64).reshape(-1, 3))
-
-
-#: The last points tuple seen and its entry: a drag of a camera keeps the scene's very tuple, so it is found by
-#: identity. (Replaced as a whole, so concurrent readers see a consistent pair; the strong reference keeps the
-#: tuple's id from being reused.)
-_last_points: tuple[tuple, _Points] | None = None
-
-
 def _points(points: tuple) -> _Points:
-    """The (cached) :class:`_Points` of a scene's points tuple: by identity first, then by value."""
-    global _last_points
-    last = _last_points
-    if last is not None and last[0] is points:
-        return last[1]
-    entry = _points_by_value(points)
-    _last_points = (points, entry)
-    return entry
-
-
-def _points_array(points: tuple) -> np.ndarray:
-    """The scene's points as a read-only (N, 3) array, built once per points tuple."""
-    return _points(points).X
+    """The (cached) :class:`_Points` of a scene's points. A scene's points tuple remembers its hash and stays
+    the same object across camera drags, so the lookup costs no walk over the points."""
+    return _Points(np.array(points, dtype=np.float64).reshape(-1, 3))
 
 
 @lru_cache(maxsize=64)

@@ -254,6 +254,20 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) ->
     return "".join(tokens.tolist())
 
 
+@lru_cache(maxsize=16)
+def _line_tags(idx_bytes: bytes, selected_point: int | None, thick: str) -> np.ndarray:
+    """The text around the four coordinates of each ``epipolar-line`` (the same from one drag step to the next)."""
+    idx = np.frombuffer(idx_bytes, dtype=np.intp).tolist()
+    tags = np.empty((len(idx), 5), dtype=object)
+    tags[:, 0] = [f'<line data-kind="epipolar-line" data-index="{i}" x1="' for i in idx]
+    tags[:, 1] = '" y1="'
+    tags[:, 2] = '" x2="'
+    tags[:, 3] = '" y2="'
+    tags[:, 4] = [f'" stroke="{_COLOURS[i % _N_COLOURS]}"{thick if i == selected_point else ""}/>' for i in idx]
+    tags.setflags(write=False)
+    return tags
+
+
 @lru_cache(maxsize=64)
 def axes_svg(w: float, h: float, font: float, lw: float) -> str:
     """Pixel axes with ticks and labels: u along the top edge, v along the left edge (origin top-left)."""
@@ -428,15 +442,11 @@ def image_plane_svg(
         L = np.asarray(plane.lines, float).reshape(-1, 4)
         ok = np.all(np.isfinite(L), axis=1)
         thick = f' stroke-width="{_f(lw * 3.0)}"'
-        idx = np.flatnonzero(ok).tolist()
+        idx = np.flatnonzero(ok)
         table = np.empty((len(idx), 9), dtype=object)
-        if idx:
-            table[:, 0] = [f'<line data-kind="epipolar-line" data-index="{i}" x1="' for i in idx]
+        if len(idx):
+            table[:, 0::2] = _line_tags(idx.tobytes(), selected_point, thick)
             table[:, 1:9:2] = _fixed_strs(L[ok], dp)
-            table[:, 2] = '" y1="'
-            table[:, 4] = '" x2="'
-            table[:, 6] = '" y2="'
-            table[:, 8] = [f'" stroke="{_COLOURS[i % _N_COLOURS]}"{thick if i == selected_point else ""}/>' for i in idx]
         out.append(f'<g stroke-width="{_f(lw * 1.2)}">{"".join(table.ravel().tolist())}</g>')
 
     if plane.conics is not None:
