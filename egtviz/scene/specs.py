@@ -26,30 +26,29 @@ class SceneError(ValueError):
     """A change to a scene that cannot be applied (the scene is left unchanged)."""
 
 
-def _triple(value: Any, name: str) -> tuple[float, float, float]:
-    if type(value) is tuple and len(value) == 3 and all(type(v) is float for v in value):
+def _numbers(value: Any, name: str, n: int) -> tuple[float, ...]:
+    """``value`` as ``n`` finite floats, or a SceneError naming ``name``."""
+    if type(value) is tuple and len(value) == n and all(type(v) is float for v in value):
         x = value  # the usual case (every drag): nothing to convert
     else:
         try:
             x = tuple(float(v) for v in value)
         except (TypeError, ValueError) as exc:
-            raise SceneError(f"{name}: expected three numbers, got {value!r}") from exc
-    if len(x) != 3 or not all(map(_isfinite, x)):
-        raise SceneError(f"{name}: expected three finite numbers, got {value!r}")
-    return x  # type: ignore[return-value]
+            raise SceneError(f"{name}: expected {_COUNT[n]} numbers, got {value!r}") from exc
+    if len(x) != n or not all(map(_isfinite, x)):
+        raise SceneError(f"{name}: expected {_COUNT[n]} finite numbers, got {value!r}")
+    return x
+
+
+_COUNT = {2: "two", 3: "three"}
+
+
+def _triple(value: Any, name: str) -> tuple[float, float, float]:
+    return _numbers(value, name, 3)  # type: ignore[return-value]
 
 
 def _pair(value: Any, name: str) -> tuple[float, float]:
-    if type(value) is tuple and len(value) == 2 and all(type(v) is float for v in value):
-        x = value
-    else:
-        try:
-            x = tuple(float(v) for v in value)
-        except (TypeError, ValueError) as exc:
-            raise SceneError(f"{name}: expected two numbers, got {value!r}") from exc
-    if len(x) != 2 or not all(map(_isfinite, x)):
-        raise SceneError(f"{name}: expected two finite numbers, got {value!r}")
-    return x  # type: ignore[return-value]
+    return _numbers(value, name, 2)  # type: ignore[return-value]
 
 
 def _trusted_pose(R: Any, t: tuple[float, float, float]) -> Pose:
