@@ -37,6 +37,7 @@ from ..scene import (
     default_scene,
 )
 from .svg import empty_svg, image_plane_svg
+from .svg import warm_up as svg_warm_up
 
 __all__ = ["EgtvizApp", "ClientView"]
 
@@ -655,6 +656,7 @@ class EgtvizApp:
         self._lock = threading.Lock()
         self._gone: set[int] = set()
         self._frame_view(self.initial_scene)
+        svg_warm_up()
         # The long-lived objects (numpy, scipy, trimesh, viser, the scene) are never garbage: a full
         # collection walking them all would stall a drag update for tens of milliseconds.
         gc.collect()

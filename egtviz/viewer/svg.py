@@ -190,6 +190,12 @@ def _fixed_strs(X: Any, dp: int) -> np.ndarray:
     return out
 
 
+def warm_up() -> None:
+    """Build the number tables of images 100 px and larger now, not in the first drag step that needs them."""
+    _int_tables()
+    _fixed_strs(np.zeros(1), 1)
+
+
 def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
     """Split a polyline at NaN rows into runs of at least two points."""
     P = np.asarray(P, float)
