@@ -329,13 +329,16 @@ def test_panoramic_and_mixed_pairs(tabs):
 
 
 def test_gizmo_quaternion_matrix_matches_viser():
+    from scipy.spatial.transform import Rotation
     from viser.transforms import SO3
 
-    from egtviz.viewer.app import _quat_matrix
+    from egtviz.geometry.poses import matrix_from_quat_wxyz
 
     rng = np.random.default_rng(3)
     for _ in range(200):
         q = rng.normal(size=4)
+        np.testing.assert_allclose(matrix_from_quat_wxyz(q), Rotation.from_quat(q, scalar_first=True).as_matrix(),
+                                   atol=1e-12)
         q /= np.linalg.norm(q)
-        np.testing.assert_allclose(_quat_matrix(q), SO3(q).as_matrix(), atol=1e-12)
-    np.testing.assert_allclose(_quat_matrix((1.0, 0.0, 0.0, 0.0)), np.eye(3))
+        np.testing.assert_allclose(matrix_from_quat_wxyz(q), SO3(q).as_matrix(), atol=1e-12)
+    np.testing.assert_allclose(matrix_from_quat_wxyz((1.0, 0.0, 0.0, 0.0)), np.eye(3))

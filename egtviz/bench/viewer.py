@@ -78,16 +78,20 @@ def _drag_event(gizmo: Any, position: np.ndarray) -> Any:
     return types.SimpleNamespace(target=gizmo, phase="update", client=None, client_id=None)
 
 
-def _drive(view: Any, name: str, n: int, spacing: float) -> list[float]:
+def _drive(view: Any, name: str, n: int, spacing: float) -> list[tuple[int, float, dict]]:
+    """Drag camera ``name`` 2 mm further ``n`` times (always to a new place), ``spacing`` seconds apart.
+
+    Returns ``(revision, wall time at the end of the update, its breakdown)`` per event.
+    """
     gizmo = view.scene3d._cams[name]["gizmo"]
     start = np.array(gizmo.position, float)
     view.timings.clear()
-    revs = []
+    out = []
     for k in range(n):
         view._camera_gizmo_event(name, _drag_event(gizmo, start + np.array([0.002 * k, 0.0, 0.0])))
-        revs.append((view.revision, view.last_update_wall))
+        out.append((view.revision, view.last_update_wall, dict(view.breakdown)))
         time.sleep(spacing)
-    return revs
+    return out
 
 
 def server_latency(scene: Any, n: int = EVENTS, *, spacing: float = 0.005) -> dict[str, float]:
@@ -100,15 +104,7 @@ def server_latency(scene: Any, n: int = EVENTS, *, spacing: float = 0.005) -> di
     server, app, fakes, views = start_headless(scene)
     try:
         view = views[0]
-        name = scene.cameras[0].name
-        breakdown: list[dict] = []
-        gizmo = view.scene3d._cams[name]["gizmo"]
-        start = np.array(gizmo.position, float)
-        view.timings.clear()
-        for k in range(n):
-            view._camera_gizmo_event(name, _drag_event(gizmo, start + np.array([0.002 * k, 0.0, 0.0])))
-            breakdown.append(dict(view.breakdown))
-            time.sleep(spacing)
+        breakdown = [b for _, _, b in _drive(view, scene.cameras[0].name, n, spacing)]
         t = np.array(view.timings) * 1e3
         parts = {k: float(np.median([b[k] for b in breakdown]) * 1e3) for k in breakdown[0]}
         return {"p50": float(np.percentile(t, 50)), "p99": float(np.percentile(t, 99)), **parts}
@@ -151,7 +147,7 @@ def browser_latency(scene: Any, n: int = BROWSER_EVENTS, *, width: int = 1600, h
             seen = page.evaluate("() => window.__egtRev")
             page.close()
         lat = []
-        for rev, t_server in revs:
+        for rev, t_server, _ in revs:
             key = f"{name}@{rev}"
             if key in seen:
                 lat.append(seen[key] - t_server * 1e3)

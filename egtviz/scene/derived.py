@@ -134,27 +134,26 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
-class _Points:
-    """The scene's points, read-only: ``X`` (N, 3) and ``XT`` (3, N) contiguous (the coordinate-major layout of the
-    pair computations). Hashed by identity: a cache key that is cheap to hash, where the points tuple itself costs
-    a hash of all its floats on every lookup."""
+class _PointArrays:
+    """The scene's points, read-only, in both layouts: ``X`` (N, 3) and ``XT`` (3, N) contiguous (the
+    coordinate-major layout of the pair computations). Hashed by identity (a cheap cache key)."""
 
     __slots__ = ("X", "XT")
 
     def __init__(self, X: np.ndarray) -> None:
-        self.X = _frozen(X)
+        self.X = X
         self.XT = _frozen(np.ascontiguousarray(X.T))
 
 
 @lru_cache(maxsize=8)
-def _points(points: tuple) -> _Points:
-    """The (cached) :class:`_Points` of a scene's points. A scene's points tuple remembers its hash and stays
-    the same object across camera drags, so the lookup costs no walk over the points."""
-    return _Points(np.array(points, dtype=np.float64).reshape(-1, 3))
+def _points(points: tuple) -> _PointArrays:
+    """The :class:`_PointArrays` of a scene's points (``Scene.points``: it carries its checked read-only array,
+    remembers its hash and stays the same object across camera drags, so the lookup is cheap)."""
+    return _PointArrays(points.array)  # type: ignore[attr-defined]
 
 
 @lru_cache(maxsize=64)
-def _camera_block(spec, pts: _Points) -> dict:
+def _camera_block(spec, pts: _PointArrays) -> dict:
     """Everything about one camera that depends only on its spec and the points (cached: a drag changes one
     camera, so the others' projections, rays, meshes and image content are reused). Arrays are read-only.
 

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import viser
 
+from ..geometry.poses import matrix_from_quat_wxyz
 from ..scene import (
     Scene,
     SceneError,
@@ -316,7 +317,7 @@ class ClientView:
                 self._drag_seq[name] = self._drag_seq.get(name, 0) + 1  # one drag = one undo step
                 return
             self._t_event = t0
-            R = _quat_matrix(target.wxyz)
+            R = matrix_from_quat_wxyz(target.wxyz)
             position = np.asarray(target.position, float)
             self._moving = name if phase == "update" else None
             try:
@@ -601,18 +602,6 @@ class ClientView:
                 return
             self.closed = True
             self._unsubscribe()
-
-
-def _quat_matrix(wxyz: Any) -> np.ndarray:
-    """The rotation matrix of a unit quaternion ``(w, x, y, z)`` (plain floats: it runs on every drag event)."""
-    w, x, y, z = (float(v) for v in wxyz)
-    n = w * w + x * x + y * y + z * z
-    s = 2.0 / n if n > 0.0 else 0.0
-    return np.array([
-        [1.0 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)],
-        [s * (x * y + w * z), 1.0 - s * (x * x + z * z), s * (y * z - w * x)],
-        [s * (x * z - w * y), s * (y * z + w * x), 1.0 - s * (x * x + y * y)],
-    ])
 
 
 def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:

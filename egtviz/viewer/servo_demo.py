@@ -39,9 +39,8 @@ from typing import Any, Literal
 
 import numpy as np
 import viser
-from viser.transforms import SO3
 
-from egtviz.geometry.poses import Pose
+from egtviz.geometry.poses import Pose, quat_wxyz_from_matrix
 from egtviz.servo import ServoResult, simulate_panoramic, simulate_pinhole
 
 from .palette import hex_to_rgb, point_colour
@@ -97,10 +96,6 @@ def puma_meshes() -> list[tuple[np.ndarray, np.ndarray]] | None:
         return out
     except Exception:  # noqa: BLE001 - no meshes: the stick figure is drawn instead
         return None
-
-
-def _wxyz(R: np.ndarray) -> np.ndarray:
-    return SO3.from_matrix(np.asarray(R, float)).wxyz
 
 
 def _thin(k: int, limit: int = PLOT_SAMPLES) -> np.ndarray:
@@ -231,7 +226,7 @@ class ServoDemo:
             aspect = self.intrinsics.aspect
             n["target"] = api.add_camera_frustum("/servo/target", fov=fov, aspect=aspect, scale=0.07,
                                                  color=(0, 158, 115), thickness=0.004,
-                                                 wxyz=_wxyz(self.target_pose.R), position=self.target_pose.t)
+                                                 wxyz=self.target_pose.quat_wxyz, position=self.target_pose.t)
             api.add_label("/servo/target/label", "target", position=(0.0, -0.06, 0.0), font_screen_scale=0.9)
             n["camera"] = api.add_camera_frustum("/servo/camera", fov=fov, aspect=aspect, scale=0.07,
                                                  color=(20, 20, 20), thickness=0.005)
@@ -313,7 +308,7 @@ class ServoDemo:
         if "links" in self.nodes:
             for j, h in enumerate(self.nodes["links"]):
                 h.position = links[j][:3, 3]
-                h.wxyz = _wxyz(links[j][:3, :3])
+                h.wxyz = quat_wxyz_from_matrix(links[j][:3, :3])
         else:
             P = np.array([T[:3, 3] for T in links], np.float32)
             self.nodes["sticks"].points = np.stack([P[:-1], P[1:]], axis=1)
@@ -768,12 +763,12 @@ class ServoDemo:
             self._set_arm(k)
             Hk = r.camera_poses[k]
             n["camera"].position = Hk[:3, 3]
-            n["camera"].wxyz = _wxyz(Hk[:3, :3])
+            n["camera"].wxyz = quat_wxyz_from_matrix(Hk[:3, :3])
             C = H[:, :3, 3]
         else:
             x, y, th = r.states[k]
             n["robot"].position = (float(x), float(y), 0.0)
-            n["robot"].wxyz = _wxyz(np.array([[math.cos(th), -math.sin(th), 0], [math.sin(th), math.cos(th), 0],
+            n["robot"].wxyz = quat_wxyz_from_matrix(np.array([[math.cos(th), -math.sin(th), 0], [math.sin(th), math.cos(th), 0],
                                               [0, 0, 1.0]]))
             C = np.column_stack([r.states[: k + 1, :2], np.full(k + 1, 0.01)])
         idx = trail_indices(k, 400)
