@@ -79,12 +79,17 @@ def test_many_points_are_numbered_only_when_selected():
     # Every disc still sits at its pixel, in its colour.
     discs = [next(c for c in p.iter(NS + "circle") if c.get("fill") != "none") for p in pts_el]
     assert np.allclose([[float(d.get("cx")), float(d.get("cy"))] for d in discs], pts, atol=0.051)
-    assert "numbers shown for the selected point only" in kinds(svg, "hidden-count")[0].text
+    assert "numbers shown for the selected point only" in kinds(svg, "numbering-note")[0].text
+    # On its own line, inside the viewBox.
+    note_y = float(kinds(svg, "numbering-note")[0].get("y"))
+    x, y, w, h = map(float, ET.fromstring(svg).get("viewBox").split())
+    assert float(kinds(svg, "hidden-count")[0].get("y")) < note_y < y + h
     # At the limit every point is numbered again.
     few = plane(points=pts[:MAX_NUMBERED_POINTS], visible=np.ones(MAX_NUMBERED_POINTS, bool),
                 in_image=np.ones(MAX_NUMBERED_POINTS, bool), n_hidden=0)
     labels = [t.text for p in kinds(image_plane_svg(few), "point") for t in p.iter(NS + "text")]
     assert labels == [str(i + 1) for i in range(MAX_NUMBERED_POINTS)]
+    assert not kinds(image_plane_svg(few), "numbering-note")
 
 
 def test_selected_point_gets_a_ring():

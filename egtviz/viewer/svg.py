@@ -16,7 +16,7 @@ Testability contract (the browser tests rely on it):
   ``data-label`` and ``data-where`` = ``inside`` | ``outside`` | ``infinity``),
   ``epipolar-line`` (with ``data-index``, one per drawn line),
   ``epipolar-conic`` (with ``data-index``; a conic may have several pieces),
-  ``rim``, ``message``, ``hidden-count``.
+  ``rim``, ``message``, ``hidden-count``, ``numbering-note``.
 
 Point labels are 1-based, like EGT's ``f_3Dwfenum``; ``data-index`` is 0-based.
 Above ``MAX_NUMBERED_POINTS`` points in an image only the selected and
@@ -414,7 +414,9 @@ def image_plane_svg(
     r_pt = s / 110.0
     lw = s / 400.0
     n_inf_total = sum(1 for ep in (plane.epipoles or ()) if ep.at_infinity or ep.xy is None)
-    bottom = margin * (0.45 + 0.55 * (n_inf_total + 1))
+    in_image = np.asarray(plane.in_image, bool).reshape(-1)
+    numbering_note = show_labels and not numbered_points(int(in_image.sum()), True)
+    bottom = margin * (0.45 + 0.55 * (n_inf_total + 1 + numbering_note))
     vb = f"{_f(-margin)} {_f(-margin)} {_f(w + 2 * margin)} {_f(h + margin + bottom)}"
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
     mh = "" if max_height is None else f";max-height:{escape(max_height)}"
@@ -459,7 +461,6 @@ def image_plane_svg(
         out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{_conics_svg(plane.conics, selected_point, lw, s)}</g>')
 
     P = np.asarray(plane.points, float).reshape(-1, 2)
-    in_image = np.asarray(plane.in_image, bool).reshape(-1)
     out.append(_points_group(P, in_image, selected_point, frozenset(highlighted), show_labels, c, r_pt, lw, font))
     out.append("</g>")  # end of clipped group
 
@@ -514,13 +515,17 @@ def image_plane_svg(
         status += f"; {n_hidden} hidden ({why})"
     if n_outside > 0:
         status += f"; {n_outside} outside the image"
-    if show_labels and not numbered_points(int(in_image.sum()), True):
-        status += f"; numbers shown for the selected point only (more than {MAX_NUMBERED_POINTS} points)"
     ty = h + margin * (0.85 + 0.55 * n_inf)
     out.append(
         f'<text data-kind="hidden-count" data-hidden="{n_hidden}" x="{_f(w)}" y="{_f(ty)}" text-anchor="end" '
         f'font-size="{_f(font * 0.85)}" fill="#333">{escape(status)}</text>'
     )
+    if numbering_note:  # a line of its own: appended to the status it ran off the panel
+        out.append(
+            f'<text data-kind="numbering-note" x="{_f(w)}" y="{_f(ty + margin * 0.55)}" text-anchor="end" '
+            f'font-size="{_f(font * 0.85)}" fill="#333">numbers shown for the selected point only '
+            f"(more than {MAX_NUMBERED_POINTS} points)</text>"
+        )
     if plane.message:
         out.append(
             f'<text data-kind="message" x="{_f(w / 2)}" y="{_f(h / 2)}" text-anchor="middle" font-size="{_f(font * 1.1)}" '
