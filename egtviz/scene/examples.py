@@ -1,4 +1,4 @@
-"""Ready-made scenes: the default classroom pair and the tutorial's examples (EGT reference, section 8)."""
+"""Ready-made scenes: the default classroom pair, a panoramic pair, and the EGT tutorial's Examples 1-4."""
 
 from __future__ import annotations
 
@@ -11,6 +11,16 @@ from .specs import PanoramicSpec, PinholeSpec
 CUBE = tuple(
     (x, y, z) for z in (0.0, 2.0) for (x, y) in ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0))
 )
+
+
+#: Eight points on the walls of a room round the panoramic pair (x, y in metres), at varied heights.
+PANORAMIC_ROOM = (
+    (2.26, 0.92, 0.6), (1.01, 1.93, 1.6), (-0.82, 1.99, 1.0), (-2.18, 1.06, 2.2),
+    (-2.26, -0.32, 0.8), (-1.01, -1.33, 1.9), (0.82, -1.39, 1.3), (2.18, -0.46, 2.5),
+)
+
+#: The tutorial's panoramic CCD: ``K = [[1e3, 0, 320], [0, 1e3, 240], [0, 0, 1]]`` on a 640 x 480 image.
+TUTORIAL_CCD = dict(focal_pixels=1000.0, principal_point=(320.0, 240.0), width=640, height=480)
 
 
 def _looking_at_origin(name: str, position: tuple[float, float, float], target_z: float = 1.0) -> PinholeSpec:
@@ -33,18 +43,20 @@ def default_scene() -> Scene:
 
 
 def panoramic_scene() -> Scene:
-    """Two hyperbolic-mirror cameras (tutorial Example 4, at table-top scale): eight points around them.
+    """Two hyperbolic-mirror cameras (EGT's ``a = 3``, ``b = 1`` scaled by 1/10) among eight points.
 
-    The mirrors are EGT's ``a = 3``, ``b = 1`` scaled by 1/10 (the image does
-    not change with the scale), with a CCD focal length that fills the image.
+    The points stand around both mirrors at elevations between about 10 and 55 degrees, so that they
+    and their epipolar conics spread from the middle of each mirror image out towards its rim (a mirror
+    image packs the horizon into a small circle round the centre; higher points fill the rest).
+    The image does not change with the mirror's scale; the CCD focal length fills the image.
     """
     mirror = dict(a=0.3, b=0.1, focal_pixels=1100.0)
     return Scene(
         cameras=(
-            PanoramicSpec("pano1", (-1.5, -0.8, 0.2), (45.0, 0.0, 0.0), **mirror),
-            PanoramicSpec("pano2", (1.6, -0.4, 0.2), **mirror),
+            PanoramicSpec("pano1", (-0.7, -0.2, 0.2), (45.0, 0.0, 0.0), **mirror),
+            PanoramicSpec("pano2", (0.8, 0.1, 0.2), **mirror),
         ),
-        points=tuple((x * 1.2, y * 1.2 + 2.0, z * 0.6 + 0.9) for (x, y, z) in CUBE),
+        points=PANORAMIC_ROOM,
         title="Two panoramic cameras",
     )
 
@@ -72,9 +84,32 @@ def tutorial_example_3() -> Scene:
     )
 
 
+def tutorial_example_2() -> Scene:
+    """Example 2: ``H = [rotoz(pi/4), [-5, -5, 0]; 0 1]``, hyperbolic mirror ``a = 3``, ``b = 1``, the tutorial's
+    CCD, and the point ``Xw = [0, 0, 4]`` (its image is ``u = 410.49``, ``v = 240``)."""
+    cam = PanoramicSpec("pano", (-5.0, -5.0, 0.0), (45.0, 0.0, 0.0), a=3.0, b=1.0, **TUTORIAL_CCD)
+    return Scene(cameras=(cam,), points=((0.0, 0.0, 4.0),), title="Tutorial example 2: panoramic placement")
+
+
+def tutorial_example_4() -> Scene:
+    """Example 4: two panoramic cameras placed as in Example 3 (``rotoz(pi/4)`` at ``[-10, -10, 0]``; upright at
+    the origin), EGT's mirror ``a = 3``, ``b = 1`` and CCD, and eight points that both mirrors see."""
+    mirror = dict(a=3.0, b=1.0, **TUTORIAL_CCD)
+    return Scene(
+        cameras=(
+            PanoramicSpec("pano1", (-10.0, -10.0, 0.0), (45.0, 0.0, 0.0), **mirror),
+            PanoramicSpec("pano2", (0.0, 0.0, 0.0), **mirror),
+        ),
+        points=tuple((x, y, z) for z in (2.0, 5.0) for (x, y) in ((-8.0, -4.0), (-4.0, -4.0), (-4.0, 2.0), (-8.0, 2.0))),
+        title="Tutorial example 4: panoramic epipolar geometry",
+    )
+
+
 SCENES = {
     "default": default_scene,
     "panoramic": panoramic_scene,
     "example1": tutorial_example_1,
+    "example2": tutorial_example_2,
     "example3": tutorial_example_3,
+    "example4": tutorial_example_4,
 }
