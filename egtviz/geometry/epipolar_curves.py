@@ -1,0 +1,114 @@
+r"""Epipolar curves of any two central camera models, by one route.
+
+The epipolar plane of a scene point :math:`X` contains both centres :math:`c_1, c_2` and :math:`X`; its
+world normal is
+
+.. math:: n = (c_2 - c_1) \times (X - c_1).
+
+Each camera images that plane through its own centre with
+:meth:`~egtviz.geometry.camera_model.CameraModel.plane_image_conics` (a double line for the pin-hole, a conic
+for the sphere models), ``plane_image_lines`` (the pin-hole's line :math:`l`, equal to :math:`F m_1` up to scale)
+and ``plane_image_arcs`` (the sampled, really visible arcs). The epipoles are the images of the baseline:
+in image 1 of the direction :math:`c_2 - c_1`, in image 2 of :math:`c_1 - c_2`
+(``baseline_images``: one for a pin-hole, two, :math:`\pm`, for a sphere model). Every epipolar curve of an
+image passes through that image's epipoles and through the image of its point (H&Z 9.1; Geyer &
+Daniilidis; ``docs/conventions.md``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from ._validate import GeometryError, as_points
+from .camera_model import CameraModel, check_sample_count
+from .epipolar import epipolar_planes
+
+__all__ = ["EpipolarCurvePair", "EpipolarCurves", "epipolar_curves", "epipolar_plane_normals"]
+
+
+@dataclass(frozen=True, eq=False)
+class EpipolarCurves:
+    """The epipolar curves of N scene points in one camera of a pair, and that image's epipoles."""
+
+    conics: np.ndarray | None
+    """(N, 3, 3) exact conics :math:`m^T C m = 0`, unit Frobenius norm (a double line :math:`l l^T` for a pin-hole);
+    NaN rows for points on the baseline; None if the model has no conics."""
+    lines: np.ndarray | None
+    """(N, 3) exact lines :math:`l \\cdot m = 0` where the model images planes to lines (pin-hole), else None."""
+    arcs: list[list[np.ndarray]]
+    """Per point, the visible arcs (k, 2) of its curve inside the camera's drawn region (empty: none)."""
+    epipoles: np.ndarray
+    """(k, 3) homogeneous epipoles (``baseline_images`` of the direction to the other centre; row 0 towards it)."""
+    epipoles_visible: np.ndarray
+    """(k,) bool: the camera really shows that epipole."""
+
+
+@dataclass(frozen=True, eq=False)
+class EpipolarCurvePair:
+    """The epipolar curves of N scene points in both cameras of a pair."""
+
+    normals: np.ndarray
+    """(N, 3) unit world normals of the epipolar planes; NaN rows for points on the baseline."""
+    first: EpipolarCurves
+    """In camera 1."""
+    second: EpipolarCurves
+    """In camera 2."""
+
+
+def _check_model(camera: object, name: str) -> CameraModel:
+    if not isinstance(camera, CameraModel):
+        raise GeometryError(f"{name}: expected a camera model (CameraModel), got {type(camera).__name__}")
+    return camera
+
+
+def epipolar_plane_normals(cam1: CameraModel, cam2: CameraModel, X_world: npt.ArrayLike) -> np.ndarray:
+    r"""Unit world normals (N, 3) :math:`n \propto (c_2 - c_1) \times (X - c_1)` of the epipolar planes of ``X_world``.
+
+    Raises:
+        DegenerateConfigurationError: if the two centres coincide.
+    """
+    cam1 = _check_model(cam1, "cam1")
+    cam2 = _check_model(cam2, "cam2")
+    X = as_points(X_world, "X_world", 3)
+    return epipolar_planes(cam1.centre, cam2.centre, X)[:, :3]
+
+
+def epipolar_curves(
+    cam1: CameraModel, cam2: CameraModel, X_world: npt.ArrayLike, *, n_samples: int = 96
+) -> EpipolarCurvePair:
+    """Epipolar curves of scene points in both cameras, and the epipoles, for any two camera models.
+
+    Args:
+        cam1: first camera (any :class:`~egtviz.geometry.camera_model.CameraModel`).
+        cam2: second camera.
+        X_world: (N, 3) scene points.
+        n_samples: samples per curve for the arcs (>= 3).
+
+    Returns:
+        An :class:`EpipolarCurvePair`. A point on the baseline (the centres included) has no unique epipolar
+        plane: NaN normal, NaN conic and line rows, no arcs.
+
+    Raises:
+        DegenerateConfigurationError: if the two centres coincide.
+        GeometryError: on a camera that is not a camera model, or bad points.
+    """
+    n_samples = check_sample_count(n_samples, "n_samples", 3)
+    normals = epipolar_plane_normals(cam1, cam2, X_world)
+    baseline = cam2.centre - cam1.centre
+    return EpipolarCurvePair(
+        normals, _curves(cam1, normals, baseline, n_samples), _curves(cam2, normals, -baseline, n_samples)
+    )
+
+
+def _curves(camera: CameraModel, normals: np.ndarray, towards_other: np.ndarray, n_samples: int) -> EpipolarCurves:
+    epipoles = camera.baseline_images(towards_other)
+    return EpipolarCurves(
+        conics=camera.plane_image_conics(normals),
+        lines=camera.plane_image_lines(normals),
+        arcs=camera.plane_image_arcs(normals, n_samples),
+        epipoles=epipoles.points,
+        epipoles_visible=epipoles.visible,
+    )
