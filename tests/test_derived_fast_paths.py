@@ -23,7 +23,7 @@ from egtviz.geometry.epipolar import (
     epipole_of_centre,
     lines_of_planes,
 )
-from egtviz.geometry.homogeneous import _clip_lines, clip_lines_to_rect, normalize_homogeneous, normalize_lines
+from egtviz.geometry.homogeneous import _clip_lines, clip_lines_to_rect, normalize_homogeneous
 from egtviz.geometry.panoramic_epipolar import _circle_arcs, _sample_circles, sample_plane_conics
 from egtviz.geometry.pinhole import Intrinsics
 from egtviz.geometry.poses import look_at
@@ -49,9 +49,19 @@ def random_pinhole(rng) -> PinholeCamera:
 # --------------------------------------------------------------------------- references (the replaced code)
 
 
+def reference_normalize_lines(lines):
+    """``normalize_lines`` without its checks: NaN rows for NaN, zero and at-infinity lines."""
+    lines = np.atleast_2d(np.asarray(lines, dtype=np.float64))
+    n = np.hypot(lines[:, 0], lines[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = lines / n[:, None]
+        out[~(n > 1e-12 * np.linalg.norm(lines, axis=1))] = np.nan
+    return out
+
+
 def reference_clip(lines, width, height):
     """``clip_lines_to_rect`` as it was: (N, 4) candidates, argmin/argmax, ``np.clip``."""
-    L = normalize_lines(lines)
+    L = reference_normalize_lines(lines)
     a, b, c = L[:, 0:1], L[:, 1:2], L[:, 2:3]
     eps = 1e-9 * max(width, height, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -127,16 +137,20 @@ def test_clip_matches_the_reference_on_random_and_special_lines(seed, size):
                [np.nan, 1, 2]]
     lines = np.vstack([special, rng.normal(size=(60, 3)) * [1, 1, max(w, h)],
                        rng.normal(size=(10, 3)) * rng.choice([1e-12, 1, 1e6], size=(10, 3))])
-    seg, hit = clip_lines_to_rect(lines, w, h)
-    ref_seg, ref_hit = reference_clip(lines, w, h)
+    # The public function refuses the zero line and the NaN row; the internal one takes them.
+    public = np.delete(lines, [special.index([0, 0, 0]), len(special) - 1], axis=0)
+    assert np.isfinite(public).all() and (np.abs(public).max(axis=1) > 0).all()
+    seg, hit = clip_lines_to_rect(public, w, h)
+    ref_seg, ref_hit = reference_clip(public, w, h)
     np.testing.assert_array_equal(hit, ref_hit)
     np.testing.assert_allclose(seg, ref_seg, rtol=0, atol=1e-12 * max(w, h), equal_nan=True)
-    assert seg.shape == (len(lines), 2, 2) and seg.flags.c_contiguous
+    assert seg.shape == (len(public), 2, 2) and seg.flags.c_contiguous
     # The internal entry point takes the lines coordinate-major and not normalised (any moderate scale).
+    ref_seg, ref_hit = reference_clip(lines, w, h)
     scaled = lines * rng.uniform(1e-3, 1e3, size=(len(lines), 1))
     seg2, hit2 = _clip_lines(np.ascontiguousarray(scaled.T), float(w), float(h))
-    np.testing.assert_array_equal(hit2, hit)
-    np.testing.assert_allclose(seg2, seg, rtol=0, atol=1e-12 * max(w, h), equal_nan=True)
+    np.testing.assert_array_equal(hit2, ref_hit)
+    np.testing.assert_allclose(seg2, ref_seg, rtol=0, atol=1e-12 * max(w, h), equal_nan=True)
 
 
 def test_clip_of_no_lines():
@@ -223,7 +237,9 @@ def test_lines_of_planes_match_the_solve(seed):
     rng = np.random.default_rng(seed)
     cam = random_pinhole(rng)
     n = rng.normal(size=(20, 3))
-    ref = np.linalg.solve(cam.K.T, cam.pose.R.T @ n.T).T
+    # A normal is defined up to scale: the public function divides each by its largest entry first.
+    n_unit_max = n / np.abs(n).max(axis=1, keepdims=True)
+    ref = np.linalg.solve(cam.K.T, cam.pose.R.T @ n_unit_max.T).T
     np.testing.assert_allclose(lines_of_planes(cam, n), ref, rtol=1e-10, atol=1e-14 * np.abs(ref).max())
 
 

@@ -405,7 +405,7 @@ def test_bad_arguments():
         epipolar_conics(cam1, cam2, [[np.nan, 0.0, 0.0]])
     with pytest.raises(GeometryError, match="n_mirror: a zero normal"):
         sample_plane_conic(cam1, [0.0, 0.0, 0.0])
-    with pytest.raises(GeometryError, match="n: expected an integer >= 3"):
+    with pytest.raises(GeometryError, match="n: expected a whole number at least 3"):
         sample_plane_conic(cam1, [0.0, 0.0, 1.0], n=2)
     with pytest.raises(GeometryError, match=r"n_mirror: expected shape \(N, 3\)"):
         conic_from_plane(cam1, np.ones((2, 2)))

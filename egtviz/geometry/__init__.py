@@ -1,9 +1,13 @@
 """The numeric core of egtviz: pure numpy/scipy, points as rows, no viewer imports.
 
-Conventions: ``docs/conventions.md``.
+Conventions: ``docs/conventions.md``. Every public function refuses bad input with a
+:class:`GeometryError` naming the argument (types, shapes, NaN and inf, magnitudes beyond
+``MAX_MAGNITUDE``); quantities defined up to scale are accepted at any finite magnitude.
 """
 
 from ._validate import DegenerateConfigurationError as DegenerateConfigurationError
+from ._validate import MAX_MAGNITUDE as MAX_MAGNITUDE
+from ._validate import MIN_MAGNITUDE as MIN_MAGNITUDE
 from ._validate import GeometryError as GeometryError
 from .epipolar import EpipolarPair as EpipolarPair
 from .epipolar import epipolar_lines as epipolar_lines

@@ -34,7 +34,7 @@ from functools import cached_property
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import GeometryError, as_calibration, as_points
+from ._validate import MAX_IMAGE_SIZE, GeometryError, as_calibration, as_count, as_points, as_up_to_scale_rows
 from .mirrors import HyperbolicMirror, Mirror, ParabolicMirror
 from .poses import Pose
 
@@ -101,10 +101,7 @@ class CatadioptricCamera:
         K.setflags(write=False)
         object.__setattr__(self, "K", K)
         for name in ("width", "height"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value <= 0:
-                raise GeometryError(f"{name}: expected a positive integer, got {value!r}")
-            object.__setattr__(self, name, int(value))
+            object.__setattr__(self, name, as_count(getattr(self, name), name, minimum=1, maximum=MAX_IMAGE_SIZE))
 
     # ------------------------------------------------------------------ frames
     def moved(self, pose: Pose) -> CatadioptricCamera:
@@ -152,8 +149,12 @@ class CatadioptricCamera:
         return self._project_mirror_frame((X - self.pose.t) @ self.pose.R)
 
     def project_directions(self, d_mirror: npt.ArrayLike) -> PanoramicProjection:
-        """Like :meth:`project` for ray directions ``d_mirror`` (N, 3) already in the mirror frame."""
-        return self._project_mirror_frame(as_points(d_mirror, "d_mirror", 3))
+        """Like :meth:`project` for ray directions ``d_mirror`` (N, 3) already in the mirror frame.
+
+        A direction is defined up to scale (each is first divided by its largest entry, so any finite
+        magnitude gives the same pixels and mirror points); a zero direction is no ray and is not visible.
+        """
+        return self._project_mirror_frame(as_up_to_scale_rows(d_mirror, "d_mirror", 3, allow_zero=True))
 
     def _project_mirror_frame(self, d: np.ndarray) -> PanoramicProjection:
         dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
@@ -322,7 +323,7 @@ class CatadioptricCamera:
 
     def rim_image(self, n: int = 256) -> np.ndarray:
         """(n, 2) pixels of the mirror's rim: the outer boundary of the mirror's image."""
-        P = self.mirror.rim_points(n)
+        P = self.mirror.rim_points(n)  # checks n
         if isinstance(self.mirror, HyperbolicMirror):
             P = P + np.array([0.0, 0.0, self.mirror.ccd_offset])
         else:

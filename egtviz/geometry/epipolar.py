@@ -14,7 +14,15 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import DegenerateConfigurationError, GeometryError, as_calibration, as_matrix, as_points
+from ._validate import (
+    DegenerateConfigurationError,
+    GeometryError,
+    as_calibration,
+    as_points,
+    as_up_to_scale,
+    as_up_to_scale_rows,
+    as_vector,
+)
 from .homogeneous import _normalize_homogeneous3, clip_lines_to_rect, homogeneous, normalize_homogeneous
 from .pinhole import PinholeCamera
 from .poses import Pose
@@ -23,16 +31,30 @@ from .poses import Pose
 COINCIDENT_CENTRES_TOL = 1e-9
 
 
+def _check_pose(pose: object, name: str) -> Pose:
+    if not isinstance(pose, Pose):
+        raise GeometryError(f"{name}: expected a Pose, got {type(pose).__name__}")
+    return pose
+
+
+def _check_pinhole(camera: object, name: str) -> PinholeCamera:
+    if not isinstance(camera, PinholeCamera):
+        raise GeometryError(f"{name}: expected a PinholeCamera, got {type(camera).__name__}")
+    return camera
+
+
 def relative_pose(pose1: Pose, pose2: Pose) -> tuple[np.ndarray, np.ndarray]:
     r"""``(R, t)`` from frame 1 to frame 2: :math:`X_2 = R X_1 + t`, :math:`R = R_2^T R_1`, :math:`t = R_2^T (t_1 - t_2)`."""
+    _check_pose(pose1, "pose1")
+    _check_pose(pose2, "pose2")
     R = pose2.R.T @ pose1.R
     t = pose2.R.T @ (pose1.t - pose2.t)
     return R, t
 
 
 def check_distinct_centres(c1: np.ndarray, c2: np.ndarray) -> None:
-    """Raise :class:`DegenerateConfigurationError` when two centres coincide."""
-    if _centres_coincide(np.asarray(c1, dtype=np.float64), np.asarray(c2, dtype=np.float64)):
+    """Raise :class:`DegenerateConfigurationError` when two centres (3-vectors) coincide."""
+    if _centres_coincide(as_vector(c1, "c1", 3), as_vector(c2, "c2", 3)):
         raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
 
 
@@ -46,8 +68,22 @@ def _centres_coincide(c1: np.ndarray, c2: np.ndarray) -> bool:
     return bool(np.linalg.norm(c1 - c2) <= COINCIDENT_CENTRES_TOL * scale)
 
 
-def unit_frobenius(M: np.ndarray) -> np.ndarray:
-    """Scale a matrix to unit Frobenius norm with its largest-magnitude entry positive (a canonical sign)."""
+def unit_frobenius(M: npt.ArrayLike) -> np.ndarray:
+    r"""Scale a 3x3 matrix to unit Frobenius norm with its largest-magnitude entry positive (a canonical sign).
+
+    .. math:: M \mapsto \operatorname{sign}(M_k)\, M / \|M\|_F, \qquad k = \arg\max |M_{ij}|.
+
+    ``M`` (F, E, ...) is defined up to scale: it is divided by its largest absolute entry first, so any
+    finite magnitude gives the same result.
+
+    Raises:
+        GeometryError: ``M`` is not a finite 3x3 matrix, or is zero.
+    """
+    return _unit_frobenius(as_up_to_scale(M, "M", (3, 3)))
+
+
+def _unit_frobenius(M: np.ndarray) -> np.ndarray:
+    """:func:`unit_frobenius` of a checked float matrix of moderate scale."""
     M = M / _frobenius(M)
     k = np.argmax(np.abs(M))
     return M if M.flat[k] >= 0 else -M
@@ -66,6 +102,8 @@ def _skew(x: float, y: float, z: float) -> np.ndarray:
 
 def essential_from_poses(pose1: Pose, pose2: Pose) -> np.ndarray:
     r""":math:`E = [t]_\times R` with ``(R, t)`` from :func:`relative_pose`, unit Frobenius norm."""
+    _check_pose(pose1, "pose1")
+    _check_pose(pose2, "pose2")
     check_distinct_centres(pose1.t, pose2.t)
     return _essential(pose1, pose2)
 
@@ -73,7 +111,7 @@ def essential_from_poses(pose1: Pose, pose2: Pose) -> np.ndarray:
 def _essential(pose1: Pose, pose2: Pose) -> np.ndarray:
     """:func:`essential_from_poses` of poses whose centres are known to be distinct."""
     R, t = relative_pose(pose1, pose2)
-    return unit_frobenius(_skew(*t.tolist()) @ R)
+    return _unit_frobenius(_skew(*t.tolist()) @ R)
 
 
 def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
@@ -89,10 +127,10 @@ def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
         K1: ``(3, 3)`` calibration of camera 1.
         K2: ``(3, 3)`` calibration of camera 2.
     """
-    F = as_matrix(F, "F", (3, 3))
+    F = as_up_to_scale(F, "F", (3, 3))
     E = as_calibration(K2, "K2").T @ F @ as_calibration(K1, "K1")
     n = np.linalg.norm(E)
-    if n == 0:
+    if not n > 0:
         raise GeometryError("F: expected a nonzero matrix")
     return E / n
 
@@ -109,20 +147,24 @@ def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
         K1: ``(3, 3)`` calibration of camera 1.
         K2: ``(3, 3)`` calibration of camera 2.
     """
-    E = as_matrix(E, "E", (3, 3))
+    E = as_up_to_scale(E, "E", (3, 3))
     F = _inverse_calibration(K2, "K2").T @ E @ _inverse_calibration(K1, "K1")
+    F = F / np.abs(F).max()  # K^-1 may be small (1e-3 per entry): keep the norm's squares in range
     n = np.linalg.norm(F)
-    if n == 0:
+    if not n > 0:
         raise GeometryError("E: expected a nonzero matrix")
     return F / n
 
 
 def _inverse_calibration(K: npt.ArrayLike, name: str) -> np.ndarray:
-    """``inv(as_calibration(K))``, remembered per matrix (a camera drag keeps both calibrations)."""
-    arr = np.ascontiguousarray(K, dtype=np.float64)
-    if arr.shape != (3, 3):
-        as_calibration(arr, name)  # raises with the shape in the message
-    return _inverse_of(arr.tobytes(), name)
+    """``inv(as_calibration(K))``, remembered per matrix (a camera drag keeps both calibrations).
+
+    A (3, 3) float64 array is looked up by its bytes (checked on the first use only); anything else is
+    checked first.
+    """
+    if not (isinstance(K, np.ndarray) and K.dtype == np.float64 and K.shape == (3, 3)):
+        K = as_calibration(K, name)
+    return _inverse_of(np.ascontiguousarray(K).tobytes(), name)
 
 
 @lru_cache(maxsize=64)
@@ -170,6 +212,8 @@ def epipolar_pair(cam1: PinholeCamera, cam2: PinholeCamera) -> EpipolarPair:
     Raises:
         DegenerateConfigurationError: the two centres coincide.
     """
+    _check_pinhole(cam1, "cam1")
+    _check_pinhole(cam2, "cam2")
     c1, c2 = cam1.center, cam2.center
     if _centres_coincide(c1, c2):
         raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
@@ -206,7 +250,8 @@ def epipole_of_centre(camera: PinholeCamera, other_centre: npt.ArrayLike) -> tup
     infinity when the baseline is parallel to the image plane), ``in_front`` is
     False when the other centre is behind the camera.
     """
-    c = as_points(other_centre, "other_centre", 3)[0]
+    _check_pinhole(camera, "camera")
+    c = as_vector(other_centre, "other_centre", 3)
     check_distinct_centres(camera.center, c)
     return _epipole_of_centre(camera, c)
 
@@ -264,9 +309,14 @@ def lines_of_planes(camera: PinholeCamera, normals_world: npt.ArrayLike) -> np.n
     A plane :math:`n \cdot (X - t) = 0` through the centre images to
     :math:`l = K^{-T} R^T n`. For the epipolar plane of a point this is its
     epipolar line (equal to :math:`F m` up to scale), defined whether or not the
-    point itself is visible. NaN normals give NaN lines.
+    point itself is visible. A normal is defined up to scale (each is first divided by its largest
+    entry); the planes of points without one (NaN rows of :func:`epipolar_planes`) must be left out.
+
+    Raises:
+        GeometryError: a normal is zero, NaN or inf, or ``normals_world`` is not (N, 3).
     """
-    n = np.atleast_2d(np.asarray(normals_world, dtype=np.float64))
+    _check_pinhole(camera, "camera")
+    n = as_up_to_scale_rows(normals_world, "normals_world", 3)
     return n @ camera._plane_to_line.T
 
 
@@ -277,26 +327,33 @@ def fundamental_from_cameras(cam1: PinholeCamera, cam2: PinholeCamera) -> np.nda
 
 def epipoles_from_fundamental(F: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     r"""Right and left null vectors of F: ``(e1, e2)`` with :math:`F e_1 = 0`, :math:`F^T e_2 = 0` (H&Z 9.2.4)."""
-    F = as_matrix(F, "F", (3, 3))
+    F = as_up_to_scale(F, "F", (3, 3))
     U, _, Vt = np.linalg.svd(F)
     return normalize_homogeneous(Vt[2]), normalize_homogeneous(U[:, 2])
 
 
 def epipolar_lines(F: npt.ArrayLike, m1: npt.ArrayLike) -> np.ndarray:
-    r"""Lines in image 2 of points of image 1: :math:`l_2 = F m_1`, (N, 3) from (N, 2) pixels."""
-    F = as_matrix(F, "F", (3, 3))
+    r"""Lines in image 2 of points of image 1: :math:`l_2 = F m_1`, (N, 3) from (N, 2) pixels.
+
+    ``F`` is defined up to scale: it is divided by its largest absolute entry first (the lines are those of
+    that ``F``, whatever the magnitude given).
+    """
+    F = as_up_to_scale(F, "F", (3, 3))
     return homogeneous(m1, "m1") @ F.T
 
 
 def epipolar_lines_in_first(F: npt.ArrayLike, m2: npt.ArrayLike) -> np.ndarray:
-    r"""Lines in image 1 of points of image 2: :math:`l_1 = F^T m_2`, (N, 3) from (N, 2) pixels."""
-    F = as_matrix(F, "F", (3, 3))
+    r"""Lines in image 1 of points of image 2: :math:`l_1 = F^T m_2`, (N, 3) from (N, 2) pixels.
+
+    ``F`` is divided by its largest absolute entry first, as in :func:`epipolar_lines`.
+    """
+    F = as_up_to_scale(F, "F", (3, 3))
     return homogeneous(m2, "m2") @ F
 
 
 def epipolar_constraint(F: npt.ArrayLike, m1: npt.ArrayLike, m2: npt.ArrayLike) -> np.ndarray:
-    r"""Algebraic residuals :math:`m_2^T F m_1`, (N,)."""
-    F = as_matrix(F, "F", (3, 3))
+    r"""Algebraic residuals :math:`m_2^T F m_1`, (N,), of ``F`` divided by its largest absolute entry."""
+    F = as_up_to_scale(F, "F", (3, 3))
     h1, h2 = homogeneous(m1, "m1"), homogeneous(m2, "m2")
     if len(h1) != len(h2):
         raise GeometryError(f"m2: expected as many points as m1 ({len(h1)}), got {len(h2)}")
@@ -309,8 +366,8 @@ def epipolar_planes(c1: npt.ArrayLike, c2: npt.ArrayLike, X_world: npt.ArrayLike
     :math:`n = (c_2 - c_1) \times (X - c_1)`, unit norm. Points on the baseline
     give a NaN row (every plane through the baseline contains them).
     """
-    c1 = as_points(c1, "c1", 3)[0]
-    c2 = as_points(c2, "c2", 3)[0]
+    c1 = as_vector(c1, "c1", 3)
+    c2 = as_vector(c2, "c2", 3)
     check_distinct_centres(c1, c2)
     X = as_points(X_world, "X_world", 3)
     n = _epipolar_normals(c1, c2, X.T).T

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import as_points
+from ._validate import as_array, as_points, as_positive, as_up_to_scale_rows
 
 #: A homogeneous point whose last coordinate is below this fraction of its norm is at infinity.
 AT_INFINITY_TOL = 1e-12
@@ -20,24 +20,35 @@ def homogeneous(points: npt.ArrayLike, name: str = "points") -> np.ndarray:
 
 
 def normalize_homogeneous(v: npt.ArrayLike) -> np.ndarray:
-    """Scale homogeneous 3-vectors (3,) or (N, 3): finite -> last coordinate 1, at infinity -> unit norm, w = 0.
+    r"""Scale homogeneous 3-vectors (3,) or (N, 3): finite -> last coordinate 1, at infinity -> unit norm, w = 0.
 
-    Never divides by zero (see ``docs/conventions.md``).
+    .. math:: v \mapsto v / v_3 \quad (|v_3| > \epsilon |v|), \qquad v \mapsto (v_1, v_2, 0) / |v| \quad
+        \text{otherwise},
+
+    with :math:`\epsilon` = ``AT_INFINITY_TOL``. Each vector is defined up to scale and first divided by its
+    largest absolute entry, so any finite magnitude gives the same result; never divides by zero (see
+    ``docs/conventions.md``).
+
+    Raises:
+        GeometryError: ``v`` is not (3,) or (N, 3) finite numbers, or a vector is zero.
     """
-    a = np.array(v, dtype=np.float64)
-    if a.shape == (3,):
-        return _normalize_homogeneous3(*a.tolist())
-    single = a.ndim == 1
-    a = np.atleast_2d(a)
+    single = _is_single(v, "v")
+    a = as_up_to_scale_rows(v, "v", 3)
+    if single:
+        return _normalize_homogeneous3(*a[0].tolist())
     norm = np.linalg.norm(a, axis=1)
     at_inf = np.abs(a[:, 2]) <= AT_INFINITY_TOL * norm
     out = np.empty_like(a)
     finite = ~at_inf
     out[finite] = a[finite] / a[finite, 2:3]
-    safe = np.where(norm[at_inf] > 0, norm[at_inf], 1.0)
-    out[at_inf] = a[at_inf] / safe[:, None]
+    out[at_inf] = a[at_inf] / norm[at_inf, None]  # norm >= 1: the largest entry is +-1
     out[at_inf, 2] = 0.0
-    return out[0] if single else out
+    return out
+
+
+def _is_single(v: npt.ArrayLike, name: str) -> bool:
+    """Whether ``v`` is one flat vector (then results are returned flat); bad input raises naming ``name``."""
+    return as_array(v, name, max_abs=None).ndim == 1
 
 
 def _normalize_homogeneous3(x: float, y: float, z: float) -> np.ndarray:
@@ -50,18 +61,25 @@ def _normalize_homogeneous3(x: float, y: float, z: float) -> np.ndarray:
 
 
 def is_at_infinity(v: npt.ArrayLike) -> np.ndarray | bool:
-    """True where a homogeneous point has (numerically) zero last coordinate."""
-    a = np.atleast_2d(np.asarray(v, dtype=np.float64))
+    r"""True where a homogeneous point (3,) or (N, 3) has (numerically) zero last coordinate,
+    :math:`|v_3| \le \epsilon |v|` with :math:`\epsilon` = ``AT_INFINITY_TOL`` (a bool for a single vector)."""
+    single = _is_single(v, "v")
+    a = as_up_to_scale_rows(v, "v", 3)
     res = np.abs(a[:, 2]) <= AT_INFINITY_TOL * np.linalg.norm(a, axis=1)
-    return bool(res[0]) if np.ndim(v) == 1 else res
+    return bool(res[0]) if single else res
 
 
 def normalize_lines(lines: npt.ArrayLike) -> np.ndarray:
-    """Scale lines (N, 3) ``(a, b, c)`` to ``a^2 + b^2 = 1`` so that ``l . m`` is a distance in pixels.
+    r"""Scale lines (N, 3) ``(a, b, c)`` to :math:`a^2 + b^2 = 1` so that ``l . m`` is a distance in pixels.
 
-    The line at infinity ``(0, 0, c)`` is returned as NaN.
+    Each line is defined up to scale (first divided by its largest absolute entry, so any finite magnitude
+    gives the same result). The line at infinity ``(0, 0, c)``, :math:`|(a, b)| \le \epsilon |(a, b, c)|`, is
+    returned as NaN.
+
+    Raises:
+        GeometryError: ``lines`` is not (3,) or (N, 3) finite numbers, or a line is zero.
     """
-    lines = np.atleast_2d(np.asarray(lines, dtype=np.float64))
+    lines = as_up_to_scale_rows(lines, "lines", 3)
     n = np.hypot(lines[:, 0], lines[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         out = lines / n[:, None]
@@ -80,8 +98,13 @@ def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float) -> tup
 
     and of the candidates inside the rectangle (up to ``eps``) the two extreme
     ones along the line direction :math:`(-b, a)` are kept.
+
+    Raises:
+        GeometryError: ``lines`` is not (N, 3) finite numbers or a line is zero; ``width`` or ``height`` is
+            not a positive number.
     """
-    return _clip_lines(normalize_lines(lines).T, float(width), float(height))
+    L = normalize_lines(lines)
+    return _clip_lines(np.ascontiguousarray(L.T), as_positive(width, "width"), as_positive(height, "height"))
 
 
 def _clip_lines(lines_T: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:

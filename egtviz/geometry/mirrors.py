@@ -31,7 +31,7 @@ from typing import ClassVar, Literal, NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import GeometryError, as_points, as_positive
+from ._validate import MIN_MAGNITUDE, GeometryError, as_array, as_count, as_points, as_positive, as_scalar, row_scales
 
 __all__ = ["HyperbolicMirror", "Mirror", "MirrorHit", "ParabolicMirror"]
 
@@ -45,10 +45,37 @@ class MirrorHit(NamedTuple):
     """(N,) bool: the ray meets the visible sheet inside the rim."""
 
 
+#: Most vertices a mirror mesh or rim polyline may have (a drawing, not a computation).
+MAX_SAMPLES = 1_000_000
+
+
 def _positive_int(value: int, name: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise GeometryError(f"{name}: expected an integer >= {minimum}, got {value!r}")
-    return int(value)
+    return as_count(value, name, minimum=minimum, maximum=MAX_SAMPLES)
+
+
+def _length(value: float, name: str) -> float:
+    """A mirror parameter: positive, and large enough that its square is a normal float."""
+    return as_positive(value, name, min_value=MIN_MAGNITUDE)
+
+
+def _radii(r: npt.ArrayLike) -> np.ndarray:
+    """Distances from the axis: a non-empty array (any shape) of non-negative numbers."""
+    arr = as_array(r, "r", allow_empty=False)
+    if (arr < 0).any():
+        raise GeometryError("r: expected radii >= 0")
+    return arr
+
+
+def _ray_directions(directions: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Directions (N, 3) each divided by its largest entry (a zero direction stays zero), and those scales."""
+    return row_scales(directions, "directions", 3, allow_zero=True)
+
+
+def _rim_tolerance(rim_tol: float) -> float:
+    tol = as_scalar(rim_tol, "rim_tol")
+    if not 0.0 <= tol < 1.0:
+        raise GeometryError(f"rim_tol: expected a relative tolerance in [0, 1), got {tol!r}")
+    return tol
 
 
 def _surface_of_revolution(
@@ -62,6 +89,8 @@ def _surface_of_revolution(
     """
     n_radial = _positive_int(n_radial, "n_radial", 1)
     n_angular = _positive_int(n_angular, "n_angular", 3)
+    if n_radial * n_angular > MAX_SAMPLES:
+        raise GeometryError(f"n_angular: n_radial * n_angular may be at most {MAX_SAMPLES}, got {n_radial * n_angular}")
     r = rim_radius * np.arange(1, n_radial + 1) / n_radial
     phi = 2.0 * np.pi * np.arange(n_angular) / n_angular
     rr, pp = np.meshgrid(r, phi, indexing="ij")  # (n_radial, n_angular)
@@ -105,7 +134,7 @@ class HyperbolicMirror:
         rim_radius: radius of the mirror's rim (> 0); ``None`` means ``2 b``.
 
     Raises:
-        GeometryError: if ``a``, ``b`` or ``rim_radius`` is not positive and finite.
+        GeometryError: if ``a``, ``b`` or ``rim_radius`` is not a finite number in ``[1e-100, 1e100]``.
     """
 
     a: float = 3.0
@@ -118,9 +147,9 @@ class HyperbolicMirror:
     kind: ClassVar[Literal["hyperbolic"]] = "hyperbolic"
 
     def __post_init__(self) -> None:
-        a = as_positive(self.a, "a")
-        b = as_positive(self.b, "b")
-        rim = 2.0 * b if self.rim_radius is None else as_positive(self.rim_radius, "rim_radius")
+        a = _length(self.a, "a")
+        b = _length(self.b, "b")
+        rim = 2.0 * b if self.rim_radius is None else _length(self.rim_radius, "rim_radius")
         object.__setattr__(self, "a", a)
         object.__setattr__(self, "b", b)
         object.__setattr__(self, "rim_radius", rim)
@@ -168,7 +197,7 @@ class HyperbolicMirror:
 
     def profile_z(self, r: npt.ArrayLike) -> np.ndarray:
         r"""Height of the visible sheet at distance ``r`` from the axis: :math:`-e + a\sqrt{1 + r^2/b^2}`."""
-        r = np.asarray(r, dtype=np.float64)
+        r = _radii(r)
         return -self.e + self.a * np.sqrt(1.0 + (r / self.b) ** 2)
 
     def implicit(self, X: npt.ArrayLike) -> np.ndarray:
@@ -207,8 +236,9 @@ class HyperbolicMirror:
             a distance from the axis at most ``rim_radius``. Zero directions and
             the blind cone (above the rim, at or beyond the asymptote) are not hit.
         """
-        d = as_points(directions, "directions", 3)
-        return self._intersect_xyz(d[:, 0], d[:, 1], d[:, 2], rim_tol)
+        d, scale = _ray_directions(directions)
+        lam, hit = self._intersect_xyz(d[:, 0], d[:, 1], d[:, 2], _rim_tolerance(rim_tol))
+        return MirrorHit(lam / scale, hit)
 
     @cached_property
     def _ray_constants(self) -> tuple[float, float, float]:
@@ -290,7 +320,7 @@ class ParabolicMirror:
         rim_radius: radius of the rim (> 0); ``None`` means ``2 h``.
 
     Raises:
-        GeometryError: if ``h`` or ``rim_radius`` is not positive and finite.
+        GeometryError: if ``h`` or ``rim_radius`` is not a finite number in ``[1e-100, 1e100]``.
     """
 
     h: float = 1.0
@@ -301,8 +331,8 @@ class ParabolicMirror:
     kind: ClassVar[Literal["parabolic"]] = "parabolic"
 
     def __post_init__(self) -> None:
-        h = as_positive(self.h, "h")
-        rim = 2.0 * h if self.rim_radius is None else as_positive(self.rim_radius, "rim_radius")
+        h = _length(self.h, "h")
+        rim = 2.0 * h if self.rim_radius is None else _length(self.rim_radius, "rim_radius")
         object.__setattr__(self, "h", h)
         object.__setattr__(self, "rim_radius", rim)
 
@@ -336,7 +366,7 @@ class ParabolicMirror:
 
     def profile_z(self, r: npt.ArrayLike) -> np.ndarray:
         r"""Height of the mirror at distance ``r`` from the axis: :math:`(r^2 - h^2) / (2h)`."""
-        r = np.asarray(r, dtype=np.float64)
+        r = _radii(r)
         return (r**2 - self.h**2) / (2.0 * self.h)
 
     def implicit(self, X: npt.ArrayLike) -> np.ndarray:
@@ -366,8 +396,9 @@ class ParabolicMirror:
             where not ``hit``; ``hit`` true when the ray meets the mirror within
             the rim.
         """
-        d = as_points(directions, "directions", 3)
-        return self._intersect_xyz(d[:, 0], d[:, 1], d[:, 2], rim_tol)
+        d, scale = _ray_directions(directions)
+        lam, hit = self._intersect_xyz(d[:, 0], d[:, 1], d[:, 2], _rim_tolerance(rim_tol))
+        return MirrorHit(lam / scale, hit)
 
     def _intersect_xyz(self, dx: np.ndarray, dy: np.ndarray, dz: np.ndarray, rim_tol: float = 1e-12) -> MirrorHit:
         """:meth:`intersect` of directions given by their coordinates (arrays of any one shape), unchecked."""

@@ -33,7 +33,7 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import DegenerateConfigurationError, GeometryError, as_points, as_vector
+from ._validate import DegenerateConfigurationError, GeometryError, as_count, as_points, as_up_to_scale_rows
 from .catadioptric import UNIFIED_FLIP, CatadioptricCamera
 from .mirrors import Mirror
 from .poses import skew
@@ -51,6 +51,9 @@ __all__ = [
 ]
 
 _DEGENERATE_REL = 1e-10
+
+#: Most samples per great circle (a drawing: a few hundred are plenty).
+MAX_CONIC_SAMPLES = 100_000
 
 
 def _check_camera(camera: object, name: str) -> CatadioptricCamera:
@@ -212,10 +215,11 @@ def conic_from_plane(camera: CatadioptricCamera, n_mirror: npt.ArrayLike) -> np.
         n_mirror: (N, 3) plane normals in the mirror frame (any length).
 
     Returns:
-        (N, 3, 3) conics; NaN for zero normals.
+        (N, 3, 3) conics; NaN for zero normals. A normal is defined up to scale (each is divided by its
+        largest entry first, so any finite magnitude gives the same conic).
     """
     camera = _check_camera(camera, "camera")
-    return _conics_from_normals(camera, as_points(n_mirror, "n_mirror", 3))
+    return _conics_from_normals(camera, as_up_to_scale_rows(n_mirror, "n_mirror", 3, allow_zero=True))
 
 
 def _epipolar_normals(cam1: CatadioptricCamera, cam2: CatadioptricCamera, X: np.ndarray) -> np.ndarray:
@@ -261,12 +265,15 @@ def epipolar_conics(
 def biconic_normals(d_current: npt.ArrayLike, d_desired: npt.ArrayLike) -> np.ndarray:
     r"""Normals :math:`n = d_c \times d_d` (N, 3) of the bi-conic planes; zero rows where the rays are parallel.
 
+    Directions are defined up to scale: each is divided by its largest entry first (a zero direction gives a
+    zero normal).
+
     Args:
         d_current: (N, 3) current viewing directions, mirror frame.
         d_desired: (N, 3) desired viewing directions, mirror frame.
     """
-    dc = as_points(d_current, "d_current", 3)
-    dd = as_points(d_desired, "d_desired", 3)
+    dc = as_up_to_scale_rows(d_current, "d_current", 3, allow_zero=True)
+    dd = as_up_to_scale_rows(d_desired, "d_desired", 3, allow_zero=True)
     if dc.shape != dd.shape:
         raise GeometryError(f"d_desired: expected shape {dc.shape} like d_current, got {dd.shape}")
     n = np.cross(dc, dd)
@@ -367,9 +374,7 @@ def _circle_arcs(camera: CatadioptricCamera, normals_T: np.ndarray, n: int) -> l
     need not be unit or finite (zero and NaN normals get no arc). No other checks
     (internal: the viewer samples hundreds of circles per drag).
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
-        raise GeometryError(f"n: expected an integer >= 3, got {n!r}")
-    n = int(n)
+    n = as_count(n, "n", minimum=3, maximum=MAX_CONIC_SAMPLES)
     out: list[tuple[np.ndarray, ...]] = [()] * normals_T.shape[1]
     norm = np.sqrt(np.add.reduce(normals_T * normals_T, axis=0))
     good = np.flatnonzero(np.isfinite(norm) & (norm > 0))
@@ -448,10 +453,12 @@ def sample_plane_conic(camera: CatadioptricCamera, n_mirror: npt.ArrayLike, n: i
         GeometryError: on a zero normal.
     """
     camera = _check_camera(camera, "camera")
-    normal = as_vector(n_mirror, "n_mirror", 3)
-    if np.linalg.norm(normal) == 0.0:
+    normal = as_up_to_scale_rows(n_mirror, "n_mirror", 3, allow_zero=True)
+    if len(normal) != 1:
+        raise GeometryError(f"n_mirror: expected one normal (3,), got {len(normal)}")
+    if not normal.any():
         raise GeometryError("n_mirror: a zero normal defines no plane")
-    return _sample_circles(camera, normal[None, :], n)[0]
+    return _sample_circles(camera, normal, n)[0]
 
 
 def sample_plane_conics(
@@ -469,7 +476,7 @@ def sample_plane_conics(
         a zero normal or a plane that misses the visible mirror.
     """
     camera = _check_camera(camera, "camera")
-    return _sample_circles(camera, as_points(n_mirror, "n_mirror", 3), n)
+    return _sample_circles(camera, as_up_to_scale_rows(n_mirror, "n_mirror", 3, allow_zero=True), n)
 
 
 def sample_epipolar_conics(

@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import GeometryError, as_calibration, as_points, as_positive
+from ._validate import MAX_IMAGE_SIZE, GeometryError, as_calibration, as_count, as_points, as_positive, as_scalar, as_vector
 from .poses import Pose
 
 
@@ -42,20 +42,24 @@ class Intrinsics:
     """Image height in pixels."""
 
     def __post_init__(self) -> None:
-        as_positive(self.focal_length, "focal_length")
-        ku, kv = (as_positive(k, "pixels_per_metre") for k in self.pixels_per_metre)
+        object.__setattr__(self, "focal_length", as_positive(self.focal_length, "focal_length"))
+        ku, kv = as_vector(self.pixels_per_metre, "pixels_per_metre", 2).tolist()
+        if not (ku > 0 and kv > 0):
+            raise GeometryError(f"pixels_per_metre: expected two positive numbers, got ({ku!r}, {kv!r})")
         object.__setattr__(self, "pixels_per_metre", (ku, kv))
-        u0, v0 = (float(c) for c in self.principal_point)
-        if not (np.isfinite(u0) and np.isfinite(v0)):
-            raise GeometryError("principal_point: expected finite (u0, v0)")
+        u0, v0 = as_vector(self.principal_point, "principal_point", 2).tolist()
         object.__setattr__(self, "principal_point", (u0, v0))
-        if not np.isfinite(self.skew):
-            raise GeometryError("skew: expected a finite number")
+        object.__setattr__(self, "skew", as_scalar(self.skew, "skew"))
         for name in ("width", "height"):
-            value = getattr(self, name)
-            if int(value) != value or value < 1:
-                raise GeometryError(f"{name}: expected a positive whole number of pixels, got {value!r}")
-            object.__setattr__(self, name, int(value))
+            object.__setattr__(self, name, as_count(getattr(self, name), name, minimum=1, maximum=MAX_IMAGE_SIZE))
+        try:
+            as_calibration(self.K, "K")
+        except GeometryError as exc:
+            # Each field is fine on its own; together they make no usable K (a focal length of 1e-300 m).
+            raise GeometryError(
+                f"focal_length, pixels_per_metre, skew: K = [[{self.K[0, 0]:.3g}, {self.skew:.3g}, ...], "
+                f"[0, {self.K[1, 1]:.3g}, ...], [0, 0, 1]] cannot be inverted ({exc})"
+            ) from None
 
     @classmethod
     def from_K(cls, K: npt.ArrayLike, width: int = 640, height: int = 480, focal_length: float = 1.0) -> Intrinsics:
@@ -111,6 +115,12 @@ class PinholeCamera:
 
     pose: Pose = dataclasses.field(default_factory=Pose)
     intrinsics: Intrinsics = dataclasses.field(default_factory=Intrinsics)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.pose, Pose):
+            raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
+        if not isinstance(self.intrinsics, Intrinsics):
+            raise GeometryError(f"intrinsics: expected an Intrinsics, got {type(self.intrinsics).__name__}")
 
     @property
     def K(self) -> np.ndarray:
@@ -200,8 +210,7 @@ class PinholeCamera:
     def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
         r"""Unit world directions (N, 3) of the rays through ``pixels`` (N, 2): :math:`d \propto R K^{-1} m`."""
         m = as_points(pixels, "pixels", 2)
-        d_cam = np.linalg.solve(self.K, np.column_stack([m, np.ones(len(m))]).T).T
-        d = d_cam @ self.pose.R.T
+        d = np.column_stack([m, np.ones(len(m))]) @ self._R_K_inv.T
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
     def frustum_corners(self, depth: float = 1.0) -> np.ndarray:
@@ -212,12 +221,12 @@ class PinholeCamera:
         depth = as_positive(depth, "depth")
         w, h = self.intrinsics.width, self.intrinsics.height
         corners = np.array([[0.0, 0.0, 1.0], [w, 0.0, 1.0], [w, h, 1.0], [0.0, h, 1.0]])
-        d_cam = np.linalg.solve(self.K, corners.T).T
+        d_cam = corners @ self._K_inv.T
         d_cam = d_cam * (depth / d_cam[:, 2:3])
         return self.pose.to_world(d_cam)
 
     def image_to_world(self, pixels: npt.ArrayLike, depth: float = 1.0) -> np.ndarray:
         """World points (N, 3) of ``pixels`` (N, 2) on the plane ``z_c = depth`` (for drawing the image in 3D)."""
         m = as_points(pixels, "pixels", 2)
-        d_cam = np.linalg.solve(self.K, np.column_stack([m, np.ones(len(m))]).T).T
+        d_cam = np.column_stack([m, np.ones(len(m))]) @ self._K_inv.T
         return self.pose.to_world(d_cam * as_positive(depth, "depth"))

@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
-from ._validate import GeometryError, as_matrix, as_points, as_rotation, as_vector
+from ._validate import GeometryError, as_matrix, as_points, as_rotation, as_scalar, as_vector
 
 
 def rotx(angle: float) -> np.ndarray:
@@ -24,7 +24,7 @@ def rotx(angle: float) -> np.ndarray:
 
     .. math:: R_x(a) = \begin{bmatrix}1&0&0\\0&\cos a&-\sin a\\0&\sin a&\cos a\end{bmatrix}
     """
-    c, s = np.cos(angle), np.sin(angle)
+    c, s = _cos_sin(angle)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
@@ -33,7 +33,7 @@ def roty(angle: float) -> np.ndarray:
 
     .. math:: R_y(a) = \begin{bmatrix}\cos a&0&\sin a\\0&1&0\\-\sin a&0&\cos a\end{bmatrix}
     """
-    c, s = np.cos(angle), np.sin(angle)
+    c, s = _cos_sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
@@ -42,8 +42,14 @@ def rotz(angle: float) -> np.ndarray:
 
     .. math:: R_z(a) = \begin{bmatrix}\cos a&-\sin a&0\\\sin a&\cos a&0\\0&0&1\end{bmatrix}
     """
-    c, s = np.cos(angle), np.sin(angle)
+    c, s = _cos_sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _cos_sin(angle: float) -> tuple[float, float]:
+    """``(cos a, sin a)`` of a checked angle (radians, a finite real number)."""
+    a = as_scalar(angle, "angle")
+    return math.cos(a), math.sin(a)
 
 
 #: The rotation EGT's ``f_Rt2H`` folds in: a pin-hole camera "with no rotation"
@@ -120,6 +126,8 @@ class Pose:
 
     def compose(self, other: Pose) -> Pose:
         """``self @ other``: ``other`` expressed in this frame, returned in the world."""
+        if not isinstance(other, Pose):
+            raise GeometryError(f"other: expected a Pose, got {type(other).__name__}")
         return Pose(self.R @ other.R, self.R @ other.t + self.t)
 
     def inverse(self) -> Pose:
@@ -183,11 +191,23 @@ def _quat_wxyz(R: np.ndarray) -> np.ndarray:
 
 
 def matrix_from_quat_wxyz(q: npt.ArrayLike) -> np.ndarray:
-    """Rotation matrix of a quaternion ``(w, x, y, z)``; it need not be unit-norm."""
-    w, x, y, z = as_vector(q, "q", 4).tolist()
-    n2 = w * w + x * x + y * y + z * z
-    if n2 < 1e-24:
+    r"""Rotation matrix of a quaternion :math:`q = (w, x, y, z)`; it need not be unit-norm.
+
+    ``q`` is defined up to scale: it is first divided by its largest absolute entry (any finite magnitude
+    gives the same rotation), then with :math:`s = 2 / |q|^2`
+
+    .. math:: R = \begin{bmatrix} 1 - s(y^2 + z^2) & s(xy - wz) & s(xz + wy) \\
+        s(xy + wz) & 1 - s(x^2 + z^2) & s(yz - wx) \\ s(xz - wy) & s(yz + wx) & 1 - s(x^2 + y^2) \end{bmatrix}.
+
+    Raises:
+        GeometryError: ``q`` is not 4 finite numbers, or is zero.
+    """
+    q = as_vector(q, "q", 4, max_abs=None)
+    top = max(abs(c) for c in q.tolist())
+    if top == 0.0:
         raise GeometryError("q: a zero quaternion is not a rotation")
+    w, x, y, z = (c / top for c in q.tolist())
+    n2 = w * w + x * x + y * y + z * z  # >= 1: the largest entry is +-1
     # The textbook formula in plain floats (scipy's Rotation costs ~50 us a call; this runs on every gizmo event).
     s = 2.0 / n2
     return np.array([
@@ -210,6 +230,7 @@ def egt_rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
     Feed the result to :meth:`Pose.from_egt` (``f_Rt2H``); ``rotoy(pi/4)`` is a
     yaw of 45 degrees.
     """
+    yaw, pitch, roll = as_scalar(yaw, "yaw"), as_scalar(pitch, "pitch"), as_scalar(roll, "roll")
     return roty(yaw) @ rotx(pitch) @ rotz(roll)
 
 
