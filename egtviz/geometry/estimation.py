@@ -1,7 +1,10 @@
 r"""Estimating the fundamental matrix from point correspondences.
 
-EGT's ``f_Festim`` (reference, section 6) offers three estimators; this module
-has them and the robust estimators and error measures a lesson needs:
+EGT's ``f_Festim`` offers the first three estimators below and EGT 2.0 adds
+robust ones; this module has the linear and iterative estimators, RANSAC and
+LMedS, and the error measures a lesson needs (EGT 2.0's M-estimator and
+MAPSAC, and the robust essential matrix from rays, are in
+:mod:`egtviz.geometry.robust`):
 
 * :func:`fundamental_8point`: the linear, unnormalised 8-point algorithm
   (Hartley & Zisserman 2nd ed., section 11.1).
@@ -12,12 +15,13 @@ has them and the robust estimators and error measures a lesson needs:
 * :func:`fundamental_7point`: the minimal 7-point solver (H&Z section 11.1.2).
 * :func:`fundamental_ransac`, :func:`fundamental_lmeds`: robust estimation
   from 7-point samples (H&Z section 11.6, Algorithm 11.4; adaptive
-  sampling, Algorithm 4.5).
+  sampling, Algorithm 4.5). LMedS works from 8 points on.
 
 Essential matrices (H&Z section 9.6; the E <-> F conversions live in
 :mod:`egtviz.geometry.epipolar`): :func:`decompose_essential`,
 :func:`pose_from_essential`; :func:`essential_from_correspondences`
-estimates E from calibrated correspondences.
+estimates E from calibrated correspondences, :func:`essential_from_rays` from
+corresponding rays (bearing vectors, mirror points).
 
 Conventions (``docs/conventions.md``): points are rows, pixels ``(N, 2)``;
 :math:`m_2^T F m_1 = 0`; the pose between the cameras maps camera-1
@@ -40,14 +44,20 @@ from ._validate import (
     DegenerateConfigurationError,
     GeometryError,
     as_calibration,
-    as_matrix,
+    as_count,
+    as_positive,
     as_points,
+    as_scalar,
+    as_up_to_scale,
+    as_up_to_scale_rows,
+    short_repr,
 )
 
 __all__ = [
     "RobustEstimate",
     "decompose_essential",
     "essential_from_correspondences",
+    "essential_from_rays",
     "fundamental_7point",
     "fundamental_8point",
     "fundamental_lmeds",
@@ -73,6 +83,14 @@ _MIN_REFIT = 8
 _BATCH_FIRST = 100
 _BATCH_MIN = 16
 _BATCH_MAX = 256
+# Smallest mean distance of the points from their centroid that F can be computed for.
+_MIN_SPREAD = 1e-100
+# Largest pixel coordinate, in absolute value, the unnormalised 8-point algorithm can solve (and
+# its inverse the smallest largest one): its design matrix mixes u^2, u and 1, and beyond these
+# the rounding of one kind of term swamps the others.
+_MAX_RAW_PIXEL = 1e6
+# LMedS's smallest scale estimate, relative to the spread of the points.
+_SIGMA_FLOOR = 1e-9
 # Pre-emptive scoring: subset size, and hypotheses per batch scored on all points.
 _SUBSET = 100
 _KEEP = 4
@@ -80,14 +98,17 @@ _KEEP = 4
 
 @dataclass(frozen=True, eq=False)
 class RobustEstimate:
-    """Result of :func:`fundamental_ransac` or :func:`fundamental_lmeds`."""
+    """Result of every robust estimator: :func:`fundamental_ransac`, :func:`fundamental_lmeds` and those of
+    :mod:`egtviz.geometry.robust` (M-estimator, MAPSAC, the essential matrix from rays)."""
 
     F: np.ndarray
-    """(3, 3) fundamental matrix, rank 2, unit Frobenius norm, ``m2^T F m1 = 0``."""
+    """(3, 3) fundamental matrix, rank 2, unit Frobenius norm, ``m2^T F m1 = 0`` (for the estimator from
+    rays, the essential matrix, ``d2^T E d1 = 0``)."""
     inliers: np.ndarray
     """(N,) bool mask of the correspondences consistent with ``F``."""
     iterations: int
-    """Number of 7-point samples drawn before the adaptive bound stopped the search."""
+    """Number of minimal samples drawn before the adaptive bound stopped the search (for the M-estimator,
+    the number of reweighting iterations)."""
 
 
 # --------------------------------------------------------------------------- helpers
@@ -124,8 +145,14 @@ def _hartley(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray, fl
     sq = P * P
     mean_dist = np.add.reduce(np.sqrt(sq[:, 0] + sq[:, 1]), axis=1) / n
     for k, name in enumerate(("U1", "U2")):
-        if not mean_dist[k] > 1e-9 * max(1.0, abs(c[2 * k]), abs(c[2 * k + 1])):
+        if not mean_dist[k] > 1e-9 * max(abs(c[2 * k]), abs(c[2 * k + 1])) or mean_dist[k] == 0.0:
             raise DegenerateConfigurationError(f"{name}: all points coincide, F is undefined")
+        if mean_dist[k] < _MIN_SPREAD:
+            # F's entries scale as 1 / spread^2 against F[2, 2]: beyond this it is not representable.
+            raise GeometryError(
+                f"{name}: the points spread over {mean_dist[k]:.3g} only; F cannot be computed "
+                f"below a spread of {_MIN_SPREAD:.0e} (rescale the coordinates)"
+            )
     s1, s2 = math.sqrt(2.0) / mean_dist
     P[0] *= s1
     P[1] *= s2
@@ -151,8 +178,8 @@ def _design(h1: np.ndarray, h2: np.ndarray) -> np.ndarray:
     return (h2[:, None, :] * h1[None, :, :]).reshape(9, h1.shape[1])
 
 
-def _null_vector_normal(At: np.ndarray) -> np.ndarray:
-    """Unit ``f`` minimising ``|A f|`` from the 9x9 normal matrix; raise if ``rank A < 8``."""
+def _null_vector_normal(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
+    """Unit ``f`` minimising ``|A f|`` from the 9x9 normal matrix; raise naming ``names`` if ``rank A < 8``."""
     M = At @ At.T
     # LAPACK directly: numpy.linalg's wrapper costs more than a 9x9 eigenproblem.
     w, v, info = _lapack.dsyevd(M)
@@ -160,7 +187,7 @@ def _null_vector_normal(At: np.ndarray) -> np.ndarray:
         w, v = np.linalg.eigh(M)
     if w[1] <= _RANK_TOL_EIG * w[-1]:
         raise DegenerateConfigurationError(
-            "U1, U2: degenerate configuration, the design matrix has rank < 8 "
+            f"{names}: degenerate configuration, the design matrix has rank < 8 "
             "(repeated, collinear or coplanar points?)"
         )
     return v[:, 0]
@@ -176,6 +203,7 @@ def _rank2(F: np.ndarray) -> np.ndarray:
 
 def _canonical(F: np.ndarray) -> np.ndarray:
     """Unit Frobenius norm, largest-magnitude entry positive."""
+    F = F / np.abs(F).max()  # first: the sum of squares in the norm must not overflow
     F = F / np.linalg.norm(F)
     if F.flat[np.argmax(np.abs(F))] < 0:
         F = -F
@@ -327,11 +355,21 @@ def fundamental_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.ndarray:
         norm, largest-magnitude entry positive.
 
     Raises:
-        GeometryError: bad shapes, NaN/inf, ``N < 8`` or mismatched ``N``.
+        GeometryError: bad types or shapes, NaN/inf, ``N < 8``, mismatched
+            ``N``, or a largest pixel coordinate outside ``[1e-6, 1e6]`` in
+            absolute value (the unnormalised system cannot be solved there).
         DegenerateConfigurationError: coincident points or a design matrix of
             rank below 8 (e.g. collinear or coplanar scene points).
     """
     u1, u2 = _pair(U1, U2, 8)
+    for u, name in ((u1, "U1"), (u2, "U2")):
+        top = float(np.abs(u).max())
+        if not 1.0 / _MAX_RAW_PIXEL <= top <= _MAX_RAW_PIXEL:
+            raise GeometryError(
+                f"{name}: pixel coordinates up to {top:.3g} in absolute value cannot be solved by the "
+                f"unnormalised 8-point algorithm (the largest must be within [{1.0 / _MAX_RAW_PIXEL:.0e}, "
+                f"{_MAX_RAW_PIXEL:.0e}]); fundamental_normalized_8point solves them"
+            )
     # The rank test is done in normalised coordinates, where it is meaningful.
     _, n1, _, _, n2, _ = _hartley(u1, u2)
     _null_vector_normal(_design(n1, n2))
@@ -401,6 +439,84 @@ def essential_from_correspondences(
     E0 = fundamental_normalized_8point(x1[:, :2] / x1[:, 2:], x2[:, :2] / x2[:, 2:])
     U, _, Vt = np.linalg.svd(E0)
     return _canonical(U @ np.diag([1.0, 1.0, 0.0]) @ Vt)
+
+
+def _rays_pair(d1: npt.ArrayLike, d2: npt.ArrayLike, min_count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two ``(N, 3)`` ray arrays (any nonzero length each) with the same ``N``, scaled to unit rows."""
+    r1 = as_up_to_scale_rows(d1, "d1", 3, min_count=min_count)
+    r2 = as_up_to_scale_rows(d2, "d2", 3, min_count=min_count)
+    if r1.shape[0] != r2.shape[0]:
+        raise GeometryError(f"d1, d2: expected the same number of rays, got {r1.shape[0]} and {r2.shape[0]}")
+    return (
+        r1 / np.linalg.norm(r1, axis=1, keepdims=True),
+        r2 / np.linalg.norm(r2, axis=1, keepdims=True),
+    )
+
+
+def _essential_projection(M: np.ndarray) -> np.ndarray:
+    r"""Nearest essential matrices :math:`U \operatorname{diag}(1, 1, 0) V^T / \sqrt 2` of a stack ``(..., 3, 3)``."""
+    U, _, Vt = np.linalg.svd(M)
+    return (U[..., :, :2] @ Vt[..., :2, :]) / math.sqrt(2.0)
+
+
+def _ray_sampson(Es: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    r"""Squared angular Sampson distances ``(M, N)`` (radians squared) of unit rays under ``M`` matrices ``Es``.
+
+    The first-order distance to the constraint :math:`d_2^T E d_1 = 0` when each unit ray moves on its
+    sphere: the gradients are projected on the tangent planes,
+    :math:`g_1 = (I - d_1 d_1^T) E^T d_2`, :math:`g_2 = (I - d_2 d_2^T) E d_1`, and
+    :math:`\delta = (d_2^T E d_1)^2 / (|g_1|^2 + |g_2|^2)`.
+    """
+    Ed1 = np.einsum("mij,nj->mni", Es, r1)  # (M, N, 3)
+    Etd2 = np.einsum("mji,nj->mni", Es, r2)
+    e = np.einsum("mni,ni->mn", Ed1, r2)
+    e1 = np.einsum("mni,ni->mn", Etd2, r1)  # equal to e; used to project Etd2
+    g1 = np.einsum("mni,mni->mn", Etd2, Etd2) - e1 * e1
+    g2 = np.einsum("mni,mni->mn", Ed1, Ed1) - e * e
+    return e * e / np.maximum(g1 + g2, 1e-300)
+
+
+def _essential_linear(r1: np.ndarray, r2: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Linear E of unit rays (rows), optionally with row weights; unit Frobenius norm, canonical sign."""
+    At = _design(r1.T, r2.T)
+    if weights is not None:
+        At = At * np.sqrt(weights)
+    E0 = _null_vector_normal(At, "d1, d2").reshape(3, 3)
+    return _canonical(_essential_projection(E0))
+
+
+def essential_from_rays(d1: npt.ArrayLike, d2: npt.ArrayLike) -> np.ndarray:
+    r"""Essential matrix from corresponding rays (H&Z 2nd ed., sections 9.6 and 11.1; EGT's ``f_panEestim``).
+
+    A ray is any direction from a camera's centre (a bearing vector, a point
+    on a mirror seen from its focus, :math:`K^{-1} m` for a pin-hole camera);
+    each row is scaled to unit length, which conditions the linear system as
+    Hartley's normalisation does for pixels. Each correspondence gives one
+    equation in :math:`e = \mathrm{vec}(E)`,
+
+    .. math:: d_2^T E d_1 = (d_2^T \otimes d_1^T)\, e = 0, \qquad
+              \hat e = \arg\min_{\|e\| = 1} \|A e\| ,
+
+    and :math:`\hat E = U \Sigma V^T` is projected onto the essential
+    matrices (H&Z Result 9.17): :math:`E = U \operatorname{diag}(1, 1, 0) V^T / \sqrt 2`.
+    With :math:`X_2 = R X_1 + t` between the two frames, :math:`E \simeq [t]_\times R`.
+
+    Args:
+        d1: ``(N, 3)`` rays in frame 1 (any nonzero lengths), ``N >= 8``.
+        d2: ``(N, 3)`` corresponding rays in frame 2.
+
+    Returns:
+        ``(3, 3)`` ``E`` with :math:`d_2^T E d_1 = 0`, singular values
+        :math:`(1/\sqrt 2, 1/\sqrt 2, 0)` (unit Frobenius norm), largest-magnitude
+        entry positive.
+
+    Raises:
+        GeometryError: bad types or shapes, NaN/inf, a zero ray, ``N < 8`` or mismatched ``N``.
+        DegenerateConfigurationError: a design matrix of rank below 8 (e.g. the
+            scene points and both centres on one plane, or repeated rays).
+    """
+    r1, r2 = _rays_pair(d1, d2, 8)
+    return _essential_linear(r1, r2)
 
 
 def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]:
@@ -596,7 +712,7 @@ def fundamental_sampson(
     if F0 is None:
         Fn0 = _rank2(_null_vector_normal(At).reshape(3, 3))
     else:
-        F0 = as_matrix(F0, "F0", (3, 3))
+        F0 = as_up_to_scale(F0, "F0", (3, 3))
         Fn0 = np.linalg.inv(T2).T @ F0 @ np.linalg.inv(T1)
         sv = np.linalg.svd(Fn0, compute_uv=False)
         if sv[1] <= 1e-12 * sv[0]:
@@ -609,16 +725,20 @@ def fundamental_sampson(
 # --------------------------------------------------------------------------- robust estimation
 
 
-def _check_robust_args(confidence: float, max_iterations: int) -> None:
-    if not (0.0 < float(confidence) < 1.0):
-        raise GeometryError(f"confidence: expected a number in (0, 1), got {confidence!r}")
-    if int(max_iterations) != max_iterations or max_iterations < 1:
-        raise GeometryError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
+def _check_robust_args(confidence: object, max_iterations: object, seed: object) -> tuple[float, int, int | None]:
+    """The options shared by the sampling estimators, validated: ``(confidence, max_iterations, seed)``."""
+    conf = as_scalar(confidence, "confidence")
+    if not 0.0 < conf < 1.0:
+        raise GeometryError(f"confidence: expected a number in (0, 1), got {short_repr(confidence)}")
+    iters = as_count(max_iterations, "max_iterations")
+    if seed is not None and (isinstance(seed, bool | np.bool_) or not isinstance(seed, int | np.integer) or seed < 0):
+        raise GeometryError(f"seed: expected None or a non-negative integer, got {short_repr(seed)}")
+    return conf, iters, None if seed is None else int(seed)
 
 
-def _iteration_bound(inlier_ratio: float, confidence: float) -> float:
-    r"""Adaptive number of samples (H&Z Algorithm 4.5): :math:`\log(1-p) / \log(1 - w^7)`."""
-    p = min(max(inlier_ratio, 0.0), 1.0) ** 7
+def _iteration_bound(inlier_ratio: float, confidence: float, size: int = 7) -> float:
+    r"""Adaptive number of samples (H&Z Algorithm 4.5): :math:`\log(1-p) / \log(1 - w^s)`, sample size ``s``."""
+    p = min(max(inlier_ratio, 0.0), 1.0) ** size
     if p >= 1.0 - 1e-15:
         return 1.0
     if p <= 1e-300:
@@ -626,14 +746,14 @@ def _iteration_bound(inlier_ratio: float, confidence: float) -> float:
     return math.ceil(math.log(1.0 - confidence) / math.log1p(-p))
 
 
-def _sample(rng: np.random.Generator, n: int, k: int) -> np.ndarray:
-    """``k`` samples of 7 distinct indices in ``range(n)``, ``(k, 7)``."""
+def _sample(rng: np.random.Generator, n: int, k: int, size: int = 7) -> np.ndarray:
+    """``k`` samples of ``size`` distinct indices in ``range(n)``, ``(k, size)``."""
     if n < 64:
-        return np.argpartition(rng.random((k, n)), 7, axis=1)[:, :7]
+        return np.argpartition(rng.random((k, n)), min(size, n - 1), axis=1)[:, :size]
     out = []
     got = 0
     while got < k:
-        draw = rng.integers(0, n, size=(k + 8, 7))
+        draw = rng.integers(0, n, size=(k + 8, size))
         srt = np.sort(draw, axis=1)
         ok = np.all(srt[:, 1:] != srt[:, :-1], axis=1)
         out.append(draw[ok])
@@ -662,24 +782,32 @@ def _seven_point_batch(A7: np.ndarray) -> np.ndarray:
 
 
 class _Scorer:
-    """Cost and inlier rule of RANSAC (truncated quadratic, MSAC) or LMedS (median)."""
+    """Cost and inlier rule: truncated quadratic (RANSAC's MSAC cost, MAPSAC) or LMedS's order statistic."""
 
-    def __init__(self, mode: str, th2: float, n: int) -> None:
+    def __init__(self, mode: str, th2: float, n: int, floor2: float) -> None:
         self.mode = mode
         self.th2 = th2
-        # LMedS: inlier if d <= (2.5 sigma)^2, sigma = 1.4826 (1 + 5 / (N - 7)) sqrt(median d).
+        # LMedS: inlier if d <= (2.5 sigma)^2, sigma = 1.4826 (1 + 5 / (N - 7)) sqrt(d_(h)).
         self.lmeds_scale = (2.5 * 1.4826 * (1.0 + 5.0 / max(n - 7, 1))) ** 2
+        # Rounding makes the residuals of exact data about 1e-15 of the point spread, never exactly zero;
+        # the floor keeps sigma above that, and far below any real noise.
+        self.floor2 = floor2
 
     def cost(self, d: np.ndarray) -> np.ndarray:
-        if self.mode == "ransac":
+        if self.mode != "lmeds":
             return np.minimum(d, self.th2).sum(axis=-1)
-        k = d.shape[-1] // 2
-        return np.partition(d, k, axis=-1)[..., k]
+        # The order statistic h = floor(n / 2) + 4 of n residuals (Rousseeuw and Leroy's
+        # floor(n / 2) + floor((p + 1) / 2), p = 7 parameters), 0-based below: the 7 sample points fit
+        # exactly, so a plain median would fall among them for n < 14 and read a zero scale; d_(h) is
+        # the median of the other n - 7.
+        n = d.shape[-1]
+        h = min(n - 1, n // 2 + 3)
+        return np.partition(d, h, axis=-1)[..., h]
 
     def inliers(self, d: np.ndarray, cost: float) -> np.ndarray:
-        if self.mode == "ransac":
+        if self.mode != "lmeds":
             return d < self.th2
-        return d <= self.lmeds_scale * max(cost, 1e-24)
+        return d <= self.lmeds_scale * max(cost, self.floor2)
 
 
 def _robust(
@@ -693,14 +821,15 @@ def _robust(
     seed: int | None,
 ) -> RobustEstimate:
     u1, u2 = _pair(U1, U2, _MIN_REFIT)
-    _check_robust_args(confidence, max_iterations)
+    confidence, max_iterations, seed = _check_robust_args(confidence, max_iterations, seed)
     N = u1.shape[0]
     T1, n1, s1, T2, n2, s2 = _hartley(u1, u2)
     At = _design(n1, n2)
     _null_vector_normal(At)  # all the data degenerate (e.g. a coplanar scene seen twice): no F to find
     A = At.T  # rows of the design matrix, for gathering samples
     rng = np.random.default_rng(seed)
-    scorer = _Scorer(mode, threshold * threshold, N)
+    # Scale floor of LMedS: 1e-9 of the larger point spread (mean distance to the centroid, 1 / s).
+    scorer = _Scorer(mode, threshold * threshold, N, (_SIGMA_FLOOR / min(s1, s2)) ** 2)
     # Pre-emptive scoring: every hypothesis is scored on a fixed random subset,
     # only the best few of each batch on all the points.
     sub = np.sort(rng.choice(N, _SUBSET, replace=False)) if N > 2 * _SUBSET else None
@@ -770,14 +899,20 @@ def _robust(
         raise DegenerateConfigurationError(
             f"U1, U2: the best model has only {int(sel.sum())} inliers, at least {_MIN_REFIT} are needed"
         )
-    # Sampson refinement, made robust by reweighting passes (one for RANSAC,
-    # two for LMedS, whose band is looser) with Cauchy weights
-    # 1 / (1 + d / c^2), c = 2 threshold (RANSAC) or 2 sigma (LMedS). Tighter
+    # Sampson refinement. RANSAC and LMedS make it robust by reweighting passes
+    # (one for RANSAC, two for LMedS, whose band is looser) with Cauchy weights
+    # 1 / (1 + d / c^2), c = 2 threshold (RANSAC) or 2 sigma (LMedS); tighter
     # weights tie the fit to the starting F (the same bias as truncation).
-    c2 = 4.0 * threshold**2 if mode == "ransac" else 4.0 * scorer.lmeds_scale / 2.5**2 * float(scorer.cost(d))
+    # MAPSAC refines the plain Sampson cost of its inliers (Torr's maximum
+    # likelihood step), twice, the inliers recomputed in between.
+    if mode == "lmeds":
+        c2 = 4.0 * scorer.lmeds_scale / 2.5**2 * max(float(scorer.cost(d)), scorer.floor2)
+    else:
+        c2 = 4.0 * threshold**2
     for _ in range(1 if mode == "ransac" else 2):
+        weights = None if mode == "mapsac" else 1.0 / (1.0 + d[sel] / max(c2, 1e-300))
         # A relative cost change of 1e-6 is far below the noise a robust fit works with.
-        Fn = _refine_sampson(Fn, At[:, sel], s1, s2, 1.0 / (1.0 + d[sel] / max(c2, 1e-24)), tol=1e-6)
+        Fn = _refine_sampson(Fn, At[:, sel], s1, s2, weights, tol=1e-6)
         new, d = support(Fn, widen)
         if new.sum() < _MIN_REFIT:
             break
@@ -832,9 +967,7 @@ def fundamental_ransac(
         GeometryError: bad shapes, NaN/inf, ``N < 8``, mismatched ``N`` or bad options.
         DegenerateConfigurationError: coincident points, or fewer than 8 inliers.
     """
-    thr = float(threshold)
-    if not (math.isfinite(thr) and thr > 0):
-        raise GeometryError(f"threshold: expected a positive number of pixels, got {threshold!r}")
+    thr = as_positive(threshold, "threshold")
     return _robust(
         U1, U2, mode="ransac", threshold=thr, confidence=confidence, max_iterations=max_iterations, seed=seed
     )
@@ -886,7 +1019,7 @@ def fundamental_lmeds(
 
 
 def _lines_and_error(F: npt.ArrayLike, U1: npt.ArrayLike, U2: npt.ArrayLike):
-    Fm = as_matrix(F, "F", (3, 3))
+    Fm = as_up_to_scale(F, "F", (3, 3))
     u1, u2 = _pair(U1, U2, 1)
     h1 = _homogeneous(u1)
     h2 = _homogeneous(u2)
@@ -969,16 +1102,16 @@ def reprojection_error(
         plane (no image) and for a NaN row of ``X`` (a point at infinity from
         :func:`~egtviz.geometry.triangulation.triangulate_linear`).
     """
-    P1 = as_matrix(P1, "P1", (3, 4))
-    P2 = as_matrix(P2, "P2", (3, 4))
-    try:
-        Xw = np.asarray(X, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise GeometryError(f"X: expected a numeric array, got {type(X).__name__}") from exc
-    if Xw.ndim == 1 and Xw.shape[0] == 3:
-        Xw = Xw[None]
-    if Xw.ndim != 2 or Xw.shape[1] != 3:
-        raise GeometryError(f"X: expected shape (N, 3), got {Xw.shape}")
+    P1 = as_up_to_scale(P1, "P1", (3, 4))
+    P2 = as_up_to_scale(P2, "P2", (3, 4))
+    # NaN rows of X (points at infinity from triangulation) are allowed and propagate.
+    nan_rows = None
+    if isinstance(X, np.ndarray) and X.dtype.kind == "f" and np.isnan(X).any():
+        nan_rows = np.isnan(X).any(axis=-1).reshape(-1)
+        X = np.where(np.isnan(X), 0.0, X)
+    Xw = as_points(X, "X", 3)
+    if nan_rows is not None:
+        Xw[nan_rows] = np.nan
     u1, u2 = _pair(U1, U2, 1)
     if Xw.shape[0] != u1.shape[0]:
         raise GeometryError(f"X, U1: expected the same number of points, got {Xw.shape[0]} and {u1.shape[0]}")
@@ -1021,7 +1154,7 @@ def decompose_essential(E: npt.ArrayLike) -> list[tuple[np.ndarray, np.ndarray]]
     Raises:
         GeometryError: bad shape, NaN/inf, or ``E`` of rank below 2.
     """
-    E = as_matrix(E, "E", (3, 3))
+    E = as_up_to_scale(E, "E", (3, 3))
     U, S, Vt = np.linalg.svd(E)
     if S[0] == 0 or S[1] <= 1e-9 * S[0]:
         raise GeometryError("E: expected an essential matrix of rank 2")

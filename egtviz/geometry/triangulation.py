@@ -1,6 +1,7 @@
 r"""Triangulation of corresponding points in two views (Hartley & Zisserman 2nd ed., chapter 12).
 
-* :func:`triangulate_linear`: the homogeneous linear (DLT) method, H&Z 12.2.
+* :func:`triangulate_linear`: the homogeneous linear (DLT) method, H&Z 12.2,
+  exact (one batched SVD) at any parallax; NaN on the baseline.
 * :func:`correct_correspondences`: the optimal correction of H&Z Algorithm 12.1,
   the pair of points nearest to the measurements that satisfies the epipolar
   constraint exactly.
@@ -8,7 +9,8 @@ r"""Triangulation of corresponding points in two views (Hartley & Zisserman 2nd 
 * :func:`fundamental_from_projections`: ``F`` of two camera matrices (H&Z 9.2.2).
 
 Points are rows (``docs/conventions.md``): pixels ``(N, 2)``, world points
-``(N, 3)``; camera matrices are ``(3, 4)`` with :math:`m \simeq P X`.
+``(N, 3)``; camera matrices are ``(3, 4)`` with :math:`m \simeq P X`, and like
+``F`` are defined up to scale: any nonzero scale gives the same result.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import DegenerateConfigurationError, GeometryError, as_matrix, as_points
+from ._validate import DegenerateConfigurationError, GeometryError, as_points, as_up_to_scale
 
 __all__ = [
     "correct_correspondences",
@@ -44,9 +46,16 @@ def _camera_centre(P: np.ndarray, name: str) -> np.ndarray:
     return vt[3]
 
 
+def _camera_matrix(P: npt.ArrayLike, name: str) -> np.ndarray:
+    """A ``(3, 4)`` camera matrix, defined up to scale, scaled to unit Frobenius norm."""
+    P = as_up_to_scale(P, name, (3, 4))
+    return P / np.linalg.norm(P)
+
+
 def _cameras(P1: npt.ArrayLike, P2: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    P1 = as_matrix(P1, "P1", (3, 4))
-    P2 = as_matrix(P2, "P2", (3, 4))
+    """Both camera matrices (unit Frobenius norm) and their homogeneous centres; refuse coincident centres."""
+    P1 = _camera_matrix(P1, "P1")
+    P2 = _camera_matrix(P2, "P2")
     C1 = _camera_centre(P1, "P1")
     C2 = _camera_centre(P2, "P2")
     # Coincident centres: C1 and C2 are the same projective point.
@@ -76,71 +85,31 @@ def fundamental_from_projections(P1: npt.ArrayLike, P2: npt.ArrayLike) -> np.nda
     return F if F.flat[np.argmax(np.abs(F))] > 0 else -F
 
 
-def _adjugate4(A: np.ndarray) -> np.ndarray:
-    """Adjugates ``(N, 4, 4)`` of a stack of 4x4 matrices, by Laplace expansion in 2x2 minors."""
-    m = [[A[:, i, j] for j in range(4)] for i in range(4)]
-    s0 = m[0][0] * m[1][1] - m[1][0] * m[0][1]
-    s1 = m[0][0] * m[1][2] - m[1][0] * m[0][2]
-    s2 = m[0][0] * m[1][3] - m[1][0] * m[0][3]
-    s3 = m[0][1] * m[1][2] - m[1][1] * m[0][2]
-    s4 = m[0][1] * m[1][3] - m[1][1] * m[0][3]
-    s5 = m[0][2] * m[1][3] - m[1][2] * m[0][3]
-    c5 = m[2][2] * m[3][3] - m[3][2] * m[2][3]
-    c4 = m[2][1] * m[3][3] - m[3][1] * m[2][3]
-    c3 = m[2][1] * m[3][2] - m[3][1] * m[2][2]
-    c2 = m[2][0] * m[3][3] - m[3][0] * m[2][3]
-    c1 = m[2][0] * m[3][2] - m[3][0] * m[2][2]
-    c0 = m[2][0] * m[3][1] - m[3][0] * m[2][1]
-    out = np.empty_like(A)
-    out[:, 0, 0] = m[1][1] * c5 - m[1][2] * c4 + m[1][3] * c3
-    out[:, 0, 1] = -m[0][1] * c5 + m[0][2] * c4 - m[0][3] * c3
-    out[:, 0, 2] = m[3][1] * s5 - m[3][2] * s4 + m[3][3] * s3
-    out[:, 0, 3] = -m[2][1] * s5 + m[2][2] * s4 - m[2][3] * s3
-    out[:, 1, 0] = -m[1][0] * c5 + m[1][2] * c2 - m[1][3] * c1
-    out[:, 1, 1] = m[0][0] * c5 - m[0][2] * c2 + m[0][3] * c1
-    out[:, 1, 2] = -m[3][0] * s5 + m[3][2] * s2 - m[3][3] * s1
-    out[:, 1, 3] = m[2][0] * s5 - m[2][2] * s2 + m[2][3] * s1
-    out[:, 2, 0] = m[1][0] * c4 - m[1][1] * c2 + m[1][3] * c0
-    out[:, 2, 1] = -m[0][0] * c4 + m[0][1] * c2 - m[0][3] * c0
-    out[:, 2, 2] = m[3][0] * s4 - m[3][1] * s2 + m[3][3] * s0
-    out[:, 2, 3] = -m[2][0] * s4 + m[2][1] * s2 - m[2][3] * s0
-    out[:, 3, 0] = -m[1][0] * c3 + m[1][1] * c1 - m[1][2] * c0
-    out[:, 3, 1] = m[0][0] * c3 - m[0][1] * c1 + m[0][2] * c0
-    out[:, 3, 2] = -m[3][0] * s3 + m[3][1] * s1 - m[3][2] * s0
-    out[:, 3, 3] = m[2][0] * s3 - m[2][1] * s1 + m[2][2] * s0
-    return out
+#: A DLT matrix whose third singular value is below this fraction of its first has rank 2 or less: the
+#: two rays coincide (the point lies on the baseline) and the depth along them is undetermined.
+_RANK2_TOL = 1e-10
 
 
 def _dlt(P1: np.ndarray, P2: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
-    r"""Homogeneous DLT solutions ``(N, 4)`` (unit norm): smallest right singular vectors of ``A_i``.
+    r"""Homogeneous DLT solutions ``(N, 4)`` (unit norm): the smallest right singular vectors of the ``A_i``.
 
-    With :math:`A = U \Sigma V^T`, the adjugate is
-    :math:`\operatorname{adj} A = \det(A) A^{-1} = \sum_i (\prod_{j \ne i} \sigma_j)\, v_i u_i^T`,
-    dominated by :math:`v_4 u_4^T`. Its largest column starts, and
-    :math:`x \leftarrow \operatorname{adj}(A) \operatorname{adj}(A)^T x` (inverse
-    iteration on :math:`A^T A`) refines, the smallest right singular vector
-    for all points at once: each step multiplies the error by
-    :math:`(\sigma_4 / \sigma_3)^2`. The result equals the batched SVD solution
-    to rounding and is several times faster.
+    One batched SVD of the ``(N, 4, 4)`` stack, :math:`A_i = U_i \Sigma_i V_i^T`,
+    :math:`\hat X_i = v_{i,4}` (H&Z section 12.2). Each :math:`A_i` is first divided by its largest
+    entry, which leaves :math:`v_{i,4}` unchanged and keeps the SVD in range. It is exact for every
+    conditioning, however small the parallax. A point with
+    :math:`\sigma_3 \le 10^{-10} \sigma_1` (rank 2 or less: it lies on the baseline, both rays are the
+    baseline) gets NaN.
     """
-    n = u1.shape[0]
     uv = np.concatenate([u1, u2], axis=1)[:, :, None]  # (N, 4, 1): u1, v1, u2, v2
     third = np.stack([P1[2], P1[2], P2[2], P2[2]])
     first = np.stack([P1[0], P1[1], P2[0], P2[1]])
     A = uv * third - first  # rows u p3 - p1, v p3 - p2 of both cameras
-    A *= 1.0 / np.abs(A).max()  # a common scale keeps the adjugate in range
-    adj = _adjugate4(A)
-    adjT = adj.transpose(0, 2, 1)
-    cols = np.einsum("nij,nij->nj", adj, adj)
-    x = adj[np.arange(n), :, np.argmax(cols, axis=1), None]  # (N, 4, 1)
-    # A point on the baseline has a 2-D null space, adj(A) = 0 and x = NaN:
-    # its depth is undetermined.
-    with np.errstate(invalid="ignore", divide="ignore"):
-        for _ in range(2):
-            x = x / np.sqrt(np.einsum("nik,nik->n", x, x))[:, None, None]
-            x = adj @ (adjT @ x)
-        x = x[:, :, 0]
-        return x / np.sqrt(np.einsum("ni,ni->n", x, x))[:, None]
+    top = np.abs(A).max(axis=(1, 2))
+    A /= np.where(top > 0.0, top, 1.0)[:, None, None]
+    _, s, vt = np.linalg.svd(A)
+    X = vt[:, 3, :].copy()
+    X[~(s[:, 2] > _RANK2_TOL * s[:, 0])] = np.nan
+    return X
 
 
 def _dehomogenize(X: np.ndarray) -> np.ndarray:
@@ -165,20 +134,27 @@ def triangulate_linear(
               \hat X = \arg\min_{\|X\| = 1} \|A X\| ,
 
     :math:`\hat X` is the right singular vector of the smallest singular
-    value, computed for all points at once (see ``_dlt``).
+    value, computed for all points at once by one batched SVD, exact for
+    every conditioning (low parallax included). ``P1`` and ``P2`` are defined
+    up to scale; each is first scaled to unit Frobenius norm, so the result
+    does not depend on their scales (the relative weight of the two images'
+    equations is fixed by that choice).
 
     Args:
-        P1: ``(3, 4)`` camera matrix of image 1.
-        P2: ``(3, 4)`` camera matrix of image 2.
+        P1: ``(3, 4)`` camera matrix of image 1 (any nonzero scale).
+        P2: ``(3, 4)`` camera matrix of image 2 (any nonzero scale).
         U1: ``(N, 2)`` pixels in image 1.
         U2: ``(N, 2)`` corresponding pixels in image 2.
 
     Returns:
         ``(N, 3)`` world points; NaN for a point at infinity (rays parallel)
-        or on the baseline (rays coincide).
+        or on the baseline (the rays coincide: ``A`` has rank 2 or less and
+        the depth is undetermined).
 
     Raises:
-        GeometryError: bad shapes, NaN/inf, mismatched ``N``, rank-deficient ``P``.
+        GeometryError: bad types or shapes, NaN/inf, empty input, mismatched
+            ``N``, a zero or rank-deficient ``P``, pixels beyond
+            ``MAX_MAGNITUDE``.
         DegenerateConfigurationError: coincident camera centres.
     """
     P1, P2, _, _ = _cameras(P1, P2)
@@ -255,7 +231,7 @@ def correct_correspondences(
     Raises:
         GeometryError: bad shapes, NaN/inf, mismatched ``N``, or ``F`` of rank < 2.
     """
-    F = as_matrix(F, "F", (3, 3))
+    F = as_up_to_scale(F, "F", (3, 3))
     u1, u2 = _pair(U1, U2)
     U, S, Vt = np.linalg.svd(F)
     if S[1] <= 1e-12 * S[0]:
@@ -358,7 +334,12 @@ def triangulate_optimal(
         U2: ``(N, 2)`` corresponding pixels in image 2.
 
     Returns:
-        ``(N, 3)`` world points; NaN for a point at infinity.
+        ``(N, 3)`` world points; NaN for a point at infinity or on the baseline.
+
+    Raises:
+        GeometryError: bad types or shapes, NaN/inf, empty input, mismatched
+            ``N``, a zero or rank-deficient ``P``.
+        DegenerateConfigurationError: coincident camera centres.
     """
     P1, P2, _, _ = _cameras(P1, P2)
     u1, u2 = _pair(U1, U2)
