@@ -5,6 +5,9 @@ geometric description rather than from egtviz's code path, and the resulting
 literal numbers are asserted too (so a silent change of both routes shows).
 """
 
+import runpy
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -148,7 +151,7 @@ def test_festim_recovers_example_3_F_from_noise_free_points():
     Xw = np.column_stack([rng.uniform(-5, 5, 20), rng.uniform(8, 16, 20), rng.uniform(-3, 3, 20)]).T
     U1 = np.vstack(f_perspproj(Xw, H1, K))
     U2 = np.vstack(f_perspproj(Xw, H2, K))
-    for algorithm in (1, 2, 3, 4, 5):
+    for algorithm in (1, 2, 3, 4, 5, 6, 7, "ransac"):
         Fe = f_Festim(U1, U2, algorithm)
         assert min(np.linalg.norm(Fe - F), np.linalg.norm(Fe + F)) < 1e-6, algorithm
 
@@ -156,8 +159,10 @@ def test_festim_recovers_example_3_F_from_noise_free_points():
 def test_facade_errors_name_the_argument():
     H = f_Rt2H(np.eye(3), [0, 0, 0])
     with pytest.raises(GeometryError, match=r"Xw: expected shape \(3, N\)"):
+        f_perspproj(np.zeros((5, 2)), H, np.eye(3))
+    with pytest.raises(GeometryError, match="Xw: a homogeneous point has last coordinate 0"):
         f_perspproj(np.zeros((4, 2)), H, np.eye(3))
-    with pytest.raises(GeometryError, match="K: calibration matrix is not invertible"):
+    with pytest.raises(GeometryError, match="K: calibration matrix is (singular|not invertible)"):
         f_perspproj([0, 1, 0], H, np.zeros((3, 3)) + np.diag([0, 0, 1.0]))
     with pytest.raises(GeometryError, match="a: expected a positive"):
         f_panproj([0, 0, 4], np.eye(4), None, a=-1.0)
@@ -172,3 +177,52 @@ def test_point_behind_camera_gives_nan_not_a_pixel():
     u, v = f_perspproj(np.array([[0, -5, 0], [1, 5, 0]], float).T, H, np.eye(3))
     assert np.isnan(u[0]) and np.isnan(v[0])
     np.testing.assert_allclose([u[1], v[1]], [0.2, 0.0])
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.mark.parametrize(
+    "script, expected",
+    [
+        # Example 1's first corner: u = -1/15, v = 0.2828... (test_example_1 derives them by hand).
+        ("01_pinhole_placement.py", "point 1: u = -0.066667, v = 0.282843"),
+        # The paper's printed Example 2 pixel, u = 410.48 (brentq root in test_example_2).
+        ("02_panoramic_placement.py", "m = (410.49, 240.00)"),
+        # Example 3's epipoles by hand: e1 = (sqrt(1/2), -sqrt(1/2)), e2 = (1, 0).
+        ("03_pinhole_epipolar.py", "e1 = (0.707107, -0.707107, 1)"),
+        # Horizontal baseline, mirror a=3, b=1: the epipole is 1000 (1/3) / (2 sqrt 10) = 52.705 px off centre.
+        ("04_panoramic_epipolar.py", "e1 = (372.705, 240.000), e1' = (267.295, 240.000)"),
+        # Desired camera's epipole: the actual centre (-5, -5, 0) seen from the origin looking along +y: (1, 0).
+        ("05_pinhole_demo.py", "ed = (1.000000, "),
+        # Parabola h = 0.03 m, horizontal baseline: the epipoles are h * 1000 = 30 px from (640, 480).
+        ("06_panoramic_demo.py", "desired epipoles: (670.00, 480.00) and (610.00, 480.00)"),
+        ("07_planar_mirror_demo.py", "points seen in both mirrors: 20 of 20"),
+    ],
+)
+def test_example_scripts_run_headless_and_print_their_results(script, expected, capsys):
+    runpy.run_path(str(EXAMPLES / script), run_name="__main__")
+    out = capsys.readouterr().out
+    assert expected in out, out
+
+
+def test_planar_mirror_demo_recovers_the_virtual_epipoles(capsys):
+    runpy.run_path(str(EXAMPLES / "07_planar_mirror_demo.py"), run_name="__main__")
+    errors = [float(line.split("=")[1]) for line in capsys.readouterr().out.splitlines() if "epipole_e" in line]
+    assert len(errors) == 2 and max(errors) < 1e-6
+
+
+def test_readme_snippet_runs():
+    ns: dict = {}
+    exec("from egtviz.egt import *\nimport numpy as np\n" + README_SNIPPET, ns)
+    np.testing.assert_allclose(ns["u"], [-1 / 15, 5 / 21, 5 / 21, -1 / 15], atol=1e-12)
+    # e2: camera 1's centre (-10, -5, 0) in camera 2 (x right = world x, y down = world -z, z = world y):
+    # (-10, 0, -5), i.e. the homogeneous pixel (2, 0, 1).
+    np.testing.assert_allclose(ns["e2"], [2.0, 0.0, 1.0], atol=1e-12)
+
+
+README_SNIPPET = """
+H = f_Rt2H(rotoy(pi / 4), [-10, -5, 0])                                    # Example 1
+u, v = f_perspproj(np.array([[-3, 3, 3, -3], [3, 3, 3, 3], [-3, -3, 3, 3]]), H, eye(3))
+e1, e2, F = f_epipole(H, f_Rt2H(eye(3), [0, 0, 0]), eye(3), eye(3))      # m2' F m1 = 0
+"""
