@@ -5,7 +5,9 @@ import json
 import numpy as np
 import pytest
 
+from egtviz.geometry import GeometryError
 from egtviz.scene import (
+    OutOfRangeError,
     PanoramicSpec,
     PinholeSpec,
     Scene,
@@ -15,9 +17,14 @@ from egtviz.scene import (
     SurfaceSpec,
     compute_derived,
     default_scene,
+    limits,
+    mesh_names,
     panoramic_scene,
+    scene_from_bytes,
+    scene_to_bytes,
 )
 from egtviz.scene.derived import COINCIDENT_MESSAGE
+from egtviz.scene.surfaces import ASSETS
 
 
 def distance_to_polyline(p, poly):
@@ -70,7 +77,7 @@ def test_invalid_change_leaves_scene_unchanged():
     with pytest.raises(SceneError, match="no camera named"):
         model.update_camera("nope", focal_length=0.01)
     model.add_camera("panoramic")
-    with pytest.raises(SceneError, match="a: expected a positive"):
+    with pytest.raises(SceneError, match=r"camera 'pano1': a: expected 0.001..100 m, got -1"):
         model.update_camera("pano1", a=-1.0)
 
 
@@ -217,5 +224,110 @@ def test_mesh_surface_from_assets_is_sampled_with_unit_normals():
     # The house (1 x 1 x 1.2, scaled by 2) stands on the ground at (1, 2).
     assert pts[:, 2].min() >= -1e-9 and pts[:, 2].max() <= 2.4 + 1e-9
     assert np.all(np.abs(pts[:, :2] - [1.0, 2.0]) <= 1.0 + 1e-9)
-    with pytest.raises(SceneError, match="cannot load mesh"):
-        sample_surface(SurfaceSpec("mesh", path="no-such-mesh.obj"))
+    with pytest.raises(SceneError, match=r"no mesh named 'no-such-mesh.obj' in the assets \(have house.obj\)"):
+        SurfaceSpec("mesh", path="no-such-mesh.obj")
+    for forged in ("/etc/passwd", "../assets/house.obj", "mesh: /any/path.obj", str(ASSETS / "house.obj")):
+        with pytest.raises(SceneError, match="expected the name of a mesh in the assets"):
+            SurfaceSpec("mesh", path=forged)
+    assert mesh_names() == ("house.obj",)
+
+
+def test_out_of_range_errors_carry_the_limit_for_the_gui():
+    with pytest.raises(OutOfRangeError) as info:
+        PinholeSpec("c", focal_length=1e-300)
+    err = info.value
+    assert (err.camera, err.field, err.value, err.limit) == ("c", "focal_length", 1e-300, limits.FOCAL_LENGTH)
+    assert str(err) == "camera 'c': focal_length: expected 0.0001..10 m, got 1e-300"
+    assert err.limit.describe(1e3, "mm") == "0.1..10000 mm"  # restated in the field's own unit
+    with pytest.raises(OutOfRangeError, match=r"camera 'p': b: expected 0.001..100 m, got 1e-200"):
+        PanoramicSpec("p", b=1e-200)
+    with pytest.raises(SceneError, match=r"width: expected a whole number in 1..8192 px, got 640.5"):
+        PinholeSpec("c", width=640.5)
+    assert PinholeSpec("c", width=640.0).width == 640  # a whole number typed as a float is that number
+
+
+def test_undrawable_change_is_refused_before_commit(monkeypatch):
+    from egtviz.scene import derived as derived_module
+
+    model = SceneModel()
+    before, before_derived = model.scene, model.derived
+    seen = []
+    model.subscribe(lambda scene, change: seen.append(change.kind))
+    real = derived_module._compute_derived
+
+    def refuse_wide_images(scene):
+        if any(c.width > 1000 for c in scene.cameras):
+            raise GeometryError("K: too wide to draw")
+        return real(scene)
+
+    monkeypatch.setattr(derived_module, "_compute_derived", refuse_wide_images)
+    with pytest.raises(SceneError, match="cannot be drawn: K: too wide to draw"):
+        model.update_camera("cam1", width=2000)
+    assert model.scene is before and model.derived is before_derived and seen == []
+    with pytest.raises(SceneError, match="cannot be drawn"):
+        with model.batch():
+            model.update_camera("cam1", width=2000)
+            model.update_camera("cam2", focal_length=0.01)
+    assert model.scene is before and model.derived is before_derived and seen == []
+    model.update_camera("cam1", width=800)
+    assert model.derived.image_planes["cam1"].width == 800 and seen == ["camera"]
+
+
+def test_model_derived_is_the_committed_scene_s():
+    model = SceneModel()
+    got = []
+    model.subscribe(lambda scene, change: got.append((scene, model.derived)))
+    model.set_point(0, (0.5, 0.5, 0.5))
+    scene, derived = got[-1]
+    assert scene is model.scene and derived is model.derived
+    np.testing.assert_allclose(derived.image_planes["cam1"].points, compute_derived(scene).image_planes["cam1"].points)
+    assert model.undo() and model.derived.image_planes["cam1"].points[0].tolist() != derived.image_planes["cam1"].points[0].tolist()
+
+
+def test_model_enforces_the_limits_the_page_shows():
+    model = SceneModel()
+    before = model.scene
+    for bad in (100_000, 2001, -1, 2.5, True, "8"):
+        with pytest.raises(SceneError, match="n: expected"):
+            model.randomize_points(bad)
+    with pytest.raises(SceneError, match="points: at most 2000"):
+        model.set_points(np.zeros((2001, 3)))
+    with pytest.raises(SceneError, match="cameras: at most 8"):
+        for _ in range(10):
+            model.add_camera("pinhole")
+    assert len(model.scene.cameras) == 8
+    model.reset()
+    with pytest.raises(SceneError, match="highlighted: expected a list"):
+        model.highlight("cam1")
+    with pytest.raises(SceneError, match="highlighted: .*'point:abc'"):
+        model.highlight(["point:abc"])
+    with pytest.raises(SceneError, match="selected_point"):
+        model.select_point(True)
+    with pytest.raises(SceneError, match="show_rays: expected true or false"):
+        model.set_option("show_rays", "yes")
+    assert model.scene is before
+    model.randomize_points(2000, seed=3)
+    assert len(model.scene.points) == 2000
+
+
+def test_point_marks_follow_removed_points_and_renamed_cameras():
+    model = SceneModel()
+    model.lock("point:2")
+    model.lock("point:5")
+    model.highlight(["point:5", "cam2"])
+    model.remove_point(2)
+    assert model.scene.locked == {"point:4"} and model.scene.highlighted == {"point:4", "cam2"}
+    model.update_camera("cam2", name="right")
+    assert model.scene.highlighted == {"point:4", "right"}
+    model.set_points(np.zeros((2, 3)))
+    assert model.scene.locked == frozenset() and model.scene.highlighted == {"right"}
+
+
+def test_load_scene_commits_an_uploaded_scene_and_is_undoable():
+    model = SceneModel()
+    start = model.scene
+    kinds = []
+    model.subscribe(lambda scene, change: kinds.append(change.kind))
+    model.load_scene(scene_from_bytes(scene_to_bytes(panoramic_scene()), "upload.json"))
+    assert model.scene.camera_names == ("pano1", "pano2") and kinds == ["load"]
+    assert model.undo() and model.scene is start

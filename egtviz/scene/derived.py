@@ -18,7 +18,7 @@ from ..geometry.epipolar import _epipolar_normals, _epipole_of_centre, _matrix_r
 from ..geometry.homogeneous import _clip_lines
 from ..geometry.panoramic_epipolar import _circle_arcs
 from .scene import Scene
-from .specs import PanoramicSpec
+from .specs import PanoramicSpec, SceneError
 
 COINCIDENT_MESSAGE = "no epipolar geometry: the centres coincide"
 #: Samples on each epipolar great circle (conic polylines): fewer per conic when there are many,
@@ -222,9 +222,27 @@ def _rim_image(mirror, K_bytes: bytes) -> np.ndarray:
 def compute_derived(scene: Scene) -> Derived:
     """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``.
 
-    On a drag only the pair-dependent part below is new work (the per-camera blocks are cached); it calls the
+    On a drag only the pair-dependent part is new work (the per-camera blocks are cached); it calls the
     geometry core's unchecked internal functions, since every array here was built and checked by the core.
+
+    Raises:
+        SceneError: the scene cannot be drawn (the core refused it, or a drawn value is infinite). A scene
+            whose ``compute_derived`` succeeds is one the viewer can draw.
     """
+    try:
+        derived = _compute_derived(scene)
+    except (GeometryError, ArithmeticError, ValueError) as exc:
+        raise SceneError(f"cannot be drawn: {exc}") from exc
+    for name, plane in derived.image_planes.items():
+        if np.isinf(plane.points).any() or (plane.lines is not None and np.isinf(plane.lines).any()):
+            raise SceneError(f"cannot be drawn: camera {name!r}: image coordinates overflow")
+    for name, ray in derived.rays.items():
+        if np.isinf(ray).any():
+            raise SceneError(f"cannot be drawn: camera {name!r}: rays overflow")
+    return derived
+
+
+def _compute_derived(scene: Scene) -> Derived:
     pts = _points(scene.points)
     X = pts.X
     n_points = len(X)

@@ -1,8 +1,10 @@
 """``SceneModel``: the one mutable holder of a scene, with validation, undo and change notifications.
 
 The viewer, the lessons and the CLI all change a scene through this small API;
-each call validates, replaces the immutable :class:`Scene`, and notifies the
-subscribers once (or once per :meth:`SceneModel.batch`).
+each call validates, draws the new scene once (:func:`compute_derived`: compute,
+then commit, so an undrawable scene is never committed), replaces the immutable
+:class:`Scene` and its :class:`Derived`, and notifies the subscribers once (or
+once per :meth:`SceneModel.batch`).
 """
 
 from __future__ import annotations
@@ -19,10 +21,38 @@ from typing import Any
 import numpy as np
 
 from ..geometry import GeometryError
+from .derived import Derived, compute_derived
+from .limits import COORDINATE, MAX_POINTS, Range
 from .scene import Scene, SceneFileError
-from .specs import CAMERA_KINDS, DisplayOptions, PanoramicSpec, PinholeSpec, SceneError, SurfaceSpec, _triple
+from .specs import (
+    CAMERA_KINDS,
+    DisplayOptions,
+    PanoramicSpec,
+    PinholeSpec,
+    SceneError,
+    SurfaceSpec,
+    _ranged,
+    _short,
+    _triple,
+)
 
 UNDO_DEPTH = 100
+_POINT_COUNT = Range(0, MAX_POINTS, "", integer=True)
+_EXTENT = Range(0.0, COORDINATE.high, "m")
+
+
+def _without_point(marks: frozenset[str], index: int) -> frozenset[str]:
+    """``marks`` after point ``index`` is removed: its mark goes, later indices shift down by one."""
+    out = set()
+    for m in marks:
+        if m.startswith("point:"):
+            i = int(m[6:])
+            if i == index:
+                continue
+            if i > index:
+                m = f"point:{i - 1}"
+        out.add(m)
+    return frozenset(out)
 _POSE_FIELDS = frozenset({"position", "ypr_deg"})
 
 
@@ -44,7 +74,10 @@ class SceneModel:
         from .examples import default_scene
 
         self._initial = scene if scene is not None else default_scene()
+        if not isinstance(self._initial, Scene):
+            raise SceneError(f"scene: expected a Scene, got {_short(self._initial)}")
         self._scene = self._initial
+        self._derived = compute_derived(self._initial)
         self._undo: list[Scene] = []
         self._listeners: list[Listener] = []
         self._lock = threading.RLock()
@@ -58,6 +91,12 @@ class SceneModel:
     @property
     def scene(self) -> Scene:
         return self._scene
+
+    @property
+    def derived(self) -> Derived:
+        """What the viewer draws for :attr:`scene`, computed when the scene was committed (read it, do not
+        call ``compute_derived`` again). Read inside a listener, it belongs to the notified scene."""
+        return self._derived
 
     def subscribe(self, listener: Listener) -> Callable[[], None]:
         """Call ``listener(scene, change)`` after each change; returns the function that unsubscribes."""
@@ -75,16 +114,18 @@ class SceneModel:
 
     def _commit(self, new: Scene, change: Change, *, undoable: bool = True, merge_key: object = None) -> None:
         with self._lock:
-            if self._batch_depth:
+            if self._batch_depth:  # drawn once, when the batch ends
                 self._scene = new
                 self._batch_changes.append(change)
                 return
+            derived = compute_derived(new)  # SceneError: not drawable, nothing committed
             # Consecutive changes with the same merge key (one gizmo drag) make one undo step.
             if undoable and (merge_key is None or merge_key != self._merge_key):
                 self._undo.append(self._scene)
                 del self._undo[:-UNDO_DEPTH]
             self._merge_key = merge_key if undoable else None
             self._scene = new
+            self._derived = derived
             listeners = list(self._listeners)
         for listener in listeners:
             listener(new, change)
@@ -119,6 +160,12 @@ class SceneModel:
             changes, start = self._batch_changes, self._batch_start
             if not changes:
                 return
+            try:
+                derived = compute_derived(self._scene)
+            except SceneError:
+                self._scene = start  # type: ignore[assignment]
+                raise
+            self._derived = derived
             names = tuple(dict.fromkeys(n for c in changes for n in c.names))
             self._undo.append(start)  # type: ignore[arg-type]
             del self._undo[:-UNDO_DEPTH]
@@ -130,7 +177,7 @@ class SceneModel:
 
     # -- cameras ---------------------------------------------------------------
 
-    def update_camera(self, name: str, *, merge_key: object = None, **fields: Any) -> None:
+    def update_camera(self, name: str, /, *, merge_key: object = None, **fields: Any) -> None:
         """Change fields of a camera spec (e.g. ``focal_length=0.01``); ``name=`` renames it.
 
         A change that alters nothing is not committed (no undo step, no notification).
@@ -152,8 +199,15 @@ class SceneModel:
         pair = scene.pair
         if pair and new_spec.name != name:
             pair = tuple(new_spec.name if n == name else n for n in pair)  # type: ignore[assignment]
-        names = (name, new_spec.name) if new_spec.name != name else (name,)
-        self._replace(Change("camera", names), merge_key, cameras=cameras, pair=pair)
+        if new_spec.name != name:
+            rename = {name: new_spec.name}
+            self._replace(
+                Change("camera", (name, new_spec.name)), merge_key, cameras=cameras, pair=pair,
+                locked=frozenset(rename.get(m, m) for m in scene.locked),
+                highlighted=frozenset(rename.get(m, m) for m in scene.highlighted),
+            )
+            return
+        self._replace(Change("camera", (name,)), merge_key, cameras=cameras, pair=pair)
 
     def set_camera_pose(self, name: str, position: Any, R_world: Any, *, drag_id: object = None) -> None:
         """Place a camera from a world pose (a gizmo drag): the spec keeps its own angle convention.
@@ -228,13 +282,20 @@ class SceneModel:
         self._commit(scene.with_point(index, p), Change("points", (f"point:{index}",)), merge_key=merge)
 
     def set_points(self, points: Any) -> None:
-        """Replace all points at once ((N, 3) array-like)."""
-        arr = np.asarray(points, dtype=np.float64)
-        if arr.size == 0:
-            arr = arr.reshape(0, 3)
-        if arr.ndim != 2 or arr.shape[1] != 3 or not np.all(np.isfinite(arr)):
-            raise SceneError(f"points: expected finite (N, 3), got shape {arr.shape}")
-        self._replace(Change("points"), points=tuple(map(tuple, arr)), selected_point=None)
+        """Replace all points at once ((N, 3) numbers, N at most ``MAX_POINTS``); point locks and highlights go."""
+        if not isinstance(points, np.ndarray):
+            if not isinstance(points, (list, tuple)):
+                raise SceneError(f"points: expected (N, 3) numbers, got {_short(points)}")
+            if len(points) > MAX_POINTS:
+                raise SceneError(f"points: at most {MAX_POINTS}, got {len(points)}")
+        elif len(points) > MAX_POINTS:
+            raise SceneError(f"points: at most {MAX_POINTS}, got {len(points)}")
+        scene = self._scene
+        self._replace(
+            Change("points"), points=points, selected_point=None,
+            locked=frozenset(m for m in scene.locked if not m.startswith("point:")),
+            highlighted=frozenset(m for m in scene.highlighted if not m.startswith("point:")),
+        )
 
     def add_point(self, xyz: Any) -> int:
         p = _triple(xyz, "point")
@@ -248,15 +309,23 @@ class SceneModel:
         points = scene.points[:index] + scene.points[index + 1 :]
         sel = scene.selected_point
         sel = None if sel == index else (sel - 1 if sel is not None and sel > index else sel)
-        self._replace(Change("remove_point", (f"point:{index}",)), points=points, selected_point=sel)
+        self._replace(
+            Change("remove_point", (f"point:{index}",)), points=points, selected_point=sel,
+            locked=_without_point(scene.locked, index), highlighted=_without_point(scene.highlighted, index),
+        )
 
     def randomize_points(self, n: int = 8, seed: int | None = None, *, center=(0.0, 0.0, 1.0), extent: float = 2.0) -> None:
-        """Replace the points with ``n`` uniform random points in a cube of side ``2 * extent``."""
-        if int(n) != n or n < 0 or n > 100_000:
-            raise SceneError(f"n: expected a whole number in 0..100000, got {n!r}")
+        """Replace the points with ``n`` uniform random points in a cube of side ``2 * extent``.
+
+        ``n`` is a whole number in ``0..MAX_POINTS``; the cube must lie inside the coordinate limits.
+        """
+        count = int(_ranged(n, _POINT_COUNT, "n"))
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+            raise SceneError(f"seed: expected null or a whole number >= 0, got {_short(seed)}")
+        c = _triple(center, "center")
+        half = _ranged(extent, _EXTENT, "extent")
         rng = np.random.default_rng(seed)
-        pts = np.asarray(_triple(center, "center")) + rng.uniform(-extent, extent, size=(int(n), 3))
-        self.set_points(pts)
+        self.set_points(np.asarray(c) + rng.uniform(-half, half, size=(count, 3)))
 
     def add_surface(self, spec: SurfaceSpec) -> None:
         if not isinstance(spec, SurfaceSpec):
@@ -278,15 +347,22 @@ class SceneModel:
         opts = self._scene.options
         if name not in {f.name for f in dataclasses.fields(DisplayOptions)}:
             raise SceneError(f"option: unknown display option {name!r}")
+        if not isinstance(value, (bool, np.bool_)):
+            raise SceneError(f"options: {name}: expected true or false, got {_short(value)}")
         self._replace(Change("options", (name,)), options=dataclasses.replace(opts, **{name: bool(value)}))
 
     def lock(self, name: str, locked: bool = True) -> None:
         """Lock (or unlock) a gizmo: a camera name or ``"point:<i>"``."""
+        if type(name) is not str:
+            raise SceneError(f"locked: expected a camera name or 'point:<i>', got {_short(name)}")
         new = self._scene.locked | {name} if locked else self._scene.locked - {name}
         self._replace(Change("lock", (name,)), locked=new)
 
     def highlight(self, names: Any) -> None:
-        self._replace(Change("highlight", tuple(names)), highlighted=frozenset(names))
+        """Draw attention to these camera names and ``"point:<i>"`` (a list; replaces the previous ones)."""
+        if isinstance(names, (str, bytes)) or not isinstance(names, (list, tuple, set, frozenset)):
+            raise SceneError(f"highlighted: expected a list of names, got {_short(names)}")
+        self._replace(Change("highlight", tuple(sorted(map(str, names)))), highlighted=names)
 
     # -- history and files -------------------------------------------------------
 
@@ -307,13 +383,23 @@ class SceneModel:
         """Back to the scene the model started with (or to ``scene``); undoable."""
         self._commit(scene if scene is not None else self._initial, Change("reset"))
 
+    def load_scene(self, scene: Scene) -> None:
+        """Replace the scene with ``scene`` (e.g. from :func:`egtviz.scene.scene_from_bytes`); undoable."""
+        if not isinstance(scene, Scene):
+            raise SceneError(f"scene: expected a Scene, got {_short(scene)}")
+        self._commit(scene, Change("load"))
+
     def save(self, path: str | Path) -> None:
-        self._scene.save(path)
+        """Write the scene file ``path`` (:func:`egtviz.scene.save_scene_file`; for scripts and the CLI)."""
+        from .io import save_scene_file
+
+        save_scene_file(self._scene, path)
 
     def load(self, path: str | Path) -> None:
-        """Replace the scene with a file's; on error (``SceneFileError``) nothing changes."""
-        scene = Scene.load(path)
-        self._commit(scene, Change("load", (str(path),)))
+        """Replace the scene with a file's (:func:`egtviz.scene.load_scene_file`); on error nothing changes."""
+        from .io import load_scene_file
+
+        self.load_scene(load_scene_file(path))
 
 
 __all__ = [

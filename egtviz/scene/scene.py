@@ -3,22 +3,62 @@
 from __future__ import annotations
 
 import dataclasses
-import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .limits import COORDINATE, MAX_CAMERAS, MAX_POINTS, MAX_SURFACES, MAX_TITLE_LENGTH, MAX_TOTAL_SURFACE_SAMPLES
 from .specs import (
-    CAMERA_KINDS,
     CameraSpec,
     DisplayOptions,
+    PanoramicSpec,
+    PinholeSpec,
     SceneError,
     SurfaceSpec,
+    _short,
     _triple,
-    spec_to_dict,
+    has_control_characters,
 )
+
+_CAMERA_TYPES = (PinholeSpec, PanoramicSpec)
+_POINT_MARK = re.compile(r"point:(0|[1-9][0-9]{0,8})")
+
+
+def _sequence(value: Any, name: str, limit: int) -> tuple:
+    """A list or tuple of at most ``limit`` items as a tuple (counted before anything is converted)."""
+    if not isinstance(value, (tuple, list)):
+        raise SceneError(f"{name}: expected a list, got {_short(value)}")
+    if len(value) > limit:
+        raise SceneError(f"{name}: at most {limit}, got {len(value)}")
+    return tuple(value)
+
+
+def _marks(value: Any, name: str) -> frozenset[str]:
+    """``locked`` / ``highlighted`` as a frozenset of strings."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, set, frozenset)):
+        raise SceneError(f"{name}: expected a list of camera names and 'point:<i>', got {_short(value)}")
+    if len(value) > MAX_CAMERAS + MAX_POINTS:
+        raise SceneError(f"{name}: at most {MAX_CAMERAS + MAX_POINTS} entries, got {len(value)}")
+    try:
+        return frozenset(value)
+    except TypeError:
+        raise SceneError(f"{name}: expected a list of camera names and 'point:<i>', got {_short(value)}") from None
+
+
+def _check_mark(mark: Any, name: str, cameras: list[str], n_points: int) -> None:
+    """A camera name of the scene or ``"point:<i>"`` with ``i`` below the number of points."""
+    if type(mark) is str:
+        m = _POINT_MARK.fullmatch(mark)
+        if m is not None and int(m.group(1)) < n_points:
+            return
+        if m is None and mark in cameras:
+            return
+    raise SceneError(
+        f"{name}: expected camera names of the scene and 'point:<i>' with i below {n_points}, got {_short(mark)}"
+    )
 
 FILE_FORMAT = "egtviz-scene"
 FILE_VERSION = 1
@@ -40,26 +80,67 @@ class Scene:
     selected_point: int | None = None
     options: DisplayOptions = field(default_factory=DisplayOptions)
     locked: frozenset[str] = frozenset()
-    """Gizmos the user cannot drag: camera names and ``"point:<i>"``."""
+    """Gizmos the user cannot drag: camera names and ``"point:<i>"`` (``i`` an index of ``points``)."""
     highlighted: frozenset[str] = frozenset()
     """Camera names and ``"point:<i>"`` a lesson draws attention to."""
     title: str = ""
 
     def __post_init__(self) -> None:
-        names = [c.name for c in self.cameras]
+        set_ = object.__setattr__
+        cameras = self.cameras
+        if type(cameras) is not tuple:
+            cameras = _sequence(cameras, "cameras", MAX_CAMERAS)
+            set_(self, "cameras", cameras)
+        if len(cameras) > MAX_CAMERAS:
+            raise SceneError(f"cameras: at most {MAX_CAMERAS}, got {len(cameras)}")
+        for c in cameras:
+            if type(c) not in _CAMERA_TYPES:
+                raise SceneError(f"cameras: expected camera specs, got {_short(c)}")
+        names = [c.name for c in cameras]
         if len(set(names)) != len(names):
             raise SceneError(f"cameras: names must be unique, got {names}")
         if type(self.points) is not _Points:  # a camera change keeps the previous scene's checked points
-            object.__setattr__(self, "points", _points_tuple(self.points))
+            set_(self, "points", _points_tuple(self.points))
+        n_points = len(self.points)
+        surfaces = self.surfaces
+        if type(surfaces) is not tuple:
+            surfaces = _sequence(surfaces, "surfaces", MAX_SURFACES)
+            set_(self, "surfaces", surfaces)
+        if surfaces:
+            if len(surfaces) > MAX_SURFACES:
+                raise SceneError(f"surfaces: at most {MAX_SURFACES}, got {len(surfaces)}")
+            if not all(type(s) is SurfaceSpec for s in surfaces):
+                raise SceneError("surfaces: expected surface specs")
+            total = sum(s.samples for s in surfaces)
+            if total > MAX_TOTAL_SURFACE_SAMPLES:
+                raise SceneError(f"surfaces: at most {MAX_TOTAL_SURFACE_SAMPLES} samples in all, got {total}")
         if self.pair is not None:
-            pair = tuple(self.pair)
-            if len(pair) != 2 or pair[0] == pair[1] or any(n not in names for n in pair):
-                raise SceneError(f"pair: expected two different camera names from {names}, got {self.pair!r}")
-            object.__setattr__(self, "pair", pair)
-        if self.selected_point is not None and not 0 <= self.selected_point < len(self.points):
-            raise SceneError(f"selected_point: expected an index below {len(self.points)}, got {self.selected_point}")
-        object.__setattr__(self, "locked", frozenset(self.locked))
-        object.__setattr__(self, "highlighted", frozenset(self.highlighted))
+            pair = self.pair
+            if not isinstance(pair, (tuple, list)) or len(pair) != 2 or pair[0] == pair[1] or any(
+                type(n) is not str or n not in names for n in pair
+            ):
+                raise SceneError(f"pair: expected two different camera names from {names}, got {_short(self.pair)}")
+            set_(self, "pair", tuple(pair))
+        sel = self.selected_point
+        if sel is not None:
+            if isinstance(sel, (bool, np.bool_)) or not isinstance(sel, (int, np.integer)) or not 0 <= sel < n_points:
+                raise SceneError(f"selected_point: expected null or a whole number below {n_points}, got {_short(sel)}")
+            set_(self, "selected_point", int(sel))
+        if type(self.options) is not DisplayOptions:
+            raise SceneError(f"options: expected DisplayOptions, got {_short(self.options)}")
+        for name in ("locked", "highlighted"):
+            value = getattr(self, name)
+            if type(value) is not frozenset:
+                value = _marks(value, name)
+                set_(self, name, value)
+            for mark in value:
+                _check_mark(mark, name, names, n_points)
+        title = self.title
+        if type(title) is not str or len(title) > MAX_TITLE_LENGTH or has_control_characters(title):
+            raise SceneError(
+                f"title: expected text of at most {MAX_TITLE_LENGTH} characters without control characters, "
+                f"got {_short(title)}"
+            )
 
     @property
     def camera_names(self) -> tuple[str, ...]:
@@ -112,115 +193,33 @@ class Scene:
             return dataclasses.replace(self, **changes)
         return Scene(**{**{name: getattr(self, name) for name in _SCENE_FIELDS}, **changes})
 
-    # -- file format ---------------------------------------------------------
+    # -- file format (egtviz.scene.io) --------------------------------------------
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "format": FILE_FORMAT,
-            "version": FILE_VERSION,
-            "title": self.title,
-            "cameras": [spec_to_dict(c) for c in self.cameras],
-            "points": [list(p) for p in self.points],
-            "surfaces": [spec_to_dict(s) for s in self.surfaces],
-            "pair": list(self.pair) if self.pair else None,
-            "selected_point": self.selected_point,
-            "options": dataclasses.asdict(self.options),
-            "locked": sorted(self.locked),
-            "highlighted": sorted(self.highlighted),
-        }
+        """The scene as plain JSON data (:func:`egtviz.scene.io.scene_to_dict`)."""
+        from .io import scene_to_dict
+
+        return scene_to_dict(self)
 
     @classmethod
     def from_dict(cls, data: Any, source: str = "scene") -> Scene:
-        """Build a scene from :meth:`to_dict` data; errors name ``source`` and the entry."""
+        """A scene from JSON data, type-checked and drawable (:func:`egtviz.scene.io.scene_from_dict`)."""
+        from .io import scene_from_dict
 
-        def fail(entry: str, why: str) -> SceneFileError:
-            return SceneFileError(f"{source}: {entry}: {why}")
-
-        if not isinstance(data, dict):
-            raise fail("top level", "expected a JSON object")
-        if data.get("format", FILE_FORMAT) != FILE_FORMAT:
-            raise fail("format", f"expected {FILE_FORMAT!r}, got {data.get('format')!r}")
-        if data.get("version", FILE_VERSION) != FILE_VERSION:
-            raise fail("version", f"this egtviz reads version {FILE_VERSION}, got {data.get('version')!r}")
-        unknown = set(data) - {
-            "format", "version", "title", "cameras", "points", "surfaces", "pair",
-            "selected_point", "options", "locked", "highlighted",
-        }
-        if unknown:
-            raise fail(sorted(unknown)[0], "unknown entry")
-
-        cameras = []
-        for i, entry in enumerate(data.get("cameras", [])):
-            where = f"cameras[{i}]"
-            if not isinstance(entry, dict):
-                raise fail(where, "expected an object")
-            entry = dict(entry)
-            kind = entry.pop("kind", None)
-            if kind not in CAMERA_KINDS:
-                raise fail(f"{where}.kind", f"expected one of {sorted(CAMERA_KINDS)}, got {kind!r}")
-            spec_cls = CAMERA_KINDS[kind]
-            known = {f.name for f in dataclasses.fields(spec_cls)}
-            for key in entry:
-                if key not in known:
-                    raise fail(f"{where}.{key}", f"unknown field for a {kind} camera")
-            try:
-                cameras.append(spec_cls(**{k: _from_json(v) for k, v in entry.items()}))
-            except (SceneError, TypeError, ValueError) as exc:
-                raise fail(where, str(exc)) from exc
-
-        points = []
-        for i, p in enumerate(data.get("points", [])):
-            try:
-                points.append(_triple(p, f"points[{i}]"))
-            except SceneError as exc:
-                raise fail(f"points[{i}]", "expected [x, y, z] with finite numbers") from exc
-
-        surfaces = []
-        for i, entry in enumerate(data.get("surfaces", [])):
-            try:
-                surfaces.append(SurfaceSpec(**{k: _from_json(v) for k, v in entry.items() if k != "kind"}, kind=entry.get("kind", "plane")))
-            except (SceneError, TypeError, ValueError, AttributeError) as exc:
-                raise fail(f"surfaces[{i}]", str(exc)) from exc
-
-        try:
-            options = DisplayOptions(**data.get("options", {}))
-        except TypeError as exc:
-            raise fail("options", str(exc)) from exc
-        pair = data.get("pair")
-        try:
-            return cls(
-                cameras=tuple(cameras),
-                points=tuple(points),
-                surfaces=tuple(surfaces),
-                pair=tuple(pair) if pair else None,
-                selected_point=data.get("selected_point"),
-                options=options,
-                locked=frozenset(data.get("locked", ())),
-                highlighted=frozenset(data.get("highlighted", ())),
-                title=str(data.get("title", "")),
-            )
-        except SceneError as exc:
-            raise fail(str(exc).split(":")[0], str(exc).split(":", 1)[-1].strip()) from exc
+        return scene_from_dict(data, source)
 
     def save(self, path: str | Path) -> None:
-        """Write the scene as indented JSON (atomically: a crash never leaves half a file)."""
-        path = Path(path)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
-        tmp.replace(path)
+        """Write the scene file atomically (:func:`egtviz.scene.io.save_scene_file`)."""
+        from .io import save_scene_file
+
+        save_scene_file(self, path)
 
     @classmethod
     def load(cls, path: str | Path) -> Scene:
-        path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise SceneFileError(f"{path}: cannot read: {exc.strerror or exc}") from exc
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise SceneFileError(f"{path}: line {exc.lineno}, column {exc.colno}: not valid JSON ({exc.msg})") from exc
-        return cls.from_dict(data, source=str(path))
+        """Read a scene file (:func:`egtviz.scene.io.load_scene_file`)."""
+        from .io import load_scene_file
+
+        return load_scene_file(path)
 
 
 _SCENE_FIELDS = tuple(f.name for f in dataclasses.fields(Scene))
@@ -260,22 +259,16 @@ class _Points(tuple):
 
 
 def _points_tuple(points: Any) -> _Points:
-    """Points as a tuple of float triples, checked in one vectorised pass."""
-    try:
-        seq = points if isinstance(points, (tuple, list)) else list(points)
-        if all(type(p) is tuple and len(p) == 3 for p in seq):
-            arr = np.array(seq, dtype=np.float64).reshape(-1, 3)
-            if np.isfinite(arr).all():
-                if all(type(c) is float for p in seq for c in p):
-                    return _Points.trusted(seq, arr)
-                return _Points.trusted(map(tuple, arr.tolist()), arr)
-    except (TypeError, ValueError):
-        pass
-    for i, p in enumerate(points):
-        _triple(p, f"points[{i}]")
-    arr = np.array(points, dtype=np.float64).reshape(-1, 3)
-    return _Points.trusted(map(tuple, arr.tolist()), arr)
+    """Points as a tuple of float triples, each coordinate a number in ``COORDINATE``; at most ``MAX_POINTS``."""
+    if isinstance(points, np.ndarray):
+        if points.dtype.kind not in "iuf" or points.ndim != 2 or points.shape[1] != 3:
+            raise SceneError(f"points: expected an (N, 3) array of numbers, got {points.dtype} {points.shape}")
+        points = points.tolist()
+    seq = _sequence(points, "points", MAX_POINTS)
+    if all(type(p) is tuple and len(p) == 3 and type(p[0]) is type(p[1]) is type(p[2]) is float for p in seq):
+        arr = np.array(seq, dtype=np.float64).reshape(-1, 3)
+        if len(arr) == 0 or np.abs(arr).max() <= COORDINATE.high:  # NaN fails this too
+            return _Points.trusted(seq, arr)
+    checked = [_triple(p, f"points[{i}]") for i, p in enumerate(seq)]
+    return _Points.trusted(checked, np.array(checked, dtype=np.float64).reshape(-1, 3))
 
-
-def _from_json(value: Any) -> Any:
-    return tuple(value) if isinstance(value, list) else value

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Any, ClassVar, Literal
@@ -17,6 +18,24 @@ import numpy as np
 
 from ..geometry import GeometryError, Intrinsics, PinholeCamera, Pose
 from ..geometry.poses import EGT_CAMERA_BASE, rotx, roty, rotz, ypr_from_egt_rotation
+from .limits import (
+    ANGLE_DEG,
+    COORDINATE,
+    FOCAL_LENGTH,
+    FOCAL_PIXELS,
+    IMAGE_SIZE,
+    MAX_NAME_LENGTH,
+    MIRROR_B_OVER_A,
+    MIRROR_PARAMETER,
+    PANORAMIC_FOCAL_PIXELS,
+    PIXELS_PER_METRE,
+    PRINCIPAL_POINT,
+    SKEW,
+    SKEW_OVER_FOCAL,
+    SURFACE_SAMPLES,
+    SURFACE_SIZE,
+    Range,
+)
 
 _isfinite = math.isfinite
 _BASE_T = EGT_CAMERA_BASE.T.tolist()
@@ -26,29 +45,104 @@ class SceneError(ValueError):
     """A change to a scene that cannot be applied (the scene is left unchanged)."""
 
 
-def _numbers(value: Any, name: str, n: int) -> tuple[float, ...]:
-    """``value`` as ``n`` finite floats, or a SceneError naming ``name``."""
-    if type(value) is tuple and len(value) == n and all(type(v) is float for v in value):
-        x = value  # the usual case (every drag): nothing to convert
+class OutOfRangeError(SceneError):
+    """A number outside its plausible range (``egtviz.scene.limits``).
+
+    The attributes let a GUI restate the refusal in its own units.
+    """
+
+    def __init__(self, camera: str | None, field: str, value: float, limit: Range) -> None:
+        self.camera = camera
+        """Name of the camera the value belongs to, or None (a point, a surface)."""
+        self.field = field
+        """The spec field (``"focal_length"``, ``"position"``, ...)."""
+        self.value = value
+        self.limit = limit
+        owner = f"camera {camera!r}: " if camera is not None else ""
+        kind = "a whole number in " if limit.integer else ""
+        super().__init__(f"{owner}{field}: expected {kind}{limit.describe()}, got {_short(value)}")
+
+
+def _short(value: Any) -> str:
+    """``repr(value)`` cut to a short prefix (a bad value may be a huge string or integer)."""
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**30:
+        return "an integer with more than 30 digits"
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+_NUMBER_TYPES = (int, float, np.integer, np.floating)
+
+
+def _number(value: Any, name: str, owner: str = "") -> float:
+    """``value`` as a finite float; strings, booleans, None and containers are refused."""
+    if type(value) is float:
+        x = value
+    elif isinstance(value, (bool, np.bool_)) or not isinstance(value, _NUMBER_TYPES):
+        raise SceneError(f"{owner}{name}: expected a number, got {_short(value)}")
     else:
         try:
+            x = float(value)
+        except OverflowError:
+            raise SceneError(f"{owner}{name}: expected a finite number, got {_short(value)}") from None
+    if not _isfinite(x):
+        raise SceneError(f"{owner}{name}: expected a finite number, got {_short(value)}")
+    return x
+
+
+def _ranged(value: Any, limit: Range, name: str, camera: str | None = None) -> float:
+    """``value`` as a float inside ``limit`` (a whole number if ``limit.integer``), or an error naming it."""
+    owner = f"camera {camera!r}: " if camera is not None else ""
+    x = _number(value, name, owner)
+    if x not in limit or (limit.integer and not x.is_integer()):
+        raise OutOfRangeError(camera, name, x, limit)
+    return x
+
+
+def _numbers(value: Any, name: str, n: int, limit: Range = COORDINATE, camera: str | None = None) -> tuple[float, ...]:
+    """``value`` as ``n`` floats inside ``limit``, or a SceneError naming ``name``."""
+    lo, hi = limit.low, limit.high
+    if type(value) is tuple and len(value) == n and all(type(v) is float for v in value):
+        if all(lo <= v <= hi for v in value):  # the usual case (every drag): nothing to convert
+            return value
+        x = value
+    else:
+        owner = f"camera {camera!r}: " if camera is not None else ""
+        if isinstance(value, np.ndarray):
+            if value.ndim != 1:
+                raise SceneError(f"{owner}{name}: expected {_COUNT[n]} numbers, got an array of shape {value.shape}")
+            value = value.tolist()
+        if not isinstance(value, (tuple, list)):
+            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} numbers, got {_short(value)}")
+        if len(value) != n:
+            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} finite numbers, got {len(value)}")
+        for v in value:
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, _NUMBER_TYPES):
+                raise SceneError(f"{owner}{name}: expected {_COUNT[n]} numbers, got {_short(v)}")
+        try:
             x = tuple(float(v) for v in value)
-        except (TypeError, ValueError) as exc:
-            raise SceneError(f"{name}: expected {_COUNT[n]} numbers, got {value!r}") from exc
-    if len(x) != n or not all(map(_isfinite, x)):
-        raise SceneError(f"{name}: expected {_COUNT[n]} finite numbers, got {value!r}")
+        except OverflowError:
+            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} finite numbers, got {_short(value)}") from None
+    for v in x:
+        if not _isfinite(v):
+            owner = f"camera {camera!r}: " if camera is not None else ""
+            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} finite numbers, got {_short(v)}")
+        if not lo <= v <= hi:
+            raise OutOfRangeError(camera, name, v, limit)
     return x
 
 
 _COUNT = {2: "two", 3: "three"}
 
 
-def _triple(value: Any, name: str) -> tuple[float, float, float]:
-    return _numbers(value, name, 3)  # type: ignore[return-value]
+def _triple(value: Any, name: str, limit: Range = COORDINATE, camera: str | None = None) -> tuple[float, float, float]:
+    return _numbers(value, name, 3, limit, camera)  # type: ignore[return-value]
 
 
-def _pair(value: Any, name: str) -> tuple[float, float]:
-    return _numbers(value, name, 2)  # type: ignore[return-value]
+def _pair(value: Any, name: str, limit: Range, camera: str | None = None) -> tuple[float, float]:
+    return _numbers(value, name, 2, limit, camera)  # type: ignore[return-value]
 
 
 def _trusted_pose(R: Any, t: tuple[float, float, float]) -> Pose:
@@ -115,10 +209,29 @@ def _intrinsics(*args: Any) -> Intrinsics:
     return _intrinsics_cached(*args)
 
 
+def has_control_characters(text: str) -> bool:
+    """True if ``text`` holds a control character (C0, DEL, C1): refused in names and titles."""
+    return _CONTROL.search(text) is not None
+
+
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
+
+
 def _check_name(name: Any) -> str:
     if not isinstance(name, str) or not name.strip():
-        raise SceneError(f"name: expected a non-empty string, got {name!r}")
-    return name.strip()
+        raise SceneError(f"name: expected a non-empty string, got {_short(name)}")
+    name = name.strip()
+    if len(name) > MAX_NAME_LENGTH or has_control_characters(name) or name.startswith("point:"):
+        raise SceneError(
+            f"name: expected at most {MAX_NAME_LENGTH} characters, no control characters and no 'point:' prefix, "
+            f"got {_short(name)}"
+        )
+    return name
+
+
+def _whole(value: Any, limit: Range, name: str, camera: str | None) -> int:
+    """A whole number inside ``limit`` (``640`` or ``640.0``; ``640.5`` and ``True`` are refused)."""
+    return int(_ranged(value, limit, name, camera))
 
 
 @dataclass(frozen=True)
@@ -142,11 +255,25 @@ class PinholeSpec:
     kind: ClassVar[Literal["pinhole"]] = "pinhole"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "name", _check_name(self.name))
-        object.__setattr__(self, "position", _triple(self.position, "position"))
-        object.__setattr__(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg"))
-        object.__setattr__(self, "pixels_per_metre", _pair(self.pixels_per_metre, "pixels_per_metre"))
-        object.__setattr__(self, "principal_point", _pair(self.principal_point, "principal_point"))
+        name = _check_name(self.name)
+        set_ = object.__setattr__
+        set_(self, "name", name)
+        set_(self, "position", _triple(self.position, "position", COORDINATE, name))
+        set_(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
+        set_(self, "focal_length", _ranged(self.focal_length, FOCAL_LENGTH, "focal_length", name))
+        set_(self, "pixels_per_metre", _pair(self.pixels_per_metre, "pixels_per_metre", PIXELS_PER_METRE, name))
+        set_(self, "principal_point", _pair(self.principal_point, "principal_point", PRINCIPAL_POINT, name))
+        set_(self, "skew", _ranged(self.skew, SKEW, "skew", name))
+        set_(self, "width", _whole(self.width, IMAGE_SIZE, "width", name))
+        set_(self, "height", _whole(self.height, IMAGE_SIZE, "height", name))
+        for k in self.pixels_per_metre:
+            if self.focal_length * k not in FOCAL_PIXELS:
+                raise OutOfRangeError(name, "focal_length * pixels_per_metre", self.focal_length * k, FOCAL_PIXELS)
+        if self.skew / (self.focal_length * self.pixels_per_metre[0]) not in SKEW_OVER_FOCAL:
+            raise OutOfRangeError(
+                name, "skew / (focal_length * pixels_per_metre[0])",
+                self.skew / (self.focal_length * self.pixels_per_metre[0]), SKEW_OVER_FOCAL,
+            )
         try:
             self.intrinsics  # noqa: B018 - validates focal length, pixel size, image size
         except GeometryError as exc:
@@ -233,12 +360,21 @@ class PanoramicSpec:
     kind: ClassVar[Literal["panoramic"]] = "panoramic"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "name", _check_name(self.name))
-        object.__setattr__(self, "position", _triple(self.position, "position"))
-        object.__setattr__(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg"))
-        object.__setattr__(self, "principal_point", _pair(self.principal_point, "principal_point"))
-        if self.mirror not in ("hyperbolic", "parabolic"):
-            raise SceneError(f"camera {self.name!r}: mirror must be 'hyperbolic' or 'parabolic', got {self.mirror!r}")
+        name = _check_name(self.name)
+        set_ = object.__setattr__
+        set_(self, "name", name)
+        set_(self, "position", _triple(self.position, "position", COORDINATE, name))
+        set_(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
+        if not isinstance(self.mirror, str) or self.mirror not in ("hyperbolic", "parabolic"):
+            raise SceneError(f"camera {name!r}: mirror: expected 'hyperbolic' or 'parabolic', got {_short(self.mirror)}")
+        set_(self, "a", _ranged(self.a, MIRROR_PARAMETER, "a", name))
+        set_(self, "b", _ranged(self.b, MIRROR_PARAMETER, "b", name))
+        if self.mirror == "hyperbolic" and self.b / self.a not in MIRROR_B_OVER_A:
+            raise OutOfRangeError(name, "b/a", self.b / self.a, MIRROR_B_OVER_A)
+        set_(self, "focal_pixels", _ranged(self.focal_pixels, PANORAMIC_FOCAL_PIXELS, "focal_pixels", name))
+        set_(self, "principal_point", _pair(self.principal_point, "principal_point", PRINCIPAL_POINT, name))
+        set_(self, "width", _whole(self.width, IMAGE_SIZE, "width", name))
+        set_(self, "height", _whole(self.height, IMAGE_SIZE, "height", name))
         try:
             self.camera()
         except GeometryError as exc:
@@ -282,10 +418,6 @@ class PanoramicSpec:
         if elsewhere is not None:  # made by with_pose: the same mirror and CCD, moved
             return _moved_camera(elsewhere, self.pose)
 
-        for name in ("focal_pixels", "a", "b"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, float)) or not np.isfinite(value) or value <= 0:
-                raise GeometryError(f"{name}: expected a positive finite number, got {value!r}")
         return CatadioptricCamera(self.pose, self.mirror_model(), self.K, self.width, self.height)
 
     @staticmethod
@@ -320,9 +452,9 @@ def _with_pose(spec: Any, position: Any, ypr_deg: Any) -> Any:
     for name in _field_names(cls):  # the fields only: cached values (the camera) belong to the old pose
         state[name] = old[name]
     if position is not None:
-        state["position"] = _triple(position, "position")
+        state["position"] = _triple(position, "position", COORDINATE, old["name"])
     if ypr_deg is not None:
-        state["ypr_deg"] = _triple(ypr_deg, "ypr_deg")
+        state["ypr_deg"] = _triple(ypr_deg, "ypr_deg", ANGLE_DEG, old["name"])
     if cls is PanoramicSpec:
         built = old.get("_camera", old.get("_camera_elsewhere"))
         if built is not None:
@@ -351,21 +483,28 @@ class SurfaceSpec:
     """Plane normal (ignored by sphere and mesh)."""
     samples: int = 100
     path: str = ""
-    """Mesh file (relative to ``assets/`` or absolute), for ``kind = "mesh"``."""
+    """For ``kind = "mesh"``: the name of a mesh in the package's assets (:func:`egtviz.scene.surfaces.mesh_names`).
+    Only a plain file name there is accepted; the mesh is loaded and checked when the spec is made."""
 
     def __post_init__(self) -> None:
-        if self.kind not in ("plane", "sphere", "mesh"):
-            raise SceneError(f"surface kind: expected plane, sphere or mesh, got {self.kind!r}")
-        object.__setattr__(self, "center", _triple(self.center, "center"))
-        object.__setattr__(self, "normal", _triple(self.normal, "normal"))
-        if np.linalg.norm(self.normal) < 1e-12:
-            raise SceneError("surface normal: must not be zero")
-        if not np.isfinite(self.size) or self.size <= 0:
-            raise SceneError(f"surface size: expected a positive number, got {self.size!r}")
-        if int(self.samples) != self.samples or not 1 <= self.samples <= 10_000:
-            raise SceneError(f"surface samples: expected a whole number in 1..10000, got {self.samples!r}")
-        if self.kind == "mesh" and not self.path:
-            raise SceneError("surface path: a mesh surface needs a file")
+        if not isinstance(self.kind, str) or self.kind not in ("plane", "sphere", "mesh"):
+            raise SceneError(f"surface kind: expected plane, sphere or mesh, got {_short(self.kind)}")
+        set_ = object.__setattr__
+        set_(self, "center", _triple(self.center, "center"))
+        set_(self, "normal", _triple(self.normal, "normal"))
+        if math.hypot(*self.normal) < 1e-6:
+            raise SceneError(f"surface normal: must not be (nearly) zero, got {self.normal}")
+        set_(self, "size", _ranged(self.size, SURFACE_SIZE, "size"))
+        set_(self, "samples", int(_ranged(self.samples, SURFACE_SAMPLES, "samples")))
+        if not isinstance(self.path, str):
+            raise SceneError(f"surface path: expected a mesh name, got {_short(self.path)}")
+        if self.kind != "mesh":
+            if self.path:
+                raise SceneError(f"surface path: only a mesh surface has one, got {_short(self.path)}")
+            return
+        from .surfaces import mesh_samples
+
+        mesh_samples(self.path, self.samples)  # loads and checks the mesh (cached by name)
 
 
 @dataclass(frozen=True)
@@ -377,6 +516,11 @@ class DisplayOptions:
     show_frames: bool = True
     show_labels: bool = True
     show_surfaces: bool = True
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            if type(getattr(self, f.name)) is not bool:
+                raise SceneError(f"options: {f.name}: expected true or false, got {_short(getattr(self, f.name))}")
 
 
 def spec_to_dict(spec: Any) -> dict[str, Any]:

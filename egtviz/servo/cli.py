@@ -6,14 +6,41 @@ The lead wires :func:`add_parser` and :func:`run` into ``egtviz/cli.py``.
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import math
+import os
 import sys
 from typing import Any
 
+from ..files import FileSafetyError, check_write_target, printable, write_atomic
 from .result import ServoResult
 
 ESTIMATOR_CHOICES = {"true": None, "linear": 1, "normalized": 2, "sampson": 3}
+
+
+MAX_STEPS = 100_000
+"""Most steps a headless run may take (a run at the default settings takes at most 1500)."""
+MAX_NOISE_PX = 100.0
+MAX_BETA = 1e3
+MAX_SEED = 2**63 - 1
+_PINHOLE_ONLY = ("beta", "estimator")
+
+
+def whole_number_in(low: int, high: int):
+    """An argparse type: a whole number in ``low..high`` (``1e9`` and ``2.5`` are refused)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text, 10)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number in {low}..{high}, got {text!r:.40}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a whole number in {low}..{high}, got {value}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -21,21 +48,30 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "servo",
         help="run a visual-servoing simulation headless (EGT section 7)",
-        description="Simulate the pin-hole arm (Rives' hybrid task) or the panoramic robot (bi-conics) servo.",
+        description="Simulate the pin-hole arm (Rives' hybrid task) or the panoramic robot (bi-conics) servo; "
+        "print a summary and optionally write the run as JSON and a PNG plot. Options marked 'pin-hole' are "
+        "refused for the panoramic demo. Exit status: 0 converged, 1 did not converge or an output could not "
+        "be written, 2 a refused option.",
     )
     p.add_argument("demo", choices=["pinhole", "panoramic"], help="which demo to run")
-    p.add_argument("--seed", type=int, default=0, help="seed of the start pose and the noise (default 0)")
-    p.add_argument("--beta", type=float, default=1.0, help="pin-hole: weight of the translation task (default 1)")
-    p.add_argument("--noise", type=float, default=0.0, metavar="PX", help="image noise, pixels (default 0)")
+    p.add_argument("--seed", type=whole_number_in(0, MAX_SEED), default=0,
+                   help="seed of the start pose and the noise, a whole number >= 0 (default 0)")
+    p.add_argument("--beta", type=float, default=None,
+                   help=f"pin-hole: weight of the translation task, 0..{MAX_BETA:g} (default 1)")
+    p.add_argument("--noise", type=float, default=0.0, metavar="PX",
+                   help=f"image noise, pixels, 0..{MAX_NOISE_PX:g} (default 0)")
     p.add_argument(
         "--estimator",
         choices=list(ESTIMATOR_CHOICES),
-        default="true",
+        default=None,
         help="pin-hole: F from the true poses or estimated each step (default true)",
     )
-    p.add_argument("--steps", type=int, default=None, help="maximum number of steps")
-    p.add_argument("--json", metavar="FILE", default=None, help="write the full result as JSON")
-    p.add_argument("--plot", metavar="FILE.png", default=None, help="write a PNG of feature trails, controls, errors")
+    p.add_argument("--steps", type=whole_number_in(1, MAX_STEPS), default=None,
+                   help=f"maximum number of steps, 1..{MAX_STEPS} (default: the demo's own)")
+    p.add_argument("--json", metavar="FILE", default=None,
+                   help="write the full result as JSON (atomically; an existing regular file is replaced)")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="write a PNG of feature trails, controls and errors (atomically)")
     p.set_defaults(func=run)
     return p
 
@@ -47,16 +83,42 @@ def _simulate(args: argparse.Namespace, progress: Any) -> ServoResult:
     if args.demo == "pinhole":
         from .pinhole_arm import simulate_pinhole
 
-        return simulate_pinhole(beta=args.beta, f_algorithm=ESTIMATOR_CHOICES[args.estimator], **kwargs)
+        beta = 1.0 if args.beta is None else args.beta
+        return simulate_pinhole(beta=beta, f_algorithm=ESTIMATOR_CHOICES[args.estimator or "true"], **kwargs)
     from .panoramic_robot import simulate_panoramic
 
     return simulate_panoramic(**kwargs)
 
 
+def _refusal(args: argparse.Namespace) -> str | None:
+    """Why these options cannot run (checked before the simulation), or None."""
+    if args.demo != "pinhole":
+        for name in _PINHOLE_ONLY:
+            if getattr(args, name, None) is not None:
+                return f"--{name} is a pin-hole option; the {args.demo} demo does not use it"
+    for name, high, unit in (("beta", MAX_BETA, ""), ("noise", MAX_NOISE_PX, " px")):
+        value = getattr(args, name, None)
+        if value is not None and not (math.isfinite(value) and 0.0 <= value <= high):
+            return f"--{name}: expected a number in 0..{high:g}{unit}, got {value:g}"
+    if args.plot is not None and not str(args.plot).lower().endswith(".png"):
+        return f"--plot writes a PNG: expected a file name ending in .png, got {printable(args.plot)!r}"
+    outputs = [o for o in (args.json, args.plot) if o is not None]
+    if len(outputs) == 2 and os.path.abspath(outputs[0]) == os.path.abspath(outputs[1]):
+        return "--json and --plot name the same file"
+    try:
+        for target in outputs:
+            check_write_target(target)
+    except FileSafetyError as exc:
+        return f"cannot write the output: {exc}"
+    return None
+
+
 def run(args: argparse.Namespace) -> int:
-    """Run the sub-command: 0 when the run converged, 1 when it did not, 2 on invalid parameters."""
-    if args.noise is not None and (not math.isfinite(args.noise) or args.noise < 0):
-        print(f"egtviz servo: error: --noise must be a finite number of pixels >= 0, got {args.noise}", file=sys.stderr)
+    """Run the sub-command: 0 when the run converged, 1 when it did not (or an output could not be written),
+    2 on refused options (checked before the simulation starts)."""
+    refused = _refusal(args)
+    if refused is not None:
+        print(f"egtviz servo: error: {refused}", file=sys.stderr)
         return 2
     from tqdm import tqdm
 
@@ -76,16 +138,30 @@ def run(args: argparse.Namespace) -> int:
         return 2
     bar.close()
     print(result.summary())
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(result.to_json_dict(), fh, allow_nan=False)
-    if args.plot:
-        plot_result(result, args.plot)
+    try:
+        if args.json:
+            data = json.dumps(result.to_json_dict(), allow_nan=False).encode("utf-8")
+            write_atomic(args.json, data)
+        if args.plot:
+            write_atomic(args.plot, plot_png(result))
+    except (FileSafetyError, ValueError) as exc:
+        print(f"egtviz servo: error: cannot write the output: {exc}", file=sys.stderr)
+        return 1
     return 0 if result.converged else 1
 
 
-def plot_result(result: ServoResult, path: str) -> None:
-    """Write a PNG: feature trails in the image, the controls and the errors over time (matplotlib, Agg)."""
+def plot_png(result: ServoResult) -> bytes:
+    """The bytes of :func:`plot_result`'s PNG."""
+    buf = io.BytesIO()
+    plot_result(result, buf)
+    return buf.getvalue()
+
+
+def plot_result(result: ServoResult, path: Any) -> None:
+    """Write a PNG: feature trails in the image, the controls and the errors over time (matplotlib, Agg).
+
+    ``path`` is a file name or a binary file object (the command line writes through :func:`plot_png`).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -138,7 +214,7 @@ def plot_result(result: ServoResult, path: str) -> None:
     ax.legend(fontsize=7)
     fig.suptitle(result.summary()[:150], fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    fig.savefig(path, dpi=90, format="png")
     plt.close(fig)
 
 
@@ -146,7 +222,10 @@ def main(argv: list[str] | None = None) -> int:
     """Stand-alone entry point (``python -m egtviz.servo.cli pinhole ...``)."""
     parser = argparse.ArgumentParser(prog="egtviz")
     add_parser(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(["servo", *(argv if argv is not None else sys.argv[1:])])
+    try:
+        args = parser.parse_args(["servo", *(argv if argv is not None else sys.argv[1:])])
+    except SystemExit as exc:  # usage error (2) or --help (0)
+        return int(exc.code or 0)
     return args.func(args)
 
 

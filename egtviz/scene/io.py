@@ -1,0 +1,294 @@
+"""Scene files: bytes to a checked, drawable :class:`Scene` and back; safe reads and atomic writes.
+
+One validation for every way a scene file arrives (``egtviz scene check``, ``serve --scene``, a browser
+upload, lesson files): strict UTF-8, JSON with no duplicate keys and bounded nesting and integers, every
+entry type-checked against the limits of :mod:`egtviz.scene.limits`, then drawn once
+(:func:`egtviz.scene.compute_derived`). A file passes if and only if the viewer can draw it. Every
+refusal is a :class:`SceneFileError` naming the source, the entry and the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..files import FileSafetyError, printable, read_limited, write_atomic
+from .limits import (
+    MAX_CAMERAS,
+    MAX_JSON_DEPTH,
+    MAX_JSON_INT_DIGITS,
+    MAX_POINTS,
+    MAX_SCENE_FILE_BYTES,
+    MAX_SURFACES,
+)
+from .scene import FILE_FORMAT, FILE_VERSION, Scene, SceneFileError
+from .specs import CAMERA_KINDS, DisplayOptions, SceneError, SurfaceSpec, _short, spec_to_dict
+
+__all__ = [
+    "load_scene_file",
+    "save_scene_file",
+    "scene_from_argument",
+    "scene_from_bytes",
+    "scene_from_dict",
+    "scene_to_bytes",
+    "scene_to_dict",
+]
+
+_TOP_LEVEL = (
+    "format", "version", "title", "cameras", "points", "surfaces", "pair",
+    "selected_point", "options", "locked", "highlighted",
+)  # fmt: skip
+
+
+class _Refused(ValueError):
+    """A JSON text refused while it is parsed (duplicate key, huge integer, NaN)."""
+
+
+def _object_without_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _Refused(f"duplicate key {_short(key)}")
+        out[key] = value
+    return out
+
+
+def _bounded_int(text: str) -> int:
+    if len(text.lstrip("-")) > MAX_JSON_INT_DIGITS:
+        raise _Refused(f"an integer with more than {MAX_JSON_INT_DIGITS} digits ({text[:12]}...)")
+    return int(text)
+
+
+def _finite_float(text: str) -> float:
+    x = float(text)
+    if not np.isfinite(x):
+        raise _Refused(f"the number {text[:20]} is too large for a float")
+    return x
+
+
+def _no_constant(text: str) -> Any:
+    raise _Refused(f"{text} is not a JSON number")
+
+
+def _nesting_depth(value: Any) -> int:
+    """How deeply lists and objects nest in parsed JSON (1 for a flat list), counted without recursion."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, (list, dict)):
+            deepest = max(deepest, depth)
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
+def scene_from_bytes(data: bytes, source: str) -> Scene:
+    """A scene from the bytes of a scene file, checked completely (what an upload and the CLI use).
+
+    Args:
+        data: the file's content (UTF-8 JSON).
+        source: what to call the file in messages (a path or an upload's name).
+
+    Raises:
+        SceneFileError: ``"<source>: <entry>: <reason>"``.
+    """
+    source = printable(source)
+    if not isinstance(data, (bytes, bytearray)):
+        raise SceneFileError(f"{source}: expected the bytes of a file, got {type(data).__name__}")
+    if len(data) > MAX_SCENE_FILE_BYTES:
+        raise SceneFileError(f"{source}: {len(data) / 1e6:.3g} MB, more than the {MAX_SCENE_FILE_BYTES / 1e6:g} MB limit")
+    try:
+        text = bytes(data).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneFileError(f"{source}: byte {exc.start}: not UTF-8 text") from None
+    text = text.removeprefix("\ufeff")
+    try:
+        parsed = json.loads(
+            text,
+            object_pairs_hook=_object_without_duplicates,
+            parse_int=_bounded_int,
+            parse_float=_finite_float,
+            parse_constant=_no_constant,
+        )
+    except json.JSONDecodeError as exc:
+        raise SceneFileError(f"{source}: line {exc.lineno}, column {exc.colno}: not valid JSON ({exc.msg})") from None
+    except _Refused as exc:
+        raise SceneFileError(f"{source}: {exc}") from None
+    except RecursionError:  # the parser's own guard against deep nesting
+        raise SceneFileError(f"{source}: lists or objects nested more than {MAX_JSON_DEPTH} levels deep") from None
+    if _nesting_depth(parsed) > MAX_JSON_DEPTH:
+        raise SceneFileError(f"{source}: lists or objects nested more than {MAX_JSON_DEPTH} levels deep")
+    return scene_from_dict(parsed, source)
+
+
+def _entry(source: str, where: str, exc: Exception) -> SceneFileError:
+    return SceneFileError(f"{source}: {where}: {exc}")
+
+
+def _list(data: dict, key: str, source: str, limit: int) -> list:
+    value = data.get(key, [])
+    if not isinstance(value, list):
+        raise SceneFileError(f"{source}: {key}: expected a list, got {_short(value)}")
+    if len(value) > limit:
+        raise SceneFileError(f"{source}: {key}: at most {limit} entries, got {len(value)}")
+    return value
+
+
+def _fields(entry: Any, where: str, source: str, cls: type, what: str) -> dict[str, Any]:
+    """A JSON object's entries as keyword arguments of ``cls`` (lists become tuples); unknown keys refused."""
+    if not isinstance(entry, dict):
+        raise SceneFileError(f"{source}: {where}: expected an object, got {_short(entry)}")
+    known = {f.name for f in dataclasses.fields(cls)}
+    for key in entry:
+        if key not in known:
+            raise SceneFileError(f"{source}: {where}.{printable(key)}: unknown field for {what}")
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in entry.items()}
+
+
+def scene_from_dict(data: Any, source: str = "scene") -> Scene:
+    """A scene from parsed JSON data: every entry type-checked, then the scene drawn once.
+
+    Raises:
+        SceneFileError: ``"<source>: <entry>: <reason>"``.
+    """
+    source = printable(source)
+    if not isinstance(data, dict):
+        raise SceneFileError(f"{source}: top level: expected a JSON object, got {_short(data)}")
+    for key in data:
+        if key not in _TOP_LEVEL:
+            raise SceneFileError(f"{source}: {printable(key)}: unknown entry")
+    if "format" in data and data["format"] != FILE_FORMAT:
+        raise SceneFileError(f"{source}: format: expected {FILE_FORMAT!r}, got {_short(data['format'])}")
+    if "version" in data and (type(data["version"]) is not int or data["version"] != FILE_VERSION):
+        raise SceneFileError(f"{source}: version: this egtviz reads version {FILE_VERSION}, got {_short(data['version'])}")
+
+    cameras = []
+    for i, entry in enumerate(_list(data, "cameras", source, MAX_CAMERAS)):
+        where = f"cameras[{i}]"
+        kind = entry.get("kind") if isinstance(entry, dict) else None
+        if type(kind) is not str or kind not in CAMERA_KINDS:
+            raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(CAMERA_KINDS)}, got {_short(kind)}")
+        entry = {k: v for k, v in entry.items() if k != "kind"}
+        spec_cls = CAMERA_KINDS[kind]
+        try:
+            cameras.append(spec_cls(**_fields(entry, where, source, spec_cls, f"a {kind} camera")))
+        except SceneError as exc:
+            if isinstance(exc, SceneFileError):
+                raise
+            raise _entry(source, where, exc) from None
+
+    points = _list(data, "points", source, MAX_POINTS)
+    points = [tuple(p) if isinstance(p, list) else p for p in points]
+
+    surfaces = []
+    for i, entry in enumerate(_list(data, "surfaces", source, MAX_SURFACES)):
+        where = f"surfaces[{i}]"
+        try:
+            surfaces.append(SurfaceSpec(**_fields(entry, where, source, SurfaceSpec, "a surface")))
+        except SceneError as exc:
+            if isinstance(exc, SceneFileError):
+                raise
+            raise _entry(source, where, exc) from None
+
+    options = data.get("options", {})
+    try:
+        options = DisplayOptions(**_fields(options, "options", source, DisplayOptions, "the display options"))
+    except SceneError as exc:
+        if isinstance(exc, SceneFileError):
+            raise
+        raise SceneFileError(f"{source}: {exc}") from None
+    pair = data.get("pair")
+    marks = {}
+    for key in ("locked", "highlighted"):
+        value = data.get(key, [])
+        if not isinstance(value, list) or not all(type(v) is str for v in value):
+            raise SceneFileError(f"{source}: {key}: expected a list of names, got {_short(value)}")
+        marks[key] = frozenset(value)
+    try:
+        scene = Scene(
+            cameras=tuple(cameras),
+            points=points,
+            surfaces=tuple(surfaces),
+            pair=tuple(pair) if isinstance(pair, list) else pair,
+            selected_point=data.get("selected_point"),
+            options=options,
+            title=data.get("title", ""),
+            **marks,
+        )
+    except SceneError as exc:  # messages start with the entry ("points[3]: ...", "pair: ...")
+        raise SceneFileError(f"{source}: {exc}") from None
+    from .derived import compute_derived
+
+    try:
+        compute_derived(scene)
+    except SceneError as exc:
+        raise SceneFileError(f"{source}: scene: {exc}") from None
+    return scene
+
+
+def scene_to_dict(scene: Scene) -> dict[str, Any]:
+    """The scene as plain JSON data (the file format, version ``FILE_VERSION``)."""
+    return {
+        "format": FILE_FORMAT,
+        "version": FILE_VERSION,
+        "title": scene.title,
+        "cameras": [spec_to_dict(c) for c in scene.cameras],
+        "points": [list(p) for p in scene.points],
+        "surfaces": [spec_to_dict(s) for s in scene.surfaces],
+        "pair": list(scene.pair) if scene.pair else None,
+        "selected_point": scene.selected_point,
+        "options": dataclasses.asdict(scene.options),
+        "locked": sorted(scene.locked),
+        "highlighted": sorted(scene.highlighted),
+    }
+
+
+def scene_to_bytes(scene: Scene) -> bytes:
+    """The scene file's bytes: indented UTF-8 JSON ending with a newline."""
+    return (json.dumps(scene_to_dict(scene), indent=2, allow_nan=False) + "\n").encode("utf-8")
+
+
+def load_scene_file(path: str | os.PathLike) -> Scene:
+    """Read a scene file: a regular file of at most ``MAX_SCENE_FILE_BYTES``, checked like any scene file.
+
+    Raises:
+        SceneFileError: the file is refused (not a regular file, too large, unreadable) or malformed.
+    """
+    try:
+        data = read_limited(path, MAX_SCENE_FILE_BYTES)
+    except FileSafetyError as exc:
+        raise SceneFileError(str(exc)) from None
+    return scene_from_bytes(data, os.fspath(path))
+
+
+def save_scene_file(scene: Scene, path: str | os.PathLike, *, overwrite: bool = True) -> None:
+    """Write a scene file atomically (``egtviz.files.write_atomic``: never a device, FIFO, folder or link).
+
+    Raises:
+        FileSafetyError: the target is refused or the write failed.
+    """
+    write_atomic(path, scene_to_bytes(scene), overwrite=overwrite)
+
+
+def scene_from_argument(value: str) -> Scene:
+    """A built-in scene by name (unless a file of that name exists), or a scene file.
+
+    Raises:
+        SceneFileError: the file is refused or malformed; for a name that is neither, the message lists the
+            built-in names.
+    """
+    from .examples import SCENES
+
+    value = os.fspath(value)
+    if value in SCENES and not os.path.lexists(value):
+        return SCENES[value]()
+    if not os.path.lexists(value):
+        raise SceneFileError(
+            f"{printable(value)}: no such file and not a built-in scene (built-in: {', '.join(SCENES)})"
+        )
+    return load_scene_file(Path(value))

@@ -1,0 +1,131 @@
+"""Every plausible range of a scene, in one place: scene files, specs, the model, the GUI and lesson files.
+
+A value outside these ranges is refused where it enters (a spec, a scene, a file, a field) with a message
+that names the entry and the range. The names are stable: the GUI reads them for its fields' min/max,
+converting units for display. ``docs/limits.md`` lists them with what each bad input gets.
+
+Ranges are inclusive. Lengths are in metres (scene units), image quantities in pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = [
+    "ANGLE_DEG",
+    "COORDINATE",
+    "FOCAL_LENGTH",
+    "FOCAL_PIXELS",
+    "IMAGE_SIZE",
+    "MAX_CAMERAS",
+    "MAX_JSON_DEPTH",
+    "MAX_JSON_INT_DIGITS",
+    "MAX_MESH_FILE_BYTES",
+    "MAX_NAME_LENGTH",
+    "MAX_POINTS",
+    "MAX_SCENE_FILE_BYTES",
+    "MAX_SURFACES",
+    "MAX_TITLE_LENGTH",
+    "MAX_TOTAL_SURFACE_SAMPLES",
+    "MIRROR_B_OVER_A",
+    "MIRROR_PARAMETER",
+    "PANORAMIC_FOCAL_PIXELS",
+    "PIXELS_PER_METRE",
+    "PIXEL_SIZE",
+    "PRINCIPAL_POINT",
+    "Range",
+    "SKEW",
+    "SKEW_OVER_FOCAL",
+    "SURFACE_SAMPLES",
+    "SURFACE_SIZE",
+]
+
+
+@dataclass(frozen=True)
+class Range:
+    """An inclusive interval ``low <= x <= high`` of a quantity in ``unit``."""
+
+    low: float
+    high: float
+    unit: str = ""
+    """Unit of ``low`` and ``high`` as stored in a scene (``"m"``, ``"px"``, ``"deg"``, ``""``)."""
+    integer: bool = False
+    """Only whole numbers are accepted."""
+
+    def __contains__(self, x: float) -> bool:
+        return self.low <= x <= self.high  # False for NaN
+
+    def describe(self, scale: float = 1.0, unit: str | None = None) -> str:
+        """``"low..high unit"``, the bounds multiplied by ``scale`` (e.g. ``1e3`` and ``"mm"`` for metres)."""
+        u = self.unit if unit is None else unit
+        return f"{self.low * scale:g}..{self.high * scale:g}" + (f" {u}" if u else "")
+
+
+# -- files ---------------------------------------------------------------------------------------------
+
+MAX_SCENE_FILE_BYTES = 2_000_000
+"""Largest scene file read (2 MB), checked before reading: CLI, ``serve --scene`` and uploads."""
+MAX_JSON_DEPTH = 8
+"""Deepest nesting of JSON arrays and objects in a scene file (a scene needs 4)."""
+MAX_JSON_INT_DIGITS = 15
+"""Most digits of a JSON integer (larger values are not exact as floats anyway)."""
+MAX_MESH_FILE_BYTES = 5_000_000
+"""Largest mesh asset read (5 MB)."""
+
+# -- counts --------------------------------------------------------------------------------------------
+
+MAX_CAMERAS = 8
+"""Cameras in a scene (each has an image panel)."""
+MAX_POINTS = 2000
+"""Points in a scene; also the GUI's "how many points" maximum."""
+MAX_SURFACES = 8
+"""Surfaces in a scene."""
+SURFACE_SAMPLES = Range(1, 10_000, "", integer=True)
+"""Samples of one surface."""
+MAX_TOTAL_SURFACE_SAMPLES = 20_000
+"""Samples of all surfaces of a scene together."""
+MAX_NAME_LENGTH = 40
+"""Characters of a camera name (1 or more, no control characters)."""
+MAX_TITLE_LENGTH = 200
+"""Characters of a scene title (no control characters)."""
+
+# -- placement -----------------------------------------------------------------------------------------
+
+COORDINATE = Range(-1e4, 1e4, "m")
+"""Each coordinate of a camera position, a point and a surface centre."""
+ANGLE_DEG = Range(-3600.0, 3600.0, "deg")
+"""Each of yaw, pitch, roll."""
+
+# -- pin-hole camera -----------------------------------------------------------------------------------
+
+FOCAL_LENGTH = Range(1e-4, 10.0, "m")
+"""Focal length f (0.1 mm to 10 m; the tutorial's ``K = I`` scenes use 1 m)."""
+PIXEL_SIZE = Range(1e-7, 1.0, "m")
+"""Side of a pixel (0.1 um to 1 m), the inverse of :data:`PIXELS_PER_METRE`."""
+PIXELS_PER_METRE = Range(1.0 / PIXEL_SIZE.high, 1.0 / PIXEL_SIZE.low, "px/m")
+"""ku, kv as a spec stores them: 1 / :data:`PIXEL_SIZE`."""
+FOCAL_PIXELS = Range(1.0, 1e6, "px")
+"""ku f and kv f, the focal length in pixels (what K holds): with :data:`PRINCIPAL_POINT` and
+:data:`SKEW_OVER_FOCAL` this keeps K well conditioned (condition number below about 1e10)."""
+PRINCIPAL_POINT = Range(-1e5, 1e5, "px")
+"""Each of u0, v0."""
+SKEW = Range(-1e5, 1e5, "px")
+"""gamma, the skew entry of K; also ``|gamma| <= ku f`` (:data:`SKEW_OVER_FOCAL`)."""
+SKEW_OVER_FOCAL = Range(-1.0, 1.0, "")
+"""gamma / (ku f) = cot(theta), theta the angle between the pixel axes: 45 to 135 degrees."""
+IMAGE_SIZE = Range(1, 8192, "px", integer=True)
+"""Image width and height, whole pixels (pin-hole and panoramic)."""
+
+# -- panoramic camera ----------------------------------------------------------------------------------
+
+PANORAMIC_FOCAL_PIXELS = Range(1.0, 1e6, "px")
+"""The CCD's focal length in pixels."""
+MIRROR_PARAMETER = Range(1e-3, 100.0, "m")
+"""Hyperbola a and b; parabola h (stored as ``a``)."""
+MIRROR_B_OVER_A = Range(1e-2, 1e2, "")
+"""b / a of a hyperbolic mirror: flatter or sharper mirrors are not drawn reliably."""
+
+# -- surfaces ------------------------------------------------------------------------------------------
+
+SURFACE_SIZE = Range(1e-3, 1e3, "m")
+"""Plane side, sphere radius, mesh scale factor."""
