@@ -1,0 +1,137 @@
+"""``egtviz serve`` with addresses it cannot use, a wildcard host and a busy port (real subprocesses)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+from egtviz.viewer.cli import ServeAddressError, _port, check_bind, reachable_urls
+
+EGTVIZ = [sys.executable, "-m", "egtviz.cli"]
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "120"}
+
+
+@pytest.mark.parametrize(("args", "named"), [
+    (["--host", "8.8.8.8", "--port", "0"], "8.8.8.8"),  # not an address of this machine
+    (["--host", "not-a-host", "--port", "0"], "not-a-host"),  # does not resolve
+    (["--port", "99999"], "99999"),
+    (["--port", "-5"], "-5"),
+])
+def test_unusable_address_is_one_line_and_exit_1(args, named):
+    t0 = time.monotonic()
+    done = subprocess.run([*EGTVIZ, "serve", *args], capture_output=True, text=True, timeout=30, env=_env())
+    elapsed = time.monotonic() - t0
+    assert done.returncode == 1, (done.stdout, done.stderr)
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert named in lines[0] and "Traceback" not in done.stderr
+    assert done.stdout == ""
+    assert elapsed < 15.0  # before the fix four of these hung forever
+
+
+def test_top_level_options_are_checked_the_same_way():
+    done = subprocess.run([*EGTVIZ, "--port", "70000"], capture_output=True, text=True, timeout=30, env=_env())
+    assert done.returncode == 1
+    assert done.stderr.strip() == ("egtviz serve: argument --port: 70000 is not a port number "
+                                   "(expected an integer 0..65535)")
+
+
+def _serve_until_running(args: list[str]) -> tuple[str, str]:
+    """Start ``egtviz serve``, wait for its "running at" line, stop it with Ctrl-C; (stdout, stderr)."""
+    proc = subprocess.Popen([*EGTVIZ, "serve", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=_env())
+    try:
+        out = []
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            out.append(line)
+            if line.startswith("egtviz running at"):
+                break
+        proc.send_signal(signal.SIGINT)
+        rest, err = proc.communicate(timeout=20)
+        return "".join(out) + rest, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+
+
+def _running_line(stdout: str) -> str:
+    return next(line for line in stdout.splitlines() if line.startswith("egtviz running at"))
+
+
+def test_wildcard_host_prints_reachable_urls_and_a_warning():
+    out, err = _serve_until_running(["--host", "0.0.0.0", "--port", "0"])
+    line = _running_line(out)
+    urls = line.removeprefix("egtviz running at ").split()
+    assert urls and urls[0].startswith("http://127.0.0.1:")
+    assert all("0.0.0.0" not in u for u in urls)
+    port = int(urls[0].rsplit(":", 1)[1])
+    assert port > 0 and all(u.endswith(f":{port}") for u in urls)
+    assert "warning: --host 0.0.0.0 opens the app to the network" in err
+
+
+def test_busy_port_is_reported_and_the_next_free_one_used():
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        out, err = _serve_until_running(["--port", str(port)])
+    assert f"port {port} is busy" in err
+    served = int(_running_line(out).rsplit(":", 1)[1])
+    assert served != port and served > 0
+
+
+# -- the checks in-process ------------------------------------------------------------------------------------
+
+
+def test_check_bind_accepts_loopback_and_reports_busy_ports():
+    assert check_bind("127.0.0.1", 0).addresses == ("127.0.0.1",)
+    assert check_bind("127.0.0.1", 0).port_busy is False
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        assert check_bind("127.0.0.1", taken.getsockname()[1]).port_busy is True
+
+
+@pytest.mark.parametrize(("host", "port", "match"), [
+    ("8.8.8.8", 0, "8.8.8.8 is not an address of this machine"),
+    ("127.0.0.1", 65536, "expected an integer 0..65535"),
+    ("127.0.0.1", True, "expected an integer 0..65535"),
+    ("", 0, "expected a host name or an IP address"),
+])
+def test_check_bind_refuses_in_one_line(host, port, match):
+    with pytest.raises(ServeAddressError, match=match) as info:
+        check_bind(host, port)
+    assert "\n" not in str(info.value)
+
+
+def test_port_argument_type():
+    assert _port("0") == 0 and _port("65535") == 65535
+    for bad in ("-5", "65536", "80.5", "eighty", ""):
+        with pytest.raises(argparse.ArgumentTypeError, match="expected an integer 0..65535"):
+            _port(bad)
+
+
+def test_reachable_urls():
+    assert reachable_urls("127.0.0.1", 8080) == ["http://127.0.0.1:8080"]
+    assert reachable_urls("::1", 8080) == ["http://[::1]:8080"]
+    urls = reachable_urls("0.0.0.0", 8080)
+    assert urls[0] == "http://127.0.0.1:8080"
+    assert len(urls) == len(set(urls))
+    assert all("0.0.0.0" not in u and u.endswith(":8080") and "[" not in u for u in urls)
+    v6 = reachable_urls("::", 8080)
+    assert v6[0] == "http://[::1]:8080" and all(u.startswith("http://[") for u in v6)
