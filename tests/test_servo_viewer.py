@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 import time
+import types
 
 import numpy as np
 import pytest
@@ -126,16 +127,114 @@ def test_panoramic_demo_biconics(client):
         demo.close()
 
 
-def test_bad_parameters_are_shown_not_raised(client):
-    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False)
+@pytest.fixture
+def notes(client, monkeypatch):
+    got: list[tuple[str, str]] = []
+    monkeypatch.setattr(client, "add_notification", lambda title, body, **kw: got.append((title, body)))
+    return got
+
+
+def _fire(handle, client, value) -> None:
+    """What viser does for an incoming value: store it and call the handle's callbacks."""
+    handle._impl.value = value
+    for cb in handle._impl.update_cb:
+        cb(types.SimpleNamespace(target=handle, client=client, client_id=None))
+
+
+@pytest.mark.parametrize(
+    "field, text, message",
+    [
+        ("f_beta", "-1", "beta must be between 0 and 100, got -1"),
+        ("f_steps", "0", "max steps must be between 1 and 10000, got 0"),
+        ("f_steps", "1e9", "max steps must be between 1 and 10000, got 1000000000"),
+        ("f_noise", "-3", "noise must be between 0 px and 50 px, got -3 px"),
+        ("f_seed", "1.5", "seed must be a whole number, got 1.5"),
+        ("f_seed", "abc", "seed: expected a number, got 'abc'"),
+        ("f_noise", "nan", "noise: expected a number, got 'nan'"),
+    ],
+)
+def test_bad_run_fields_are_refused_with_a_notification(client, notes, field, text, message):
+    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
     try:
-        demo.f_beta.value = -1.0
+        handle = getattr(demo, field)
+        shown, params = handle.value, demo.params()
+        handle.value = text
+        assert notes[-1] == ("Value refused", message)
+        assert handle.value == shown and demo.params() == params  # the run uses the last valid values
+        handle.value = "2"  # a good value afterwards is taken
+        assert notes[-1] == ("Value refused", message) and len(notes) == 1
+    finally:
+        demo.close()
+
+
+def test_run_fields_are_judged_once_the_user_stops_typing(client, notes):
+    demo = ServoDemo(client, "panoramic", steps=20, autorun=False, autoplay=False, field_delay=0.15)
+    try:
+        for text in ("0", "0.", "0.5"):  # keystrokes; "0." alone is not a number
+            demo.f_noise.value = text
+            time.sleep(0.02)
+        deadline = time.time() + 5
+        while demo.params()["noise_px"] != 0.5 and time.time() < deadline:
+            time.sleep(0.01)
+        assert demo.params()["noise_px"] == 0.5 and notes == []
+    finally:
+        demo.close()
+
+
+def test_set_params_refuses_bad_values_and_changes_nothing(client):
+    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    try:
+        before = demo.params()
+        for bad in ({"beta": -1.0}, {"steps": 0}, {"noise_px": -3.0}, {"seed": 1.5}, {"seed": True},
+                    {"estimator": "magic"}, {"speed": "9x"}, {"steps": 10, "beta": float("nan")}):
+            with pytest.raises(ValueError):
+                demo.set_params(**bad)
+            assert demo.params() == before
+        with pytest.raises(ValueError, match="not a parameter"):
+            ServoDemo.set_params(demo, wheels=2)
+        demo.set_params(beta=0.5, steps=30, seed="4294967295")
+        assert demo.params() == {**before, "beta": 0.5, "steps": 30, "seed": 4294967295}
+        assert demo.f_beta.value == "0.5" and demo.f_steps.value == "30" and demo.f_seed.value == "4294967295"
+    finally:
+        demo.close()
+    with pytest.raises(ValueError, match="beta"):
+        ServoDemo(client, "pinhole", beta=-1.0, autorun=False)
+
+
+def test_forged_drop_downs_and_slider_are_refused(client, notes):
+    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    try:
+        assert demo.run(wait=True) and demo.result is not None
+        _fire(demo.f_estimator, client, "magic")
+        assert notes[-1] == ("Value refused", "F estimator: expected one of true, linear, normalized, sampson, got 'magic'")
+        assert demo.f_estimator.value == "true" and demo.params()["f_algorithm"] is None
+        _fire(demo.f_speed, client, "1000x")
+        assert "speed" in notes[-1][1] and demo.f_speed.value == "1x"
+        _fire(demo.slider, client, "abc")
+        assert notes[-1] == ("Value refused", "time: expected a number of seconds, got 'abc'")
+        demo.step(3)  # still working
+        assert demo.frame == 3
+    finally:
+        demo.close()
+
+
+def test_a_failing_run_is_shown_not_raised(client, notes, monkeypatch):
+    import egtviz.viewer.servo_demo as servo_demo
+
+    def refuse(**kw):
+        raise ValueError("beta: the simulation refused it")
+
+    monkeypatch.setattr(servo_demo, "simulate_pinhole", refuse)
+    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    try:
         assert demo.run(wait=True)
         assert demo.result is None
         assert "beta" in demo.error and "Bad parameters" in demo.status.content
         assert 'data-level="error"' in demo.status.content
         assert 'data-kind="message"' in demo.svg and "beta" in demo.svg
+        assert notes[-1][0] == "Servo run failed"
         # A good run afterwards clears the error.
+        monkeypatch.undo()
         demo.set_params(beta=1.0, steps=10)
         assert demo.run(wait=True) and demo.error == "" and demo.result.n_samples == 11
     finally:

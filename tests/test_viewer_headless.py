@@ -1,7 +1,9 @@
 """The viewer's update path on a real viser server, with a websocket stand-in for the browser.
 
-Setting a GUI handle's ``.value`` runs its callbacks synchronously, so a test
-can edit a field and then read the model and the SVG the panel received.
+Setting a GUI handle's ``.value`` runs its callbacks synchronously (and the
+app judges text fields at once with ``field_delay=0``), so a test can edit a
+field and then read the model and the SVG the panel received. Number fields are
+text fields: a test types the text a user would.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from egtviz.scene import Scene, default_scene
+from egtviz.scene import default_scene, scene_from_bytes
 from egtviz.viewer.headless import start_headless
 
 
@@ -62,7 +64,7 @@ def test_editing_focal_length_changes_model_and_lines(tabs):
     view = view_of(tabs)
     before1, before2 = line_coords(view.svgs["cam1"]), line_coords(view.svgs["cam2"])
     before_rev = view.revision
-    view._cam_fields["cam1"]["focal"].value = 12.0
+    view._cam_fields["cam1"]["focal"].value = "12"
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.012)
     assert view.revision == before_rev + 1  # one change -> one update
     # Image 1 is magnified, so its epipolar lines move; in image 2, l2 = F m1 = K2^-T E x1 does not
@@ -74,7 +76,7 @@ def test_editing_focal_length_changes_model_and_lines(tabs):
 def test_moving_a_camera_changes_the_other_image_lines(tabs):
     view = view_of(tabs)
     before = line_coords(view.svgs["cam2"])
-    view._cam_fields["cam1"]["position"].value = (-4.0, -8.0, 1.5)
+    view._cam_fields["cam1"]["position"].value = "-4, -8, 1.5"
     assert view.model.scene.camera("cam1").position == (-4.0, -8.0, 1.5)
     after = line_coords(view.svgs["cam2"])
     assert before.shape == after.shape and not np.allclose(before, after, atol=0.5)
@@ -83,15 +85,16 @@ def test_moving_a_camera_changes_the_other_image_lines(tabs):
     assert np.allclose(gizmo.position, (-4.0, -8.0, 1.5))
 
 
-@pytest.mark.parametrize("bad", [-5.0, 0.0, float("nan")])
+@pytest.mark.parametrize("bad", ["-5", "0", "nan"])
 def test_invalid_focal_length_is_refused_and_reverted(tabs, bad):
     view = view_of(tabs)
     field = view._cam_fields["cam1"]["focal"]
     good = field.value
+    assert good == "8"
     rev = view.revision
     field.value = bad
-    assert view.model.scene.camera("cam1").focal_length == pytest.approx(good * 1e-3)
-    assert field.value == pytest.approx(good)  # the field shows the last valid value again
+    assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
+    assert field.value == good  # the field shows the last valid value again
     assert view.revision == rev
     assert view.notes and view.notes[-1][0] == "Value refused"
 
@@ -101,9 +104,9 @@ def test_invalid_mirror_parameter_is_refused(tabs):
     view.btn_add_pano.value = True
     name = [c.name for c in view.model.scene.cameras if c.kind == "panoramic"][0]
     field = view._cam_fields[name]["a"]
-    field.value = -1.0
+    field.value = "-1"
     assert view.model.scene.camera(name).a == 3.0
-    assert field.value == 3.0
+    assert field.value == "3"
     assert view.notes
 
 
@@ -121,9 +124,10 @@ def test_camera_gizmo_drag_updates_model_and_fields(tabs):
     view._camera_gizmo_event("cam2", fake_drag(gizmo, (2.0, -7.0, 2.0), wxyz))
     spec = view.model.scene.camera("cam2")
     assert spec.position == pytest.approx((2.0, -7.0, 2.0))
-    assert view._cam_fields["cam2"]["position"].value == pytest.approx((2.0, -7.0, 2.0))
+    assert view._cam_fields["cam2"]["position"].value == "2, -7, 2"
     # the yaw/pitch/roll field shows the same orientation as before
-    assert view._cam_fields["cam2"]["ypr"].value == pytest.approx(default_scene().camera("cam2").ypr_deg, abs=1e-6)
+    shown = [float(x) for x in view._cam_fields["cam2"]["ypr"].value.split(",")]
+    assert shown == pytest.approx(default_scene().camera("cam2").ypr_deg, abs=1e-4)
 
 
 def test_late_gizmo_event_does_not_overwrite_a_newer_one(tabs):
@@ -169,7 +173,7 @@ def test_buttons_add_and_remove_cameras_and_panels(tabs):
 
 def test_points_buttons_and_toggles(tabs):
     view = view_of(tabs)
-    view.n_points.value = 40
+    view.n_points.value = "40"
     view.btn_random.value = True
     assert len(view.model.scene.points) == 40
     assert len(view.scene3d._point_gizmos) == 0  # many points: only the selected one gets a gizmo
@@ -188,39 +192,48 @@ def test_points_buttons_and_toggles(tabs):
 
 def test_centres_coinciding_shows_the_message(tabs):
     view = view_of(tabs)
-    view._cam_fields["cam2"]["position"].value = default_scene().camera("cam1").position
+    view._cam_fields["cam2"]["position"].value = "-3, -8, 1.5"  # cam1's centre
     for name in ("cam1", "cam2"):
         msgs = kinds(view.svgs[name], "message")
         assert msgs and "centres coincide" in msgs[0].text
     assert "centres coincide" in view.readout
 
 
-def test_save_and_load(tabs, tmp_path):
+def test_save_downloads_and_load_uploads(tabs):
     view = view_of(tabs)
-    path = tmp_path / "s.json"
-    view.path_field.value = str(path)
-    view._cam_fields["cam1"]["focal"].value = 10.0
+    sent = []
+    view.client.send_file_download = lambda name, data, **kw: sent.append((name, data))
+    view._cam_fields["cam1"]["focal"].value = "10"
     view.btn_save.value = True
-    assert Scene.load(path).camera("cam1").focal_length == pytest.approx(0.010)
+    (name, data), = sent
+    assert name.endswith(".json") and "/" not in name
+    assert scene_from_bytes(data, "download").camera("cam1").focal_length == pytest.approx(0.010)
     view.btn_reset.value = True
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
-    view.btn_load.value = True
+    upload(view, "mine.json", data)
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.010)
-    assert view._cam_fields["cam1"]["focal"].value == pytest.approx(10.0)
+    assert view._cam_fields["cam1"]["focal"].value == "10"
 
 
-def test_malformed_load_notifies_and_keeps_the_scene(tabs, tmp_path):
+def upload(view, name: str, content: bytes) -> None:
+    """What viser does when an upload completes: store the file as the button's value, call its callbacks."""
+    from viser import UploadedFile
+
+    impl = view.btn_load._impl
+    impl.value = UploadedFile(name, content)
+    for cb in impl.update_cb:
+        cb(types.SimpleNamespace(target=view.btn_load, client=view.client, client_id=None))
+
+
+def test_malformed_upload_notifies_and_keeps_the_scene(tabs):
     view = view_of(tabs)
-    bad = tmp_path / "bad.json"
-    bad.write_text(json.dumps({"cameras": [{"kind": "pinhole", "name": "x", "focal_length": -1}]}))
+    bad = json.dumps({"cameras": [{"kind": "pinhole", "name": "x", "focal_length": -1}]}).encode()
     before = view.model.scene
-    view.path_field.value = str(bad)
-    view.btn_load.value = True
+    upload(view, "bad.json", bad)
     assert view.model.scene is before
     title, body = view.notes[-1]
     assert title == "Could not load the scene" and "bad.json" in body and "cameras[0]" in body
-    view.path_field.value = str(tmp_path / "missing.json")
-    view.btn_load.value = True
+    upload(view, "garbage.json", b"{not json")
     assert view.model.scene is before and len(view.notes) == 2
 
 
@@ -229,7 +242,7 @@ def test_two_tabs_have_separate_scenes(tabs):
     app, (a, b) = tabs
     assert a.model is not b.model
     b_svg = b.svgs["cam2"]
-    a._cam_fields["cam1"]["position"].value = (-5.0, -8.0, 1.5)
+    a._cam_fields["cam1"]["position"].value = "-5, -8, 1.5"
     assert a.model.scene.camera("cam1").position == (-5.0, -8.0, 1.5)
     assert b.model.scene.camera("cam1").position == (-3.0, -8.0, 1.5)
     assert b.svgs["cam2"] == b_svg
@@ -259,7 +272,7 @@ def test_concurrent_events_end_in_the_latest_state(tabs):
     field = view._cam_fields["cam1"]["position"]
     # Events arriving from several threads (viser's thread pool): the final render shows the final model state.
     def edit(k):
-        view._field_event("cam1", "position", types.SimpleNamespace(value=(-3.0 + 0.01 * k, -8.0, 1.5)))
+        view._user_event(lambda: view._apply_field("cam1", "position", f"{-3.0 + 0.01 * k:g}, -8, 1.5"))
 
     threads = [threading.Thread(target=edit, args=(k,)) for k in range(20)]
     for t in threads:
@@ -267,7 +280,7 @@ def test_concurrent_events_end_in_the_latest_state(tabs):
     for t in threads:
         t.join()
     final = view.model.scene.camera("cam1").position
-    assert field.value == pytest.approx(final)
+    assert [float(x) for x in field.value.split(",")] == pytest.approx(final)
     assert np.allclose(view.scene3d._cams["cam1"]["gizmo"].position, final)
 
 

@@ -3,7 +3,7 @@
 Data flow (one direction)::
 
     GUI field / gizmo  ->  SceneModel (validates)  ->  notification
-        ->  compute_derived(scene)  ->  one `client.atomic()` update of the 3D
+        ->  model.derived (computed once, at commit)  ->  one `client.atomic()` update of the 3D
             scene, every image-plane panel, the F/E read-out and the fields.
 
 Each browser tab has its own model: edits in one tab never reach another.
@@ -11,6 +11,16 @@ Every event handler and every render runs under the view's lock, and a render
 always draws the model's *current* scene, so an event that arrives late (viser
 runs callbacks in a thread pool) cannot overwrite a newer state. GUI fields are
 written back under a guard so that the write does not look like a user edit.
+
+Every input is judged on the server. Number fields are text fields whose raw
+text is parsed and range-checked in the field's own units
+(:mod:`egtviz.viewer.fields`, ranges from :mod:`egtviz.scene.limits`), once the
+user stops typing; drop-down values are checked against the options offered,
+since a hand-written client can send any string. Every callback is attached
+through :func:`~egtviz.viewer.fields.on_event`: whatever it raises reaches the
+tab as a notification, and the fields and gizmos go back to the model's values.
+Scene files travel through the browser (download and upload), never by a
+server path.
 """
 
 from __future__ import annotations
@@ -21,21 +31,38 @@ import itertools
 import threading
 import time
 from collections import deque
+from collections.abc import Sequence
 from html import escape
 from typing import Any
 
 import numpy as np
 import viser
 
+from ..geometry import GeometryError
 from ..geometry.poses import matrix_from_quat_wxyz
 from ..scene import (
+    SCENES,
     Scene,
     SceneError,
     SceneFileError,
     SceneModel,
     SurfaceSpec,
-    compute_derived,
     default_scene,
+    limits,
+    mesh_names,
+    scene_from_bytes,
+    scene_to_bytes,
+)
+from ..scene.specs import OutOfRangeError
+from .fields import (
+    Debouncer,
+    FieldError,
+    NumberRule,
+    describe_error,
+    format_number,
+    format_numbers,
+    on_event,
+    parse_numbers,
 )
 from .svg import empty_svg, image_plane_svg
 from .svg import warm_up as svg_warm_up
@@ -91,21 +118,127 @@ def pair_html(derived: Any) -> str:
     )
 
 
+def _rules(label: str, unit: str, rng: limits.Range, *, scale: float = 1.0,
+           axes: Sequence[str] = ("",)) -> tuple[NumberRule, ...]:
+    """One field rule per axis from a :mod:`egtviz.scene.limits` range, converted to the field's unit by ``scale``."""
+    return tuple(NumberRule(f"{label} {a}".strip(), unit, rng.low * scale, rng.high * scale, integer=rng.integer)
+                 for a in axes)
+
+
+#: What each camera field accepts, in the units the field shows (the scene's limits, converted).
+FIELD_RULES: dict[str, tuple[NumberRule, ...]] = {
+    "position": _rules("position", "m", limits.COORDINATE, axes="xyz"),
+    "ypr": _rules("angle", "deg", limits.ANGLE_DEG, axes=("yaw", "pitch", "roll")),
+    "focal": _rules("focal length", "mm", limits.FOCAL_LENGTH, scale=1e3),
+    "pixel": _rules("pixel size", "µm", limits.PIXEL_SIZE, scale=1e6, axes="xy"),
+    "pp": _rules("principal point", "px", limits.PRINCIPAL_POINT, axes="uv"),
+    "size": _rules("image size", "px", limits.IMAGE_SIZE, axes=("width", "height")),
+    "a": _rules("a", "m", limits.MIRROR_PARAMETER),
+    "b": _rules("b", "m", limits.MIRROR_PARAMETER),
+    "focal_px": _rules("focal length", "px", limits.PANORAMIC_FOCAL_PIXELS),
+}
+#: The "how many points" field: what the page offers is what the server accepts.
+POINTS_RULE = (NumberRule("how many points", "", 0, limits.MAX_POINTS, integer=True),)
+#: Seconds a text field must stay unchanged before its value is judged (see :class:`Debouncer`).
+FIELD_DELAY = 0.6
+MIRRORS = ("hyperbolic", "parabolic")
+SURFACE_KINDS = ("plane", "sphere")
+
+
+#: Spec fields (as :class:`OutOfRangeError` names them) in the words and units of the GUI: label, unit, scale.
+_SPEC_TERMS = {
+    "focal_length": ("focal length", "mm", 1e3),
+    "focal_length * pixels_per_metre": ("focal length in pixels (focal length / pixel size)", "px", 1.0),
+    "b/a": ("b / a", "", 1.0),
+    "focal_pixels": ("focal length", "px", 1.0),
+}
+
+
+def _restated(exc: OutOfRangeError, name: str) -> FieldError:
+    """The model's range refusal restated for the user: the camera, the field's words and units."""
+    label, unit, scale = _SPEC_TERMS.get(exc.field, (exc.field.replace("_", " "), exc.limit.unit, 1.0))
+    rule = NumberRule(label, unit, exc.limit.low * scale, exc.limit.high * scale, integer=exc.limit.integer)
+    try:
+        rule.check(float(exc.value) * scale, owner=name)
+    except FieldError as restated:
+        return restated
+    except (TypeError, ValueError):  # a value that is no number: keep the model's own words
+        pass
+    return FieldError(f"{name}: {exc}")
+
+
+def _spec_values(spec: Any) -> dict[str, tuple[float, ...]]:
+    """A camera spec's values as its fields show them (spec units -> UI units)."""
+    values: dict[str, tuple[float, ...]] = {
+        "position": tuple(spec.position),
+        "ypr": tuple(spec.ypr_deg),
+        "pp": tuple(spec.principal_point),
+        "size": (float(spec.width), float(spec.height)),
+    }
+    if spec.kind == "pinhole":
+        values["focal"] = (spec.focal_length * 1e3,)
+        values["pixel"] = tuple(1e6 / k for k in spec.pixels_per_metre)
+    else:
+        values["a"] = (float(spec.a),)
+        values["b"] = (float(spec.b),)
+        values["focal_px"] = (float(spec.focal_pixels),)
+    return values
+
+
+def _spec_fields(key: str, v: tuple[float, ...]) -> dict[str, Any]:
+    """Parsed field values as spec fields (UI units -> spec units)."""
+    if key == "position":
+        return {"position": v}
+    if key == "ypr":
+        return {"ypr_deg": v}
+    if key == "focal":
+        return {"focal_length": v[0] * 1e-3}
+    if key == "pixel":
+        return {"pixels_per_metre": tuple(1e6 / x for x in v)}
+    if key == "pp":
+        return {"principal_point": v}
+    if key == "size":
+        return {"width": int(v[0]), "height": int(v[1])}
+    if key in ("a", "b"):
+        return {key: v[0]}
+    if key == "focal_px":
+        return {"focal_pixels": v[0]}
+    raise FieldError(f"unknown field {key!r}")
+
+
+def _plain(text: str, limit: int = 80) -> str:
+    """Text from a file or a browser, safe to show: printable characters only, at most ``limit`` of them."""
+    clean = "".join(c if c.isprintable() else "?" for c in str(text))
+    return clean if len(clean) <= limit else clean[:limit] + "..."
+
+
+def _file_name(title: str) -> str:
+    """The download's file name: the scene title reduced to letters, digits, ``-`` and ``_``."""
+    stem = "".join(c if c.isascii() and (c.isalnum() or c in "-_") else "_" for c in title.strip())[:40].strip("_")
+    return f"{stem or 'scene'}.json"
+
+
 class ClientView:
     """One browser tab: its model, its 3D nodes, its panels and fields.
+
+    Every callback is attached through :func:`egtviz.viewer.fields.on_event`:
+    whatever it raises reaches this tab as a notification, and the fields and
+    gizmos go back to the model's values.
 
     Args:
         client: a :class:`viser.ClientHandle` (its ``scene``, ``gui``, ``atomic()``
             and ``add_notification`` are used).
         model: the tab's own :class:`SceneModel`.
+        open_demo: ``open_demo(kind)`` opens a visual-servoing demo in this tab; None: no such folder.
+        field_delay: seconds a text field must stay unchanged before it is judged (0: at once).
     """
 
-    def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None) -> None:
+    def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None,
+                 field_delay: float = FIELD_DELAY) -> None:
         from .scene3d import Scene3D
 
         self.client = client
         self.model = model
-        #: ``open_demo(kind)`` opens a visual-servoing demo in this tab (the app passes it); None: no folder.
         self._open_demo = open_demo
         self.lock = threading.RLock()
         self.closed = False
@@ -114,6 +247,7 @@ class ClientView:
         self._moving: str | None = None
         self._gizmo_stamp: dict[str, float] = {}
         self._drag_seq: dict[str, int] = {}
+        self._typing = Debouncer(field_delay)
         #: Seconds from a user event (field, button, gizmo) to the end of its atomic update (benchmark).
         self.timings: deque[float] = deque(maxlen=5000)
         self._t_event: float | None = None
@@ -133,14 +267,21 @@ class ClientView:
         self._synced_fields: dict[str, Any] = {}
         self._point_options_n = -1
         self._synced_rest: tuple | None = None
+        self._surface_options: dict[str, tuple[str, str]] = {}
+        self._n_points_text = "8"
 
         with self.lock, client.atomic():
-            self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event)
+            self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event,
+                                   report=self.report)
             self._build_controls()
             self._render(self.model.scene, None)
         self._unsubscribe = model.subscribe(self._on_change)
 
     # -- GUI construction -------------------------------------------------------
+
+    def _on(self, register: Any, callback: Any) -> None:
+        """Attach ``callback`` to a handle's event (``handle.on_update`` ...): errors reach this tab."""
+        on_event(register, callback, self.report)
 
     def _build_controls(self) -> None:
         gui = self.client.gui
@@ -150,30 +291,37 @@ class ClientView:
             gui.main_panel.set_width(CONTROL_WIDTH)
         except Exception:  # noqa: BLE001 - placement is cosmetic
             pass
-        self.title = gui.add_markdown(self._title_md())
+        # HTML, not markdown: the title comes from a file and is escaped as text.
+        self.title = gui.add_html(self._title_html())
         with gui.add_folder("Epipolar geometry", expand_by_default=True):
             self.pair_dropdown = gui.add_dropdown("drawn pair", ["-"], hint="Which two cameras' epipolar geometry is drawn.")
-            self.pair_dropdown.on_update(self._pair_event)
+            self._on(self.pair_dropdown.on_update, lambda _: self._user_event(self._set_pair))
             self.readout_md = gui.add_html("")
         with gui.add_folder("Points", expand_by_default=True):
             self.point_dropdown = gui.add_dropdown("selected point", ["none"],
                                                    hint="The selected point's epipolar plane is drawn in 3D.")
-            self.point_dropdown.on_update(self._select_event)
-            self.n_points = gui.add_number("how many (randomise)", 8, min=0, max=2000, step=1)
+            self._on(self.point_dropdown.on_update, lambda _: self._user_event(self._select))
+            self.n_points = gui.add_text("how many (randomise)", self._n_points_text,
+                                         hint=f"A whole number from 0 to {limits.MAX_POINTS}.")
+            self._on(self.n_points.on_update,
+                     lambda e: self._text_event("n_points", self._check_n_points, e.target.value))
             self.btn_random = gui.add_button("Randomise points")
-            self.btn_random.on_click(lambda _: self._guarded(self._randomise))
+            self._on(self.btn_random.on_click, lambda _: self._user_event(self._randomise))
             self.btn_add_point = gui.add_button("Add point")
-            self.btn_add_point.on_click(lambda _: self._guarded(lambda: self.model.add_point((0.0, 0.0, 1.0))))
+            self._on(self.btn_add_point.on_click,
+                     lambda _: self._user_event(lambda: self.model.add_point((0.0, 0.0, 1.0))))
             self.btn_remove_point = gui.add_button("Remove selected (or last) point")
-            self.btn_remove_point.on_click(lambda _: self._guarded(self._remove_point))
-            self.surface_kind = gui.add_dropdown("surface", ["plane", "sphere", "mesh: house.obj"], initial_value="sphere")
+            self._on(self.btn_remove_point.on_click, lambda _: self._user_event(self._remove_point))
+            self._surface_options = {k: (k, "") for k in SURFACE_KINDS}
+            self._surface_options.update({f"mesh: {m}": ("mesh", m) for m in mesh_names()})
+            self.surface_kind = gui.add_dropdown("surface", tuple(self._surface_options), initial_value="sphere")
             self.btn_surface = gui.add_button("Add surface")
-            self.btn_surface.on_click(lambda _: self._guarded(self._add_surface))
+            self._on(self.btn_surface.on_click, lambda _: self._user_event(self._add_surface))
         with gui.add_folder("Cameras", expand_by_default=True):
             self.btn_add_pinhole = gui.add_button("Add pin-hole camera")
-            self.btn_add_pinhole.on_click(lambda _: self._guarded(lambda: self.model.add_camera("pinhole")))
+            self._on(self.btn_add_pinhole.on_click, lambda _: self._user_event(lambda: self.model.add_camera("pinhole")))
             self.btn_add_pano = gui.add_button("Add panoramic camera")
-            self.btn_add_pano.on_click(lambda _: self._guarded(lambda: self.model.add_camera("panoramic")))
+            self._on(self.btn_add_pano.on_click, lambda _: self._user_event(lambda: self.model.add_camera("panoramic")))
             self.cameras_folder = gui.add_folder("Camera settings", expand_by_default=True)
         with gui.add_folder("Show", expand_by_default=False):
             self.toggles = {}
@@ -181,29 +329,34 @@ class ClientView:
                                ("show_frames", "camera frames"), ("show_labels", "labels"),
                                ("show_surfaces", "surfaces")):
                 cb = gui.add_checkbox(label, getattr(self.model.scene.options, opt))
-                cb.on_update(lambda e, opt=opt: self._guarded(lambda: self._toggle(opt, e.target.value)))
+                self._on(cb.on_update, lambda e, opt=opt: self._user_event(lambda: self._toggle(opt, e.target.value)))
                 self.toggles[opt] = cb
         if self._open_demo is not None:
             with gui.add_folder("Visual servoing", expand_by_default=False):
                 self.btn_servo_pinhole = gui.add_button("Pin-hole camera on a Puma 560")
-                self.btn_servo_pinhole.on_click(lambda _: self._open_demo("pinhole"))
+                self._on(self.btn_servo_pinhole.on_click, lambda _: self._open_demo("pinhole"))
                 self.btn_servo_panoramic = gui.add_button("Panoramic camera on a mobile robot")
-                self.btn_servo_panoramic.on_click(lambda _: self._open_demo("panoramic"))
-        with gui.add_folder("Scene file", expand_by_default=False):
+                self._on(self.btn_servo_panoramic.on_click, lambda _: self._open_demo("panoramic"))
+        with gui.add_folder("Scene", expand_by_default=False):
             self.btn_undo = gui.add_button("Undo")
-            self.btn_undo.on_click(lambda _: self._guarded(self.model.undo))
+            self._on(self.btn_undo.on_click, lambda _: self._user_event(self.model.undo))
             self.btn_reset = gui.add_button("Reset")
-            self.btn_reset.on_click(lambda _: self._guarded(self.model.reset))
-            self.path_field = gui.add_text("file", "scene.json", hint="Path on the server, relative to where egtviz runs.")
-            self.btn_save = gui.add_button("Save")
-            self.btn_save.on_click(lambda _: self._guarded(self._save))
-            self.btn_load = gui.add_button("Load")
-            self.btn_load.on_click(lambda _: self._guarded(self._load))
+            self._on(self.btn_reset.on_click, lambda _: self._user_event(self.model.reset))
+            self.builtin = gui.add_dropdown("built-in scene", tuple(SCENES), initial_value=next(iter(SCENES)),
+                                            hint="A ready-made scene; Open replaces this tab's scene (undoable).")
+            self.btn_open = gui.add_button("Open built-in scene")
+            self._on(self.btn_open.on_click, lambda _: self._user_event(self._open_builtin))
+            self.btn_save = gui.add_button("Save (download)", hint="Download this tab's scene as a JSON file.")
+            self._on(self.btn_save.on_click, lambda _: self._user_event(self._save))
+            self.btn_load = gui.add_upload_button(
+                "Load (upload)", mime_type="application/json",
+                hint=f"Open a scene file from this computer (at most {limits.MAX_SCENE_FILE_BYTES // 1000} kB).")
+            self._on(self.btn_load.on_upload, lambda _: self._user_event(self._load))
 
-    def _title_md(self) -> str:
-        title = self.model.scene.title or "egtviz"
-        return (f"**{title}**  \nDrag the gizmos or edit the fields; "
-                "the image planes are in the panels on the right. Point numbers match in 3D and in the images.")
+    def _title_html(self) -> str:
+        title = escape(_plain(self.model.scene.title or "egtviz", limits.MAX_TITLE_LENGTH))
+        return (f'<div style="font-size:0.9em;padding:0 0.6em"><b>{title}</b><br>Drag the gizmos or edit the fields; '
+                "the image planes are in the panels on the right. Point numbers match in 3D and in the images.</div>")
 
     def _build_camera_fields(self, spec: Any) -> None:
         gui = self.client.gui
@@ -211,96 +364,125 @@ class ClientView:
         with self.cameras_folder:
             folder = gui.add_folder(f"{name} ({'pin-hole' if spec.kind == 'pinhole' else 'panoramic'})",
                                     expand_by_default=False)
+        values = _spec_values(spec)
         f: dict[str, Any] = {}
         with folder:
-            f["position"] = gui.add_vector3("position (m)", spec.position, step=0.1,
-                                            hint="Camera centre (mirror focus) in world coordinates.")
+            f["position"] = gui.add_text("position (m)", format_numbers(values["position"]),
+                                         hint="Camera centre (mirror focus) in world coordinates: x, y, z.")
             hint = EGT_PINHOLE_HINT if spec.kind == "pinhole" else EGT_PANORAMIC_HINT
-            f["ypr"] = gui.add_vector3("yaw, pitch, roll (deg)", spec.ypr_deg, step=1.0, hint=hint)
+            f["ypr"] = gui.add_text("yaw, pitch, roll (deg)", format_numbers(values["ypr"]), hint=hint)
             gui.add_markdown(f"<small>{hint}</small>")
             if spec.kind == "pinhole":
-                f["focal"] = gui.add_number("focal length (mm)", spec.focal_length * 1e3, step=0.1)
-                f["pixel"] = gui.add_vector2("pixel size (µm)", tuple(1e6 / k for k in spec.pixels_per_metre), step=0.1)
-                f["pp"] = gui.add_vector2("principal point (px)", spec.principal_point, step=1.0)
-                f["size"] = gui.add_vector2("image size (px)", (spec.width, spec.height), step=1.0)
+                f["focal"] = gui.add_text("focal length (mm)", format_numbers(values["focal"]))
+                f["pixel"] = gui.add_text("pixel size (µm)", format_numbers(values["pixel"]), hint="x, y")
+                f["pp"] = gui.add_text("principal point (px)", format_numbers(values["pp"]), hint="u0, v0")
+                f["size"] = gui.add_text("image size (px)", format_numbers(values["size"]),
+                                         hint="width, height: whole pixels")
             else:
-                f["mirror"] = gui.add_dropdown("mirror", ["hyperbolic", "parabolic"], initial_value=spec.mirror)
-                f["a"] = gui.add_number("a (h if parabolic)", spec.a, step=0.1)
-                f["b"] = gui.add_number("b", spec.b, step=0.1)
-                f["focal_px"] = gui.add_number("focal length (px)", spec.focal_pixels, step=10.0)
-                f["pp"] = gui.add_vector2("principal point (px)", spec.principal_point, step=1.0)
-                f["size"] = gui.add_vector2("image size (px)", (spec.width, spec.height), step=1.0)
+                f["mirror"] = gui.add_dropdown("mirror", MIRRORS, initial_value=spec.mirror)
+                f["a"] = gui.add_text("a (h if parabolic) (m)", format_numbers(values["a"]))
+                f["b"] = gui.add_text("b (m)", format_numbers(values["b"]))
+                f["focal_px"] = gui.add_text("focal length (px)", format_numbers(values["focal_px"]))
+                f["pp"] = gui.add_text("principal point (px)", format_numbers(values["pp"]), hint="u0, v0")
+                f["size"] = gui.add_text("image size (px)", format_numbers(values["size"]),
+                                         hint="width, height: whole pixels")
             remove = gui.add_button(f"Remove {name}", color="red")
-            remove.on_click(lambda _, n=name: self._guarded(lambda: self.model.remove_camera(n)))
+            self._on(remove.on_click, lambda _, n=name: self._user_event(lambda: self.model.remove_camera(n)))
         for key, handle in f.items():
-            handle.on_update(lambda e, n=name, k=key: self._field_event(n, k, e.target))
+            if key == "mirror":
+                self._on(handle.on_update, lambda e, n=name: self._user_event(lambda: self._set_mirror(n, e.target.value)))
+            else:
+                self._on(handle.on_update, lambda e, n=name, k=key: self._text_event(
+                    (n, k), lambda text, n=n, k=k: self._apply_field(n, k, text), e.target.value))
         self._cam_fields[name] = f
         self._cam_folders[name] = folder
 
     # -- user events ----------------------------------------------------------------
 
-    def _guarded(self, action: Any) -> None:
-        """Run a model action under the lock; show a notification (and leave the scene) on error."""
+    def _user_event(self, action: Any) -> None:
+        """Run a user's action under the lock (ignored while fields are written back or after the tab left).
+
+        Errors propagate to :meth:`report` through the callback wrapper.
+        """
         t0 = time.perf_counter()
         with self.lock:
             if self.closed or self._syncing:
                 return
             self._t_event = t0
+            action()
+
+    def _text_event(self, key: Any, apply: Any, text: Any = None) -> None:
+        """A text field changed: judge its text once the user stopped typing (latest text wins)."""
+        with self.lock:
+            if self.closed or self._syncing:
+                return  # our own write-back, or the tab is gone
+
+        def judge() -> None:
             try:
-                action()
-            except (SceneError, ValueError, OSError) as exc:
-                self._notify_error(exc)
-                self._sync_fields(self.model.scene)
+                self._user_event(lambda: apply(text))
+            except Exception as exc:  # noqa: BLE001 - from a timer thread: no callback wrapper above us
+                self.report(exc)
 
-    def _notify_error(self, exc: BaseException) -> None:
-        title = "Could not load the scene" if isinstance(exc, SceneFileError) else "Value refused"
-        try:
-            self.client.add_notification(title, str(exc), color="red", auto_close_seconds=8.0)
-        except Exception:  # noqa: BLE001 - the client may be gone
-            pass
+        self._typing.submit(key, judge)
 
-    def _field_values(self, name: str, key: str, value: Any) -> dict[str, Any]:
-        """A GUI field's value as spec fields (UI units -> spec units)."""
-        v = value
-        arr = np.asarray(v, dtype=float) if not isinstance(v, str) else None
-        if arr is not None and not np.all(np.isfinite(arr)):
-            raise SceneError(f"{key}: expected finite numbers, got {v!r}")
-        if key == "position":
-            return {"position": tuple(v)}
-        if key == "ypr":
-            return {"ypr_deg": tuple(v)}
-        if key == "focal":
-            return {"focal_length": float(v) * 1e-3}
-        if key == "pixel":
-            if np.any(arr <= 0):
-                raise SceneError(f"pixel size: expected positive sizes, got {tuple(v)}")
-            return {"pixels_per_metre": tuple(1e6 / x for x in arr)}
-        if key == "pp":
-            return {"principal_point": tuple(v)}
-        if key == "size":
-            w, h = arr
-            if w != round(w) or h != round(h):
-                raise SceneError(f"image size: expected whole numbers of pixels, got {tuple(v)}")
-            return {"width": int(round(w)), "height": int(round(h))}
-        if key == "mirror":
-            return {"mirror": v}
-        if key in ("a", "b"):
-            return {key: float(v)}
-        if key == "focal_px":
-            return {"focal_pixels": float(v)}
-        raise SceneError(f"unknown field {key!r}")
-
-    def _field_event(self, name: str, key: str, handle: Any) -> None:
-        def apply() -> None:
-            if name not in self.model.scene.camera_names:
+    def report(self, exc: BaseException) -> None:
+        """Tell this tab what went wrong and put every field and gizmo back to the model's values."""
+        title, body = describe_error(exc)
+        with self.lock:
+            if self.closed:
                 return
-            fields = self._field_values(name, key, handle.value)
-            spec = self.model.scene.camera(name)
-            if all(getattr(spec, k) == v for k, v in fields.items()):
-                return  # the field already shows the model's value (e.g. our own write-back)
-            self.model.update_camera(name, **fields)
+            try:
+                self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
+            except Exception:  # noqa: BLE001 - the client may be gone
+                pass
+            self._resync()
 
-        self._guarded(apply)
+    def _resync(self) -> None:
+        """Rewrite every field and put every gizmo back to the model's scene (after a refusal or a failure).
+
+        The panels are left alone: the scene they show has not changed.
+        """
+        scene = self.model.scene
+        try:
+            with self.client.atomic():
+                self._sync_fields(scene, force=True)
+                self.scene3d.draw(scene, self.model.derived, force=True)
+        except Exception:  # noqa: BLE001 - a half-built tab: draw it all again, or show why not
+            self._render(scene, None, force_fields=True)
+
+    def _apply_field(self, name: str, key: str, text: Any) -> None:
+        if name not in self.model.scene.camera_names:
+            return  # the camera was removed while the user typed
+        values = parse_numbers(text, FIELD_RULES[key], owner=name)
+        spec = self.model.scene.camera(name)
+        current = _spec_values(spec).get(key)
+        if current is None:
+            raise FieldError(f"{name}: no field {key!r} on a {spec.kind} camera")
+        # A number the user left as shown keeps the model's full precision (the field shows six digits).
+        values = tuple(c if format_number(v) == format_number(c) else v for v, c in zip(values, current))
+        if values == current:
+            return  # nothing edited (e.g. our own write-back, or the same text again)
+        fields = _spec_fields(key, values)
+        if all(getattr(spec, k) == v for k, v in fields.items()):
+            return
+        try:
+            self.model.update_camera(name, **fields)
+        except OutOfRangeError as exc:  # a limit across fields (e.g. focal length in pixels): say it in UI terms
+            raise _restated(exc, name) from exc
+        except SceneError as exc:
+            if str(exc).startswith(f"{name}:"):
+                raise
+            raise SceneError(f"{name}: {exc}") from exc
+
+    def _set_mirror(self, name: str, value: Any) -> None:
+        if value not in MIRRORS:  # a raw client can send any string
+            raise FieldError(f"{name}: mirror must be one of {', '.join(MIRRORS)}, got {_plain(repr(value), 40)}")
+        if name in self.model.scene.camera_names and self.model.scene.camera(name).mirror != value:
+            self.model.update_camera(name, mirror=value)
+
+    def _check_n_points(self, text: Any) -> None:
+        parse_numbers(text, POINTS_RULE)
+        self._n_points_text = text  # the last valid count: a refused one reverts to it
 
     def _camera_gizmo_event(self, name: str, event: Any) -> None:
         t0 = time.perf_counter()
@@ -317,20 +499,23 @@ class ClientView:
                 self._drag_seq[name] = self._drag_seq.get(name, 0) + 1  # one drag = one undo step
                 return
             self._t_event = t0
-            R = matrix_from_quat_wxyz(target.wxyz)
-            position = np.asarray(target.position, float)
             self._moving = name if phase == "update" else None
             try:
                 if name not in self.model.scene.camera_names:
                     return
+                try:
+                    R = matrix_from_quat_wxyz(target.wxyz)
+                except GeometryError as exc:
+                    raise SceneError(f"{name}: the gizmo sent an orientation that is not a rotation ({exc})") from exc
+                position = np.asarray(target.position, float)
+                if position.shape != (3,) or not np.isfinite(position).all():
+                    raise SceneError(f"{name}: the gizmo sent a position that is not 3 finite numbers")
                 pose = self.model.scene.camera(name).camera().pose  # the spec's cached camera: no new Pose
                 if _allclose(pose.t, position, 1e-9) and _allclose(pose.R, R, 1e-9):
                     if phase == "end":  # nothing moved since the last update: just resync the fields
                         self._render(self.model.scene, None)
                     return
                 self.model.set_camera_pose(name, tuple(position), R, drag_id=self._drag_seq.get(name))
-            except SceneError as exc:
-                self._notify_error(exc)
             finally:
                 self._moving = None
 
@@ -347,42 +532,43 @@ class ClientView:
             self._gizmo_stamp[key] = stamp
             self._t_event = t0
             scene = self.model.scene
-            try:
-                if getattr(event, "phase", "update") == "start":
-                    self._drag_seq[key] = self._drag_seq.get(key, 0) + 1  # one drag = one undo step
-                    if scene.selected_point != index and index < len(scene.points):
-                        self.model.select_point(index)
-                    return
-                if index < len(scene.points):
-                    self.model.set_point(index, tuple(np.asarray(target.position, float)), drag_id=self._drag_seq.get(key))
-            except SceneError as exc:
-                self._notify_error(exc)
+            if getattr(event, "phase", "update") == "start":
+                self._drag_seq[key] = self._drag_seq.get(key, 0) + 1  # one drag = one undo step
+                if scene.selected_point != index and index < len(scene.points):
+                    self.model.select_point(index)
+                return
+            if index < len(scene.points):
+                position = np.asarray(target.position, float)
+                if position.shape != (3,) or not np.isfinite(position).all():
+                    raise SceneError(f"point {index + 1}: the gizmo sent a position that is not 3 finite numbers")
+                self.model.set_point(index, tuple(position), drag_id=self._drag_seq.get(key))
 
-    def _pair_event(self, event: Any) -> None:
-        def apply() -> None:
-            pair = self._pair_options.get(self.pair_dropdown.value)
-            if pair is not None and pair != self.model.scene.drawn_pair:
-                self.model.set_pair(*pair)
+    def _set_pair(self) -> None:
+        value = self.pair_dropdown.value
+        pair = self._pair_options.get(value)
+        if pair is None:
+            raise FieldError(f"drawn pair: no pair {_plain(repr(value), 40)}")
+        if pair != self.model.scene.drawn_pair:
+            self.model.set_pair(*pair)
 
-        self._guarded(apply)
+    def _select(self) -> None:
+        v = self.point_dropdown.value
+        n = len(self.model.scene.points)
+        options = {"none": None} | {f"point {i + 1}": i for i in range(n)}
+        if v not in options:
+            raise FieldError(f"selected point: no {_plain(repr(v), 40)} (have {n} points)")
+        idx = options[v]
+        if idx != self.model.scene.selected_point:
+            self.model.select_point(idx)
 
-    def _select_event(self, event: Any) -> None:
-        def apply() -> None:
-            v = self.point_dropdown.value
-            idx = None if v == "none" else int(v.split()[-1]) - 1
-            if idx != self.model.scene.selected_point:
-                self.model.select_point(idx)
-
-        self._guarded(apply)
-
-    def _toggle(self, opt: str, value: bool) -> None:
-        if getattr(self.model.scene.options, opt) != bool(value):
-            self.model.set_option(opt, bool(value))
+    def _toggle(self, opt: str, value: Any) -> None:
+        if not isinstance(value, bool):
+            raise FieldError(f"{opt}: expected true or false, got {_plain(repr(value), 40)}")
+        if getattr(self.model.scene.options, opt) != value:
+            self.model.set_option(opt, value)
 
     def _randomise(self) -> None:
-        n = self.n_points.value
-        if not np.isfinite(n) or n < 0 or n != int(n):
-            raise SceneError(f"how many: expected a whole number >= 0, got {n!r}")
+        (n,) = parse_numbers(self.n_points.value, POINTS_RULE)
         X = self.model.scene.points_array()
         centre = tuple(X.mean(axis=0)) if len(X) else (0.0, 0.0, 1.0)
         self.model.randomize_points(int(n), center=centre, extent=2.0)
@@ -394,25 +580,43 @@ class ClientView:
         self.model.remove_point(scene.selected_point if scene.selected_point is not None else len(scene.points) - 1)
 
     def _add_surface(self) -> None:
-        kind = self.surface_kind.value
+        choice = self._surface_options.get(self.surface_kind.value)
+        if choice is None:  # a raw client can send any string: only the listed surfaces exist
+            raise FieldError(f"surface: no surface {_plain(repr(self.surface_kind.value), 40)}")
+        kind, mesh = choice
         X = self.model.scene.points_array()
         centre = tuple(X.mean(axis=0)) if len(X) else (0.0, 0.0, 1.0)
-        if kind.startswith("mesh: "):
-            # A mesh from assets/, standing on the ground under the points.
+        if kind == "mesh":
+            # A mesh of the package's own, standing on the ground under the points.
             self.model.add_surface(
-                SurfaceSpec(kind="mesh", center=(centre[0], centre[1], 0.0), size=2.0, samples=300, path=kind[6:])
+                SurfaceSpec(kind="mesh", center=(centre[0], centre[1], 0.0), size=2.0, samples=300, path=mesh)
             )
             return
         size = 1.0 if kind == "sphere" else 3.0
         self.model.add_surface(SurfaceSpec(kind=kind, center=centre, size=size, samples=200))
 
+    def _open_builtin(self) -> None:
+        name = self.builtin.value
+        if name not in SCENES:  # a raw client can send any string
+            raise FieldError(f"built-in scene: no scene {_plain(repr(name), 40)}; "
+                             f"the built-in scenes are {', '.join(SCENES)}")
+        self.model.load_scene(SCENES[name]())
+
     def _save(self) -> None:
-        path = self.path_field.value
-        self.model.save(path)
-        self.client.add_notification("Saved", f"scene written to {path}", auto_close_seconds=4.0)
+        scene = self.model.scene
+        self.client.send_file_download(_file_name(scene.title or "scene"), scene_to_bytes(scene),
+                                       save_immediately=True)
 
     def _load(self) -> None:
-        self.model.load(self.path_field.value)
+        upload = self.btn_load.value
+        name = _plain(getattr(upload, "name", "") or "the upload", 60)
+        content = getattr(upload, "content", None)
+        if not isinstance(content, bytes):
+            raise SceneFileError(f"{name}: the upload holds no file")
+        if len(content) > limits.MAX_SCENE_FILE_BYTES:  # before parsing: a big file is refused unread
+            raise SceneFileError(f"{name}: the file has {len(content)} bytes; a scene file has at most "
+                                 f"{limits.MAX_SCENE_FILE_BYTES} bytes")
+        self.model.load_scene(scene_from_bytes(content, source=name))
 
     # -- rendering ----------------------------------------------------------------
 
@@ -423,10 +627,14 @@ class ClientView:
             # Draw the model's current scene, not the notified one: a late notification never wins.
             self._render(self.model.scene, change)
 
-    def _render(self, scene: Scene, change: Any) -> None:
+    def _render(self, scene: Scene, change: Any, *, force_fields: bool = False) -> None:
+        """Draw ``scene`` (the model's current one) with the model's derived quantities, in one atomic update."""
         t0 = time.perf_counter()
         try:
-            derived = compute_derived(scene)
+            # The model computed (and checked) these when it committed the scene: never computed twice.
+            derived = self.model.derived
+            if scene is not self.model.scene:
+                raise RuntimeError("render: the scene is not the model's current scene")
         except Exception as exc:  # noqa: BLE001 - a bug below must not take the tab down
             self._render_failure(scene, exc)
             return
@@ -454,9 +662,9 @@ class ClientView:
             t2 = time.perf_counter()
             self.readout = pair_html(derived)
             self.readout_md.content = self.readout
-            self._sync_fields(scene, force=False)
+            self._sync_fields(scene, force=force_fields)
             t3 = time.perf_counter()
-            self.scene3d.draw(scene, derived, moving=self._moving)
+            self.scene3d.draw(scene, derived, moving=self._moving, force=force_fields)
             t4 = time.perf_counter()
         # Send now: viser otherwise holds a finished atomic batch for up to one 1/60 s window.
         self.client.flush()
@@ -474,7 +682,8 @@ class ClientView:
 
         traceback.print_exception(exc)
         self.revision += 1
-        msg = f"cannot draw this scene: {type(exc).__name__}: {exc}"
+        title, body = describe_error(exc)
+        msg = f"cannot draw this scene: {body}"
         with self.client.atomic():
             self._sync_panels(scene)
             for spec in scene.cameras:
@@ -484,7 +693,10 @@ class ClientView:
             self.readout = f"<b>{escape(msg)}</b>"
             self.readout_md.content = self.readout
             self._sync_fields(scene)
-        self._notify_error(exc)
+        try:
+            self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
+        except Exception:  # noqa: BLE001 - the client may be gone
+            pass
 
     def _sync_panels(self, scene: Scene) -> None:
         """(Re)build camera folders and image panels when the set of cameras changes."""
@@ -548,19 +760,11 @@ class ClientView:
                     continue
                 self._synced_specs[spec.name] = spec
                 self._synced_fields[spec.name] = f
-                _set(f["position"], tuple(spec.position))
-                _set(f["ypr"], tuple(round(a, 6) for a in spec.ypr_deg))
-                _set(f["pp"], tuple(spec.principal_point))
-                _set(f["size"], (float(spec.width), float(spec.height)))
-                if spec.kind == "pinhole":
-                    _set(f["focal"], spec.focal_length * 1e3)
-                    _set(f["pixel"], tuple(1e6 / k for k in spec.pixels_per_metre))
-                else:
+                for key, values in _spec_values(spec).items():
+                    _set(f[key], format_numbers(values))
+                if spec.kind == "panoramic":
                     _set(f["mirror"], spec.mirror)
-                    _set(f["a"], float(spec.a))
-                    _set(f["b"], float(spec.b))
-                    _set(f["focal_px"], float(spec.focal_pixels))
-            title = self._title_md()
+            title = self._title_html()
             # A drag changes one camera's pose and nothing below: skip the rest when its inputs are unchanged.
             rest_key = (scene.camera_names, scene.drawn_pair, len(scene.points), scene.selected_point, scene.options,
                         self.model.can_undo, title)
@@ -586,6 +790,7 @@ class ClientView:
             _set(self.point_dropdown, "none" if sel is None else f"point {sel + 1}")
             for opt, cb in self.toggles.items():
                 _set(cb, getattr(scene.options, opt))
+            _set(self.n_points, self._n_points_text)
             if self.btn_undo.disabled != (not self.model.can_undo):
                 self.btn_undo.disabled = not self.model.can_undo
             if self.title.content != title:
@@ -601,6 +806,7 @@ class ClientView:
             if self.closed:
                 return
             self.closed = True
+            self._typing.close()
             self._unsubscribe()
 
 
@@ -629,11 +835,19 @@ class EgtvizApp:
     Args:
         server: the viser server to serve on.
         scene: the scene every new tab starts from (default: :func:`default_scene`).
+        demo: open this servo demo (``"pinhole"`` or ``"panoramic"``) in every new tab instead of the workbench.
+        field_delay: seconds a text field must stay unchanged before it is judged (tests use 0: at once).
+
+    A tab whose workbench cannot be built on ``scene`` (it cannot be drawn) gets
+    the default scene and a notification saying why; a tab is never left half-built.
     """
 
-    def __init__(self, server: viser.ViserServer, scene: Scene | None = None, *, demo: str | None = None) -> None:
+    def __init__(self, server: viser.ViserServer, scene: Scene | None = None, *, demo: str | None = None,
+                 field_delay: float = FIELD_DELAY) -> None:
         if demo not in (None, "pinhole", "panoramic"):
             raise ValueError(f"demo: expected None, 'pinhole' or 'panoramic', got {demo!r}")
+        Debouncer(field_delay)  # checks the value now rather than in every tab
+        self.field_delay = field_delay
         self.server = server
         self.initial_scene = scene if scene is not None else default_scene()
         #: Open this servo demo in every new tab instead of the workbench.
@@ -671,14 +885,36 @@ class EgtvizApp:
         if self.demo is not None:
             self.open_demo(client, self.demo)
             return
-        model = SceneModel(self.initial_scene)
-        view = ClientView(client, model, open_demo=lambda kind, c=client: self.open_demo(c, kind))
+        view = self._build_view(client, None)
         with self._lock:
             if client.client_id in self._gone:  # it left while we were building its view
                 self._gone.discard(client.client_id)
                 view.close()
                 return
             self.views[client.client_id] = view
+
+    def _build_view(self, client: viser.ClientHandle, model: SceneModel | None) -> ClientView:
+        """The tab's workbench on ``model`` (None: a new model of the initial scene).
+
+        If that fails (a scene that cannot be drawn), the tab is cleared and
+        gets the default scene, with a notification giving the reason.
+        """
+        open_demo = lambda kind, c=client: self.open_demo(c, kind)  # noqa: E731
+        try:
+            return ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
+                              field_delay=self.field_delay)
+        except Exception as exc:  # noqa: BLE001 - the tab must come up whatever the scene holds
+            title, body = describe_error(exc)
+            if title == "Something went wrong":
+                import traceback
+
+                traceback.print_exception(exc)
+            client.gui.reset()
+            client.scene.reset()
+            view = ClientView(client, SceneModel(default_scene()), open_demo=open_demo, field_delay=self.field_delay)
+            client.add_notification("Showing the default scene instead",
+                                    f"The scene could not be drawn: {body}", color="red", auto_close_seconds=None)
+            return view
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -709,7 +945,17 @@ class EgtvizApp:
             old.close()
         client.gui.reset()
         client.scene.reset()
-        demo = ServoDemo(client, kind, on_back=lambda: self.close_demo(client))  # type: ignore[arg-type]
+        try:
+            demo = ServoDemo(client, kind, on_back=lambda: self.close_demo(client),  # type: ignore[arg-type]
+                             field_delay=self.field_delay)
+        except Exception as exc:  # noqa: BLE001 - back to a working workbench, with the reason
+            import traceback
+
+            traceback.print_exception(exc)
+            self.close_demo(client)
+            client.add_notification("Could not open the demo", describe_error(exc)[1], color="red",
+                                    auto_close_seconds=8.0)
+            return None
         with self._lock:
             if cid in self._gone:
                 self._gone.discard(cid)
@@ -728,8 +974,7 @@ class EgtvizApp:
             demo.close()
         client.gui.reset()
         client.scene.reset()
-        view = ClientView(client, model or SceneModel(self.initial_scene),
-                          open_demo=lambda kind, c=client: self.open_demo(c, kind))
+        view = self._build_view(client, model)
         with self._lock:
             if cid in self._gone:
                 self._gone.discard(cid)

@@ -85,3 +85,11 @@ def close_notifications(page: Any) -> None:
         page.evaluate("document.querySelector('#webgl-software-rendering button').click()")
     except Exception:  # noqa: BLE001 - no toast (hardware WebGL) or already gone
         pass
+
+
+def field_input(page: Any, label: str) -> Any:
+    """The text box of the GUI field labelled ``label`` (the first one after that label in the page).
+
+    viser labels its text fields without linking label and input, so ``get_by_label`` does not find them.
+    """
+    return page.locator(f'xpath=//label[normalize-space(.)="{label}"]/following::input[1]').first

@@ -46,19 +46,25 @@ class FakeTab:
         except Exception:  # noqa: BLE001 - closed
             pass
 
+    def send(self, message_type: str, **fields: object) -> None:
+        """Send one viser message as a raw client may (no checks: tests forge values with it)."""
+        self.ws.send(msgspec.msgpack.encode({"type": message_type, **fields}))
+
     def close(self) -> None:
         self.ws.close()
 
 
-def start_headless(scene=None, *, tabs: int = 1):
+def start_headless(scene=None, *, tabs: int = 1, field_delay: float = 0.0):
     """A server on a free local port with the app and ``tabs`` connected fake tabs.
 
+    ``field_delay`` is the app's text-field delay; 0 (the default here) judges a
+    field's text inside the assignment to ``handle.value``, so a test can read the result at once.
     Returns ``(server, app, fake_tabs, views)``; call ``server.stop()`` when done.
     """
     from .app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    app = EgtvizApp(server, scene)
+    app = EgtvizApp(server, scene, field_delay=field_delay)
     fakes = []
     views = []
     for k in range(tabs):

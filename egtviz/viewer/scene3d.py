@@ -49,6 +49,7 @@ except ImportError:  # pragma: no cover - another viser
     _props_setattr = None
 
 from ..scene.derived import IMAGE_PLANE_DEPTH
+from .fields import on_event
 from .palette import BASELINE_COLOUR, CAMERA_COLOURS, POINT_COLOURS, hex_to_rgb, point_rgb
 
 #: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
@@ -201,8 +202,14 @@ class Scene3D:
         api: viser.SceneApi,
         on_camera_gizmo: Callable[[str, Any], None],
         on_point_gizmo: Callable[[int, Any], None],
+        *,
+        report: Callable[[BaseException], None] | None = None,
     ) -> None:
         self.api = api
+        #: Receives whatever a gizmo callback raises (the tab shows it; see ``fields.on_event``); None: the
+        #: server's log only.
+        self._report = report if report is not None else (lambda exc: None)
+        self._force = False
         self._on_camera_gizmo = on_camera_gizmo
         self._on_point_gizmo = on_point_gizmo
         self._cam_ids: dict[str, int] = {}
@@ -263,7 +270,7 @@ class Scene3D:
         def _cb(event: viser.TransformControlsEvent, name: str = name) -> None:
             self._on_camera_gizmo(name, event)
 
-        gizmo.on_update(_cb)
+        on_event(gizmo.on_update, _cb, self._report)
         nodes: dict[str, Any] = {"gizmo": gizmo}
         nodes["axes"] = api.add_frame(f"{root}/axes", axes_length=0.5, axes_radius=0.015, origin_radius=0.03)
         nodes["label"] = api.add_label(f"{root}/label", name, position=(0.0, -0.35, 0.0), font_screen_scale=1.1,
@@ -356,9 +363,9 @@ class Scene3D:
                 def _cb(event: viser.TransformControlsEvent, i: int = i) -> None:
                     self._on_point_gizmo(i, event)
 
-                g.on_update(_cb)
+                on_event(g.on_update, _cb, self._report)
                 self._point_gizmos[i] = g
-            elif _moved(g.position, X[i]):
+            elif self._force or _moved(g.position, X[i]):
                 g.position = X[i]
             locked = f"point:{i}" in scene.locked
             _put(g, "disable_axes", locked)
@@ -372,8 +379,21 @@ class Scene3D:
 
     # -- everything ---------------------------------------------------------------
 
-    def draw(self, scene: Any, derived: Any, moving: str | None = None) -> None:
-        """Bring every node up to date. ``moving``: the camera whose gizmo the user is dragging (not re-posed)."""
+    def draw(self, scene: Any, derived: Any, moving: str | None = None, *, force: bool = False) -> None:
+        """Bring every node up to date. ``moving``: the camera whose gizmo the user is dragging (not re-posed).
+
+        ``force``: put every gizmo back where the scene has it, even if its live pose cannot be compared (a
+        refused drag may have left NaN there).
+        """
+        self._force = force
+        if force:
+            self._points_key = None
+        try:
+            self._draw(scene, derived, moving)
+        finally:
+            self._force = False
+
+    def _draw(self, scene: Any, derived: Any, moving: str | None) -> None:
         opts = scene.options
         self._sync_cameras(scene)
         n = len(scene.points)
@@ -387,9 +407,9 @@ class Scene3D:
             gizmo = nodes["gizmo"]
             if name != moving:
                 # Compare with the gizmo's live pose (a drag changes it), never with a cache.
-                if _moved(gizmo.position, position):
+                if self._force or _moved(gizmo.position, position):
                     gizmo.position = position
-                if _quat_moved(gizmo.wxyz, wxyz):
+                if self._force or _quat_moved(gizmo.wxyz, wxyz):
                     gizmo.wxyz = wxyz
             body = nodes.get("frustum", nodes.get("ccd"))
             look = (name in scene.locked, opts.show_frames, opts.show_labels, name in scene.highlighted)

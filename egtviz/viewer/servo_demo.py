@@ -43,6 +43,7 @@ import viser
 from egtviz.geometry.poses import Pose, quat_wxyz_from_matrix
 from egtviz.servo import ServoResult, simulate_panoramic, simulate_pinhole
 
+from .fields import Debouncer, FieldError, NumberRule, describe_error, format_number, on_event, parse_numbers
 from .palette import hex_to_rgb, point_colour
 from .servo_frames import ServoFrames
 from .servo_svg import ServoImage, servo_image_svg, trail_indices
@@ -58,6 +59,17 @@ FPS = 15.0
 PLOT_SAMPLES = 300
 #: The panoramic mirror (2 cm rim) is drawn this much larger in 3D, so that it can be seen.
 MIRROR_DRAW_SCALE = 4.0
+#: Most simulation steps a run may take (the demos converge in a few hundred).
+MAX_STEPS = 10_000
+#: What each run field accepts; a refused value gets a notification and the field shows the last valid one.
+RUN_RULES = {
+    "seed": NumberRule("seed", "", 0, 2**32 - 1, integer=True),
+    "beta": NumberRule("beta", "", 0.0, 100.0),
+    "noise_px": NumberRule("noise", "px", 0.0, 50.0),
+    "steps": NumberRule("max steps", "", 1, MAX_STEPS, integer=True),
+}
+#: Seconds a run field must stay unchanged before it is judged (see ``fields.Debouncer``).
+FIELD_DELAY = 0.6
 
 _TITLES = {
     "pinhole": ("Visual servoing: pin-hole camera on a Puma 560",
@@ -98,6 +110,18 @@ def puma_meshes() -> list[tuple[np.ndarray, np.ndarray]] | None:
         return None
 
 
+def _checked_number(key: str, value: Any) -> float | int:
+    """A run parameter given in code (a number or a field's text), checked by its rule in :data:`RUN_RULES`."""
+    rule = RUN_RULES[key]
+    if isinstance(value, str):
+        (number,) = parse_numbers(value, (rule,))
+    elif isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise FieldError(f"{rule.label}: expected a number, got {type(value).__name__}")
+    else:
+        number = rule.check(float(value))
+    return int(number) if rule.integer else float(number)
+
+
 def _thin(k: int, limit: int = PLOT_SAMPLES) -> np.ndarray:
     return trail_indices(k, limit)
 
@@ -118,6 +142,10 @@ class ServoDemo:
         autoplay: play each run as soon as it is ready.
         on_back: if given, a "Back" button calls it (the app uses it to return to the workbench).
         show_panel: add the right-hand panel (image plane and plots).
+        field_delay: seconds a run field must stay unchanged before it is judged (0: at once).
+
+    Raises:
+        ValueError: a parameter outside :data:`RUN_RULES`, an unknown estimator or speed.
     """
 
     def __init__(
@@ -135,11 +163,21 @@ class ServoDemo:
         autoplay: bool = True,
         on_back: Callable[[], None] | None = None,
         show_panel: bool = True,
+        field_delay: float = FIELD_DELAY,
     ) -> None:
         if kind not in ("pinhole", "panoramic"):
             raise ValueError(f"kind: expected 'pinhole' or 'panoramic', got {kind!r}")
         if estimator not in ESTIMATOR_CHOICES:
             raise ValueError(f"estimator: expected one of {list(ESTIMATOR_CHOICES)}, got {estimator!r}")
+        if speed not in SPEEDS:
+            raise ValueError(f"speed: expected one of {list(SPEEDS)}, got {speed!r}")
+        if steps is None:
+            steps = 1000 if kind == "pinhole" else 1500
+        #: The last valid value of each run field (what Run uses), in the fields' units.
+        self._values: dict[str, Any] = {"estimator": estimator, "speed": speed}
+        for key, value in (("seed", seed), ("beta", beta), ("noise_px", noise_px), ("steps", steps)):
+            self._values[key] = _checked_number(key, value)
+        self._typing = Debouncer(field_delay)
         self.client = client
         self.kind: DemoKind = kind
         self.autoplay = autoplay
@@ -168,7 +206,7 @@ class ServoDemo:
         self._setup_model()
         with self.lock, client.atomic():
             self._build_scene()
-            self._build_gui(seed, beta, noise_px, estimator, steps, speed)
+            self._build_gui()
             if show_panel:
                 self._build_panel()
             else:
@@ -316,8 +354,13 @@ class ServoDemo:
 
     # -- GUI ----------------------------------------------------------------------------
 
-    def _build_gui(self, seed, beta, noise_px, estimator, steps, speed) -> None:
+    def _on(self, register: Any, callback: Any) -> None:
+        """Attach ``callback`` to a handle's event: whatever it raises reaches this tab (``fields.on_event``)."""
+        on_event(register, callback, self.report)
+
+    def _build_gui(self) -> None:
         gui = self.client.gui
+        v = self._values
         gui.configure_theme(dark_mode=False, show_logo=False)
         try:
             gui.main_panel.dock_left()
@@ -328,44 +371,112 @@ class ServoDemo:
         self.title_md = gui.add_markdown(f"**{title}**  \n{text}")
         if self._on_back is not None:
             self.btn_back = gui.add_button("Back to the epipolar workbench", icon=viser.Icon.ARROW_LEFT)
-            self.btn_back.on_click(lambda _: self._back())
+            self._on(self.btn_back.on_click, lambda _: self._back())
         else:
             self.btn_back = None
         self.folder_run = gui.add_folder("Run", expand_by_default=True)
         with self.folder_run:
-            self.f_seed = gui.add_number("seed", int(seed), step=1, hint="Draws the start pose and the image noise.")
+            self.f_seed = gui.add_text("seed", format_number(v["seed"]),
+                                       hint="Draws the start pose and the image noise: a whole number >= 0.")
             if self.kind == "pinhole":
-                self.f_beta = gui.add_number("beta", float(beta), min=0.0, step=0.1,
-                                             hint="Weight of the translation (secondary) task; 0 = rotation only.")
-                self.f_estimator = gui.add_dropdown("F estimator", tuple(ESTIMATOR_CHOICES), initial_value=estimator,
+                self.f_beta = gui.add_text("beta", format_number(v["beta"]),
+                                           hint="Weight of the translation (secondary) task, >= 0; 0 = rotation only.")
+                self.f_estimator = gui.add_dropdown("F estimator", tuple(ESTIMATOR_CHOICES), initial_value=v["estimator"],
                                                     hint="F from the true poses, or estimated from the noisy "
                                                          "features at every step.")
+                self._on(self.f_estimator.on_update, lambda e: self._choice_event("estimator", e.target.value))
             else:
                 self.f_beta = None
                 self.f_estimator = None
-            self.f_noise = gui.add_number("noise (px)", float(noise_px), min=0.0, step=0.1,
-                                          hint="Standard deviation of the Gaussian pixel noise.")
-            self.f_steps = gui.add_number("max steps", int(steps) if steps is not None else
-                                          (1000 if self.kind == "pinhole" else 1500), min=1, step=1,
-                                          hint="The run stops earlier once the features reach their goal.")
+            self.f_noise = gui.add_text("noise (px)", format_number(v["noise_px"]),
+                                        hint="Standard deviation of the Gaussian pixel noise, >= 0.")
+            self.f_steps = gui.add_text("max steps", format_number(v["steps"]),
+                                        hint=f"1 to {MAX_STEPS}; the run stops earlier once the features reach "
+                                             "their goal.")
+            for key, handle in self._number_fields().items():
+                self._on(handle.on_update, lambda e, key=key: self._text_event(key, e.target.value))
             self.btn_run = gui.add_button("Run", icon=viser.Icon.PLAYER_PLAY)
-            self.btn_run.on_click(lambda _: self.run())
+            self._on(self.btn_run.on_click, lambda _: self.run())
             self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
         self.status = gui.add_html("")
         self.folder_play = gui.add_folder("Playback", expand_by_default=True)
         with self.folder_play:
             self.btn_play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
-            self.btn_play.on_click(lambda _: self.toggle_play())
+            self._on(self.btn_play.on_click, lambda _: self.toggle_play())
             self.btn_step_back = gui.add_button("Step back", icon=viser.Icon.PLAYER_TRACK_PREV)
-            self.btn_step_back.on_click(lambda _: self.step(-1))
+            self._on(self.btn_step_back.on_click, lambda _: self.step(-1))
             self.btn_step = gui.add_button("Step", icon=viser.Icon.PLAYER_TRACK_NEXT)
-            self.btn_step.on_click(lambda _: self.step(1))
-            self.f_speed = gui.add_dropdown("speed", SPEEDS, initial_value=speed if speed in SPEEDS else "1x",
+            self._on(self.btn_step.on_click, lambda _: self.step(1))
+            self.f_speed = gui.add_dropdown("speed", SPEEDS, initial_value=v["speed"],
                                             hint="Simulated seconds per real second.")
+            self._on(self.f_speed.on_update, lambda e: self._choice_event("speed", e.target.value))
             self.slider = gui.add_slider("time (s)", min=0.0, max=1.0, step=0.05, initial_value=0.0,
                                          hint="Drag to any time of the run.")
-            self.slider.on_update(self._slider_event)
+            self._on(self.slider.on_update, self._slider_event)
         self.readout = gui.add_html("")
+
+    def _number_fields(self) -> dict[str, Any]:
+        fields = {"seed": self.f_seed, "beta": self.f_beta, "noise_px": self.f_noise, "steps": self.f_steps}
+        return {k: h for k, h in fields.items() if h is not None}
+
+    # -- field events ----------------------------------------------------------------------
+
+    def _text_event(self, key: str, text: Any) -> None:
+        """A run field changed: judge its text once the user stopped typing (latest text wins)."""
+        if self._syncing or self._closed.is_set():
+            return
+
+        def judge() -> None:
+            try:
+                with self.lock:
+                    if self._syncing or self._closed.is_set():
+                        return
+                    (value,) = parse_numbers(text, (RUN_RULES[key],))
+                    self._values[key] = int(value) if RUN_RULES[key].integer else value
+            except Exception as exc:  # noqa: BLE001 - from a timer thread: no callback wrapper above us
+                self.report(exc)
+
+        self._typing.submit(key, judge)
+
+    def _choice_event(self, key: str, value: Any) -> None:
+        choices = ESTIMATOR_CHOICES if key == "estimator" else SPEEDS
+        with self.lock:
+            if self._syncing or self._closed.is_set():
+                return
+            if value not in choices:  # a raw client can send any string
+                label = "F estimator" if key == "estimator" else "speed"
+                shown = "".join(c if c.isprintable() else "?" for c in repr(value))[:40]
+                raise FieldError(f"{label}: expected one of {', '.join(choices)}, got {shown}")
+            self._values[key] = value
+
+    def report(self, exc: BaseException) -> None:
+        """Tell this tab what went wrong and show the last valid value in every run field."""
+        title, body = describe_error(exc)
+        with self.lock:
+            if self._closed.is_set():
+                return
+            try:
+                self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
+            except Exception:  # noqa: BLE001 - the client may be gone
+                pass
+            self._sync_fields()
+
+    def _sync_fields(self) -> None:
+        """Write the last valid run parameters into the fields (not user edits)."""
+        self._syncing = True
+        try:
+            for key, handle in self._number_fields().items():
+                text = format_number(self._values[key])
+                if handle.value != text:
+                    handle.value = text
+            for key, handle in (("estimator", self.f_estimator), ("speed", self.f_speed)):
+                if handle is not None and handle.value != self._values[key]:
+                    handle.value = self._values[key]
+            shown = float(min(self.time, self.slider.max))
+            if self.slider.value != shown:
+                self.slider.value = shown
+        finally:
+            self._syncing = False
 
     def _build_panel(self) -> None:
         gui = self.client.gui
@@ -418,20 +529,33 @@ class ServoDemo:
         self._listeners.append(callback)
 
     def set_params(self, **params: Any) -> None:
-        """Set run parameters in the GUI fields: ``seed``, ``beta``, ``noise_px``, ``estimator``, ``steps``, ``speed``."""
-        fields = {"seed": self.f_seed, "beta": self.f_beta, "noise_px": self.f_noise, "estimator": self.f_estimator,
-                  "steps": self.f_steps, "speed": self.f_speed}
+        """Set run parameters (and their fields): ``seed``, ``beta``, ``noise_px``, ``estimator``, ``steps``, ``speed``.
+
+        Raises:
+            ValueError: an unknown parameter or one the demo does not use, or a value outside :data:`RUN_RULES`;
+                nothing is changed then.
+        """
+        known = {"seed", "noise_px", "steps", "speed"} | ({"beta", "estimator"} if self.kind == "pinhole" else set())
+        new = dict(self._values)
         for key, value in params.items():
-            if key not in fields or fields[key] is None:
+            if key not in known:
                 raise ValueError(f"{key}: not a parameter of the {self.kind} demo")
-            fields[key].value = value
+            if key == "estimator" and value not in ESTIMATOR_CHOICES:
+                raise ValueError(f"estimator: expected one of {list(ESTIMATOR_CHOICES)}, got {value!r}")
+            if key == "speed" and value not in SPEEDS:
+                raise ValueError(f"speed: expected one of {list(SPEEDS)}, got {value!r}")
+            new[key] = value if key in ("estimator", "speed") else _checked_number(key, value)
+        with self.lock:
+            self._values = new
+            self._sync_fields()
 
     def params(self) -> dict[str, Any]:
-        """The run parameters as the GUI holds them (the keyword arguments of the simulation)."""
-        kw: dict[str, Any] = {"seed": self.f_seed.value, "noise_px": self.f_noise.value, "steps": self.f_steps.value}
+        """The run parameters the next run uses (the keyword arguments of the simulation)."""
+        v = self._values
+        kw: dict[str, Any] = {"seed": int(v["seed"]), "noise_px": float(v["noise_px"]), "steps": int(v["steps"])}
         if self.kind == "pinhole":
-            kw["beta"] = self.f_beta.value
-            kw["f_algorithm"] = ESTIMATOR_CHOICES.get(self.f_estimator.value, "?")
+            kw["beta"] = float(v["beta"])
+            kw["f_algorithm"] = ESTIMATOR_CHOICES[v["estimator"]]
         return kw
 
     @property
@@ -532,6 +656,7 @@ class ServoDemo:
             if self._closed.is_set():
                 return
             self._closed.set()
+            self._typing.close()
             self._play_gen += 1
             self._sim_gen += 1
             self.playing = False
@@ -566,14 +691,7 @@ class ServoDemo:
         result = frames = links = None
         error = ""
         try:
-            kw = dict(kw)
-            for key in ("seed", "steps"):
-                v = kw[key]
-                if isinstance(v, float) and v.is_integer():
-                    kw[key] = int(v)
             if self.kind == "pinhole":
-                if kw["f_algorithm"] == "?":
-                    raise ValueError("F estimator: expected one of " + ", ".join(ESTIMATOR_CHOICES))
                 result = simulate_pinhole(**kw, progress=progress)
             else:
                 result = simulate_panoramic(**kw, camera=self.camera_model, progress=progress)
@@ -668,7 +786,7 @@ class ServoDemo:
                     return
                 now = time.perf_counter()
                 dt = float(self.result.params.get("dt", 0.05))
-                speed = float(str(self.f_speed.value).rstrip("x") or 1.0)
+                speed = float(self._values["speed"].rstrip("x"))
                 pos += (now - t_last) * speed / dt
                 t_last = now
                 last = self.n_frames - 1
@@ -685,8 +803,11 @@ class ServoDemo:
         with self.lock:
             if self._syncing or self._closed.is_set() or self.result is None:
                 return
+            t = self.slider.value
+            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
+                raise FieldError(f"time: expected a number of seconds, got {repr(t)[:40]}")
             self.pause()
-            k = int(np.argmin(np.abs(self.result.time - float(self.slider.value))))
+            k = int(np.argmin(np.abs(self.result.time - float(t))))
             if k != self.frame:
                 self._show(k)
 

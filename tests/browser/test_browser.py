@@ -13,7 +13,15 @@ import numpy as np
 import pytest
 
 from egtviz.scene import compute_derived, default_scene, panoramic_scene
-from egtviz.viewer.browser import CHROMIUM, COUNT_JS, LINES_JS, chromium, chromium_available, open_viewer
+from egtviz.viewer.browser import (
+    CHROMIUM,
+    COUNT_JS,
+    LINES_JS,
+    chromium,
+    chromium_available,
+    field_input,
+    open_viewer,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -109,7 +117,7 @@ def _wait_rev_change(page, camera, rev, timeout=15.0):
 
 def _edit_focal(page, value: str) -> None:
     page.get_by_text("cam1 (pin-hole)").first.click()
-    field = page.get_by_label("focal length (mm)").first
+    field = field_input(page, "focal length (mm)")
     field.click()
     field.fill(value)
     field.press("Enter")
@@ -140,6 +148,26 @@ def test_invalid_value_is_refused_in_the_browser(browser, pinhole_server):
         _edit_focal(page, "-3")
         page.get_by_text("Value refused").first.wait_for(timeout=10_000)
         assert all(v.model.scene.camera("cam1").focal_length > 0 for v in app.views.values())
+    finally:
+        page.close()
+
+
+@pytest.mark.parametrize("text", ["nan", "abc", "1e400", "8.5e"])
+def test_text_a_number_field_cannot_read_is_refused_and_reverted(browser, pinhole_server, text):
+    """Typed key by key, as a user would: the server sees the text, refuses it, and the field shows 8 again."""
+    app, url = pinhole_server
+    page = open_viewer(browser, url)
+    try:
+        page.get_by_text("cam1 (pin-hole)").first.click()
+        field = field_input(page, "focal length (mm)")
+        field.click()
+        field.press("Control+a")
+        field.press_sequentially(text, delay=30)
+        page.get_by_text("Value refused").first.wait_for(timeout=10_000)
+        page.wait_for_function(
+            "(el) => el.value === '8'", arg=field.element_handle(), timeout=10_000)
+        assert page.get_by_text("cam1: focal length").count() >= 1
+        assert all(v.model.scene.camera("cam1").focal_length == pytest.approx(0.008) for v in app.views.values())
     finally:
         page.close()
 

@@ -1,0 +1,114 @@
+"""Real-browser tests of the scene file buttons: Save downloads the tab's scene, Load uploads one.
+
+Headless Debian Chromium (playwright) against an in-process egtviz server. No
+path on the server is named anywhere: the file goes through the browser.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import time
+
+import pytest
+
+from egtviz.scene import default_scene, scene_from_bytes, scene_to_bytes
+from egtviz.viewer.browser import CHROMIUM, chromium, chromium_available, open_viewer
+
+pytestmark = pytest.mark.browser
+
+if not chromium_available():
+    if os.environ.get("CI"):
+        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests (bash .ci/run installs both)")
+    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing (bash .ci/run installs both)", allow_module_level=True)
+
+
+@pytest.fixture(scope="module")
+def served():
+    import viser
+
+    from egtviz.viewer.app import EgtvizApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = EgtvizApp(server, default_scene())
+    with chromium() as browser:
+        yield app, browser, f"http://127.0.0.1:{server.get_port()}"
+    server.stop()
+
+
+def _open_scene_folder(page) -> None:
+    page.get_by_text("Scene", exact=True).first.click()
+    page.get_by_text("Save (download)").first.wait_for(timeout=10_000)
+
+
+def _the_view(app, before: set[int]):
+    deadline = time.time() + 10
+    while time.time() < deadline:
+        new = set(app.views) - before
+        if new:
+            return app.views[new.pop()]
+        time.sleep(0.05)
+    raise AssertionError("the page's tab never connected")
+
+
+def test_save_downloads_the_scene_file(served, tmp_path):
+    app, browser, url = served
+    before = set(app.views)
+    page = open_viewer(browser, url)
+    try:
+        view = _the_view(app, before)
+        view.model.update_camera("cam1", focal_length=0.0135)  # something to tell the file from the default
+        _open_scene_folder(page)
+        with page.expect_download(timeout=20_000) as info:
+            page.get_by_text("Save (download)").first.click()
+        download = info.value
+        assert download.suggested_filename.endswith(".json") and "/" not in download.suggested_filename
+        path = tmp_path / "saved.json"
+        download.save_as(path)
+        scene = scene_from_bytes(path.read_bytes(), "saved.json")
+        assert scene == view.model.scene
+        assert scene.camera("cam1").focal_length == pytest.approx(0.0135)
+    finally:
+        page.close()
+
+
+def test_load_uploads_a_scene_file_and_the_scene_changes(served, tmp_path):
+    app, browser, url = served
+    before = set(app.views)
+    page = open_viewer(browser, url)
+    try:
+        view = _the_view(app, before)
+        base = default_scene()
+        wanted = base.replace(title="Uploaded", cameras=tuple(
+            dataclasses.replace(c, position=(4.0, -6.0, 2.0)) if c.name == "cam2" else c for c in base.cameras))
+        path = tmp_path / "mine.json"
+        path.write_bytes(scene_to_bytes(wanted))
+        _open_scene_folder(page)
+        page.locator('input[type="file"]').first.set_input_files(str(path))
+        deadline = time.time() + 20
+        while view.model.scene.title != "Uploaded" and time.time() < deadline:
+            time.sleep(0.05)
+        assert view.model.scene == wanted
+        # the page shows the new scene: its title and cam2's position field
+        page.get_by_text("Uploaded").first.wait_for(timeout=10_000)
+        assert view._cam_fields["cam2"]["position"].value == "4, -6, 2"
+    finally:
+        page.close()
+
+
+def test_a_bad_upload_shows_the_reason_in_the_page(served, tmp_path):
+    app, browser, url = served
+    before = set(app.views)
+    page = open_viewer(browser, url)
+    try:
+        view = _the_view(app, before)
+        scene = view.model.scene
+        path = tmp_path / "broken.json"
+        path.write_text('{"cameras": [{"kind": "pinhole", "name": "c", "focal_length": "0.008"}]}')
+        _open_scene_folder(page)
+        page.locator('input[type="file"]').first.set_input_files(str(path))
+        page.get_by_text("Could not load the scene").first.wait_for(timeout=20_000)
+        assert page.get_by_text("broken.json").count() >= 1
+        assert view.model.scene is scene
+    finally:
+        page.close()
