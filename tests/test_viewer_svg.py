@@ -54,8 +54,9 @@ def test_points_only_inside_the_image_with_index_and_count():
     assert [p.get("data-index") for p in pts] == ["0", "1"]
     status = kinds(svg, "hidden-count")[0]
     assert status.get("data-hidden") == "1"
-    assert "1 hidden (behind the camera)" in status.text
-    assert "1 outside the image" in status.text
+    text = " ".join(status.itertext())  # the status wraps onto lines (tspans) when the panel is narrow
+    assert "1 hidden (behind the camera)" in text
+    assert "1 outside the image" in text
 
 
 def test_point_labels_are_one_based_and_optional():
@@ -79,7 +80,7 @@ def test_many_points_are_numbered_only_when_selected():
     # Every disc still sits at its pixel, in its colour.
     discs = [next(c for c in p.iter(NS + "circle") if c.get("fill") != "none") for p in pts_el]
     assert np.allclose([[float(d.get("cx")), float(d.get("cy"))] for d in discs], pts, atol=0.051)
-    assert "numbers shown for the selected point only" in kinds(svg, "numbering-note")[0].text
+    assert "numbers: selected point only" in kinds(svg, "numbering-note")[0].text
     # On its own line, inside the viewBox.
     note_y = float(kinds(svg, "numbering-note")[0].get("y"))
     x, y, w, h = map(float, ET.fromstring(svg).get("viewBox").split())
@@ -122,7 +123,7 @@ def test_epipole_outside_gets_an_arrow_at_the_border_pointing_to_it():
     line = next(arrow[0].iter(NS + "line"))
     x1, x2 = float(line.get("x1")), float(line.get("x2"))
     assert x2 > x1  # points right, towards the epipole at u = 2000
-    assert x2 >= 640 - 1e-6  # at the border
+    assert 640 * 0.98 <= x2 <= 640  # at the border, just inside the frame
     assert "(2000, 240)" in "".join(els[0].itertext())
 
 
@@ -149,7 +150,7 @@ def test_conics_and_rim_for_a_panoramic_plane():
     assert len([c for c in conics if c.get("data-index") == "1"]) == 2
     assert len(kinds(svg, "rim")) == 1
     assert len(kinds(svg, "epipole")) == 2
-    assert "blind cone" in kinds(svg, "hidden-count")[0].text
+    assert "blind cone" in " ".join(kinds(svg, "hidden-count")[0].itertext())
 
 
 def test_message_and_escaping():

@@ -3,7 +3,12 @@
 Okabe & Ito's colour-blind-safe palette (without black and yellow, which do not
 read on white): point ``i`` gets ``POINT_COLOURS[i % 6]`` in the 3D scene and in
 every image plane, and its number is written next to it, so nothing depends on
-telling two hues apart.
+telling two hues apart (from the seventh point on, colours repeat).
+
+``PRESENT_POINT_COLOURS`` are the same six hues darkened for a projector: each
+has a contrast ratio of at least 4.5 : 1 on white (the WCAG level for text),
+``contrast_ratio(c, "#ffffff") = (L_white + 0.05) / (L_c + 0.05)`` with ``L``
+the relative luminance.
 """
 
 from __future__ import annotations
@@ -15,6 +20,14 @@ POINT_COLOURS: tuple[str, ...] = (
     "#CC79A7",  # reddish purple
     "#E69F00",  # orange
     "#56B4E9",  # sky blue
+)
+PRESENT_POINT_COLOURS: tuple[str, ...] = (
+    "#004C7A",  # blue
+    "#B34700",  # vermillion
+    "#007A5A",  # bluish green
+    "#A3457F",  # reddish purple
+    "#A35F00",  # orange
+    "#1F6FA8",  # sky blue
 )
 EPIPOLE_COLOUR = "#222222"
 BASELINE_COLOUR = "#444444"
@@ -34,4 +47,22 @@ def point_colour(i: int) -> str:
 
 
 def point_rgb(i: int) -> tuple[int, int, int]:
+    """``(r, g, b)`` of scene point ``i`` (0-based)."""
     return hex_to_rgb(point_colour(i))
+
+
+def relative_luminance(colour: str) -> float:
+    """Relative luminance of an sRGB colour: ``L = 0.2126 R + 0.7152 G + 0.0722 B`` on linearised channels."""
+
+    def linear(c8: int) -> float:
+        c = c8 / 255.0
+        return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+    r, g, b = hex_to_rgb(colour)
+    return 0.2126 * linear(r) + 0.7152 * linear(g) + 0.0722 * linear(b)
+
+
+def contrast_ratio(a: str, b: str) -> float:
+    """WCAG contrast ratio ``(L_light + 0.05) / (L_dark + 0.05)`` of two colours (1 to 21)."""
+    la, lb = sorted((relative_luminance(a), relative_luminance(b)))
+    return (lb + 0.05) / (la + 0.05)

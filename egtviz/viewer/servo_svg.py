@@ -8,19 +8,41 @@ feature with at least two finite samples), ``desired`` (``data-index``),
 ``point`` (``data-index``, the current feature), ``epipolar-line``
 (``data-index``), ``epipolar-conic`` (``data-index``; a bi-conic may have several
 pieces), ``epipole`` (``data-label``), ``message``, ``caption`` and ``legend``.
+
+The panel uses the image-plane panels' layout (:func:`egtviz.viewer.svg.panel_layout`):
+sizes in CSS pixels of a :class:`~egtviz.viewer.svg.PanelStyle` at the panel's
+width, tick steps from the view, the caption, the message and the legend in
+rows under the frame (never over the image), and the feature numbers and
+epipole labels placed clear of each other's marks
+(:func:`~egtviz.viewer.panel_view.place_labels`; each carries ``data-box``).
+The GUI calls ``servo_image_svg(img, style=PRESENT, panel_px=...)`` in
+presentation mode.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from html import escape
 
 import numpy as np
 
-from .palette import EPIPOLE_COLOUR, RIM_COLOUR, point_colour
-from .svg import _f, _finite_runs, _points_attr, axes_svg
+from .palette import EPIPOLE_COLOUR, RIM_COLOUR
+from .panel_view import ViewBox, place_labels
+from .svg import (
+    NORMAL,
+    PanelStyle,
+    _axes_svg,
+    _f,
+    _finite_runs,
+    _label_text,
+    _points_attr,
+    _svg_open,
+    _text_px,
+    panel_layout,
+)
 
-__all__ = ["ServoImage", "servo_image_svg", "trail_indices"]
+__all__ = ["ServoImage", "servo_image_svg", "shared_zero_ranges", "trail_indices"]
 
 #: Most vertices per trail (older samples are thinned, the newest is always kept).
 TRAIL_VERTICES = 160
@@ -57,33 +79,105 @@ def trail_indices(k: int, limit: int = TRAIL_VERTICES) -> np.ndarray:
     return np.unique(np.r_[np.linspace(0, k, limit).astype(int), k])
 
 
-def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height: str | None = None) -> str:
-    """The ``<svg>`` string of one frame (see the module docstring for the ``data-*`` contract)."""
+def shared_zero_ranges(a: tuple[float, float], b: tuple[float, float], pad: float = 0.05
+                       ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Ranges for the two y-axes of one plot that put 0 at the same height on both (for the servo plots).
+
+    Each data range ``[lo, hi]`` is first widened to hold 0; with ``p = -lo``,
+    ``q = hi``, zero sits at the fraction ``f = p / (p + q)`` of the axis from
+    the bottom. One ``f*`` is chosen for both (the larger ``f`` when it is
+    below 1, else the smaller when above 0, else 1/2), and each axis gets the
+    span ``s = max(p / f*, q / (1 - f*)) (1 + pad)``, i.e. the range
+    ``[-f* s, (1 - f*) s]``, which holds its data.
+
+    Args:
+        a, b: ``(min, max)`` of each axis's data (finite).
+        pad: extra fraction of the span.
+
+    Returns:
+        ``((lo_a, hi_a), (lo_b, hi_b))``.
+    """
+    pq = []
+    for name, (lo, hi) in (("a", a), ("b", b)):
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            raise ValueError(f"{name}: expected finite (min, max) with min <= max, got {(lo, hi)}")
+        pq.append((max(-lo, 0.0), max(hi, 0.0)))
+    fs = [p / (p + q) if p + q > 0 else 0.5 for p, q in pq]
+    f = max(fs) if max(fs) < 1 else (min(fs) if min(fs) > 0 else 0.5)
+    out = []
+    for p, q in pq:
+        span = max(p / f if p > 0 else 0.0, q / (1 - f) if q > 0 else 0.0) or 1.0
+        span *= 1.0 + pad
+        out.append((-f * span, (1 - f) * span))
+    return out[0], out[1]
+
+
+def _wrap_words(text: str, max_px: float, size_px: float) -> list[str]:
+    """``text`` broken at spaces into lines no wider than ``max_px`` (a longer word gets a line of its own)."""
+    lines: list[str] = []
+    for word in text.split():
+        if lines and _text_px(lines[-1] + " " + word, size_px) <= max_px:
+            lines[-1] += " " + word
+        else:
+            lines.append(word)
+    return lines
+
+
+def _legend_rows(curve: str, max_px: float, size_px: float) -> list[list[tuple[str, str, float]]]:
+    """The legend's entries ``(symbol, text, width in CSS px)`` packed into rows no wider than ``max_px``."""
+    entries = [("disc", "current"), ("square", "desired"), ("trail", "trail"), ("curve", curve), ("cross", "epipole")]
+    rows: list[list[tuple[str, str, float]]] = [[]]
+    used = 0.0
+    for sym, text in entries:
+        width = 2.2 * size_px + _text_px(text, size_px) + 0.9 * size_px
+        if rows[-1] and used + width > max_px:
+            rows.append([])
+            used = 0.0
+        rows[-1].append((sym, text, width))
+        used += width
+    return rows
+
+
+def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height: str | None = None,
+                    style: PanelStyle = NORMAL, panel_px: float | None = None, fixed_size: bool = False) -> str:
+    """The ``<svg>`` string of one frame (see the module docstring for the ``data-*`` contract).
+
+    Args:
+        img: the frame's drawing data.
+        revision: written as ``data-rev``.
+        max_height: a CSS ``max-height`` for the SVG.
+        style: ``NORMAL`` or ``PRESENT`` (:mod:`egtviz.viewer.svg`).
+        panel_px: the panel's width on screen in CSS pixels, if known (default ``style.panel_px``).
+        fixed_size: write ``width``/``height`` in pixels (a figure file).
+    """
     w, h = float(img.width), float(img.height)
-    s = max(w, h)
-    font = s / 32.0
-    margin = font * 2.6
-    bottom = font * 2.4
-    r_pt = s / 100.0
-    lw = s / 420.0
+    view = ViewBox(0.0, 0.0, w, h)
+    panel_px = float(style.panel_px if panel_px is None else panel_px)
+    curve = "bi-conic" if img.demo == "panoramic" else "epipolar line"
+    legend = _legend_rows(curve, 0.85 * panel_px, style.status_px)
+    caption = _wrap_words(img.caption, 0.8 * panel_px, style.status_px)
+    message = _wrap_words(img.message, 0.8 * panel_px, style.status_px * 1.1)  # bold: a little wider
+    lay = panel_layout(view, style, panel_px, len(legend) + len(caption) + len(message))
+    k = lay.k
+    colours = style.point_colours
+    nc = len(colours)
+    r_pt = style.mark_px * k
+    lw = style.line_px * k
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
-    mh = "" if max_height is None else f";max-height:{escape(max_height)}"
-    vb = f"{_f(-margin)} {_f(-margin)} {_f(w + 2 * margin)} {_f(h + margin + bottom)}"
+    attrs = f' data-demo="{escape(img.demo)}" data-frame="{int(img.frame)}"{rev}'
     out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="servo-image" data-demo="{escape(img.demo)}" '
-        f'data-frame="{int(img.frame)}"{rev} viewBox="{vb}" width="100%" '
-        f'style="display:block;font-family:sans-serif;background:#f4f4f4{mh}">',
+        _svg_open("servo-image", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
         f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#fff" '
-        f'stroke="#333" stroke-width="{_f(lw * 1.5)}"/>',
+        f'stroke="{style.ink}" stroke-width="{_f(style.frame_px * k)}"/>',
+        _axes_svg(lay, style),
+        f'<defs><clipPath id="servo-clip-{escape(img.demo)}"><rect x="0" y="0" width="{_f(w)}" '
+        f'height="{_f(h)}"/></clipPath></defs><g clip-path="url(#servo-clip-{escape(img.demo)})">',
     ]
-    out.append(axes_svg(w, h, font, lw))
-    out.append(f'<defs><clipPath id="servo-clip-{escape(img.demo)}"><rect x="0" y="0" width="{_f(w)}" '
-               f'height="{_f(h)}"/></clipPath></defs><g clip-path="url(#servo-clip-{escape(img.demo)})">')
-    integer = s > 300
+    integer = k >= 1.0
     if img.rim is not None and len(img.rim) >= 3:
         R = np.vstack([img.rim, img.rim[:1]])
         out.append(f'<polyline data-kind="rim" points="{_points_attr(R, integer=integer)}" fill="none" '
-                   f'stroke="{RIM_COLOUR}" stroke-width="{_f(lw * 1.5)}" stroke-dasharray="{_f(lw * 6)},{_f(lw * 4)}"/>')
+                   f'stroke="{RIM_COLOUR}" stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw * 5)},{_f(lw * 3)}"/>')
     n = len(img.desired)
     # Epipolar lines / bi-conics first (thin), so the features stay on top.
     if img.lines is not None:
@@ -91,73 +185,95 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
             if not np.all(np.isfinite(seg)):
                 continue
             out.append(f'<line data-kind="epipolar-line" data-index="{i}" x1="{_f(seg[0, 0])}" y1="{_f(seg[0, 1])}" '
-                       f'x2="{_f(seg[1, 0])}" y2="{_f(seg[1, 1])}" stroke="{point_colour(i)}" '
-                       f'stroke-width="{_f(lw * 1.2)}" stroke-opacity="0.75"/>')
+                       f'x2="{_f(seg[1, 0])}" y2="{_f(seg[1, 1])}" stroke="{colours[i % nc]}" '
+                       f'stroke-width="{_f(lw * 0.8)}" stroke-opacity="0.75"/>')
     for i, arcs in enumerate(img.conics):
         for arc in arcs:
             for run in _finite_runs(arc):
                 out.append(f'<polyline data-kind="epipolar-conic" data-index="{i}" '
-                           f'points="{_points_attr(run, integer=integer)}" fill="none" stroke="{point_colour(i)}" '
-                           f'stroke-width="{_f(lw * 1.2)}" stroke-opacity="0.75"/>')
-    # Trails.
+                           f'points="{_points_attr(run, integer=integer)}" fill="none" stroke="{colours[i % nc]}" '
+                           f'stroke-width="{_f(lw * 0.8)}" stroke-opacity="0.75"/>')
     T = np.asarray(img.trails, float)
     for i in range(n):
         for run in _finite_runs(T[:, i, :]) if len(T) else []:
             out.append(f'<polyline data-kind="trail" data-index="{i}" points="{_points_attr(run, integer=False)}" '
-                       f'fill="none" stroke="{point_colour(i)}" stroke-width="{_f(lw * 2.2)}" '
+                       f'fill="none" stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}" '
                        f'stroke-linejoin="round" stroke-opacity="0.9"/>')
-    # Desired features: hollow squares.
-    for i, p in enumerate(np.asarray(img.desired, float)):
-        if not np.all(np.isfinite(p)):
-            continue
-        a = r_pt * 1.3
-        out.append(f'<rect data-kind="desired" data-index="{i}" x="{_f(p[0] - a)}" y="{_f(p[1] - a)}" '
-                   f'width="{_f(2 * a)}" height="{_f(2 * a)}" fill="#fff" fill-opacity="0.6" '
-                   f'stroke="{point_colour(i)}" stroke-width="{_f(lw * 2)}"/>')
-    # Current features: filled discs with their number.
-    for i, p in enumerate(np.asarray(img.current, float)):
-        if not np.all(np.isfinite(p)):
-            continue
+    a_sq = r_pt * 1.3
+    D = np.asarray(img.desired, float).reshape(-1, 2)
+    C = np.asarray(img.current, float).reshape(-1, 2)
+    for i, p in enumerate(D):
+        if np.all(np.isfinite(p)):
+            out.append(f'<rect data-kind="desired" data-index="{i}" x="{_f(p[0] - a_sq)}" y="{_f(p[1] - a_sq)}" '
+                       f'width="{_f(2 * a_sq)}" height="{_f(2 * a_sq)}" fill="#fff" fill-opacity="0.6" '
+                       f'stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}"/>')
+    # Labels: epipoles first, then the current features' numbers, clear of every disc, square and cross.
+    a_ep = r_pt * 1.6
+    eps = [(str(lab), np.asarray(e, float)) for lab, e in img.epipoles]
+    eps = [(lab, e) for lab, e in eps if np.all(np.isfinite(e))]
+    cur = [i for i in range(len(C)) if np.all(np.isfinite(C[i]))]
+    size = style.label_px * k
+    halo = 0.25 * style.label_px * k
+    obstacles = [(p[0] - r_pt - lw, p[1] - r_pt - lw, p[0] + r_pt + lw, p[1] + r_pt + lw) for p in C[cur]]
+    obstacles += [(p[0] - a_sq - lw, p[1] - a_sq - lw, p[0] + a_sq + lw, p[1] + a_sq + lw)
+                  for p in D if np.all(np.isfinite(p))]
+    obstacles += [(e[0] - a_ep, e[1] - a_ep, e[0] + a_ep, e[1] + a_ep) for _, e in eps]
+    anchors = [tuple(e) for _, e in eps] + [tuple(C[i]) for i in cur]
+    radii = [a_ep] * len(eps) + [r_pt] * len(cur)
+    sizes = [(_text_px(lab, style.label_px) * k + halo, 0.95 * size + halo) for lab, _ in eps]
+    sizes += [(_text_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in cur]
+    boxes = (place_labels(anchors, radii, sizes, obstacles, (0.0, 0.0, w, h), gap=0.3 * size)
+             if anchors else np.zeros((0, 4)))
+    halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}" paint-order="stroke"'
+    for i, box in zip(cur, boxes[len(eps):]):
+        p = C[i]
         out.append(f'<circle data-kind="point" data-index="{i}" cx="{_f(p[0])}" cy="{_f(p[1])}" r="{_f(r_pt)}" '
-                   f'fill="{point_colour(i)}" stroke="#fff" stroke-width="{_f(lw)}"/>'
-                   f'<text x="{_f(p[0] + r_pt * 1.3)}" y="{_f(p[1] - r_pt * 1.1)}" font-size="{_f(font * 0.8)}" '
-                   f'fill="{point_colour(i)}" font-weight="bold">{i + 1}</text>')
-    for label, e in img.epipoles:
-        e = np.asarray(e, float)
-        if not np.all(np.isfinite(e)):
-            continue
-        a = r_pt * 1.6
-        out.append(f'<g data-kind="epipole" data-label="{escape(label)}">'
-                   f'<line x1="{_f(e[0] - a)}" y1="{_f(e[1] - a)}" x2="{_f(e[0] + a)}" y2="{_f(e[1] + a)}" '
-                   f'stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 2.2)}"/>'
-                   f'<line x1="{_f(e[0] - a)}" y1="{_f(e[1] + a)}" x2="{_f(e[0] + a)}" y2="{_f(e[1] - a)}" '
-                   f'stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 2.2)}"/>'
-                   f'<text x="{_f(e[0] + a * 1.2)}" y="{_f(e[1] + a * 1.8)}" font-size="{_f(font * 0.85)}" '
-                   f'font-style="italic" fill="{EPIPOLE_COLOUR}">{escape(label)}</text></g>')
+                   f'fill="{colours[i % nc]}" stroke="#fff" stroke-width="{_f(lw * 0.6)}"/>'
+                   + _label_text(box, size, str(i + 1),
+                                 f' font-size="{_f(size)}" fill="{style.ink}" font-weight="bold"{halo_attr}', p[0]))
+    for (lab, e), box in zip(eps, boxes[: len(eps)]):
+        out.append(f'<g data-kind="epipole" data-label="{escape(lab)}">'
+                   f'<path d="M{_f(e[0] - a_ep)} {_f(e[1] - a_ep)}L{_f(e[0] + a_ep)} {_f(e[1] + a_ep)}'
+                   f'M{_f(e[0] - a_ep)} {_f(e[1] + a_ep)}L{_f(e[0] + a_ep)} {_f(e[1] - a_ep)}" '
+                   f'stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 1.6)}"/>'
+                   + _label_text(box, size, escape(lab),
+                                 f' font-size="{_f(size)}" font-style="italic" fill="{EPIPOLE_COLOUR}"{halo_attr}',
+                                 e[0])
+                   + "</g>")
     out.append("</g>")
-    if img.caption:
-        out.append(f'<text data-kind="caption" x="{_f(w)}" y="{_f(h - font * 0.5)}" text-anchor="end" '
-                   f'font-size="{_f(font * 0.85)}" fill="#333">{escape(img.caption)}</text>')
-    if img.message:
-        out.append(f'<text data-kind="message" x="{_f(w / 2)}" y="{_f(font * 1.3)}" text-anchor="middle" '
-                   f'font-size="{_f(font * 0.85)}" fill="{img.message_colour}" font-weight="bold">'
-                   f'{escape(img.message)}</text>')
-    # Legend under the image.
-    y = h + font * 1.5
-    curve = "bi-conic" if img.demo == "panoramic" else "epipolar line"
-    a = r_pt
-    out.append(
-        f'<g data-kind="legend" font-size="{_f(font * 0.8)}" fill="#333">'
-        f'<circle cx="{_f(a)}" cy="{_f(y - a * 0.6)}" r="{_f(a)}" fill="#555"/>'
-        f'<text x="{_f(3 * a)}" y="{_f(y)}">current</text>'
-        f'<rect x="{_f(w * 0.2)}" y="{_f(y - 1.8 * a)}" width="{_f(2 * a)}" height="{_f(2 * a)}" fill="none" '
-        f'stroke="#555" stroke-width="{_f(lw * 2)}"/><text x="{_f(w * 0.2 + 3 * a)}" y="{_f(y)}">desired</text>'
-        f'<line x1="{_f(w * 0.4)}" y1="{_f(y - a * 0.6)}" x2="{_f(w * 0.4 + 5 * a)}" y2="{_f(y - a * 0.6)}" '
-        f'stroke="#555" stroke-width="{_f(lw * 2.2)}"/><text x="{_f(w * 0.4 + 6 * a)}" y="{_f(y)}">trail</text>'
-        f'<line x1="{_f(w * 0.58)}" y1="{_f(y - a * 0.6)}" x2="{_f(w * 0.58 + 5 * a)}" y2="{_f(y - a * 0.6)}" '
-        f'stroke="#555" stroke-width="{_f(lw * 1.2)}" stroke-opacity="0.75"/>'
-        f'<text x="{_f(w * 0.58 + 6 * a)}" y="{_f(y)}">{curve}</text>'
-        f'<text x="{_f(w)}" y="{_f(y)}" text-anchor="end" font-style="italic">&#215; epipole</text></g>'
-    )
+    # Under the frame: the legend rows, then the caption and the message.
+    st = style.status_px * k
+    rows = iter(lay.rows_y)
+    grey = "#555"
+    for entries in legend:
+        y = next(rows)
+        x = 0.0
+        items = []
+        for sym, text, width in entries:
+            cy = y - 0.35 * st
+            if sym == "disc":
+                items.append(f'<circle cx="{_f(x + 0.5 * st)}" cy="{_f(cy)}" r="{_f(0.4 * st)}" fill="{grey}"/>')
+            elif sym == "square":
+                items.append(f'<rect x="{_f(x + 0.1 * st)}" y="{_f(cy - 0.4 * st)}" width="{_f(0.8 * st)}" '
+                             f'height="{_f(0.8 * st)}" fill="none" stroke="{grey}" stroke-width="{_f(lw * 1.5)}"/>')
+            elif sym == "cross":
+                items.append(f'<path d="M{_f(x + 0.1 * st)} {_f(cy - 0.4 * st)}l{_f(0.8 * st)} {_f(0.8 * st)}'
+                             f'm0 {_f(-0.8 * st)}l{_f(-0.8 * st)} {_f(0.8 * st)}" stroke="{EPIPOLE_COLOUR}" '
+                             f'stroke-width="{_f(lw * 1.6)}"/>')
+            else:
+                op = ' stroke-opacity="0.75"' if sym == "curve" else ""
+                wd = lw * (0.8 if sym == "curve" else 1.5)
+                items.append(f'<line x1="{_f(x)}" y1="{_f(cy)}" x2="{_f(x + 1.6 * st)}" y2="{_f(cy)}" '
+                             f'stroke="{grey}" stroke-width="{_f(wd)}"{op}/>')
+            items.append(f'<text x="{_f(x + 2.2 * st)}" y="{_f(y)}">{text}</text>')
+            x += width * k
+        out.append(f'<g data-kind="legend" font-size="{_f(st)}" fill="{style.ink}">{"".join(items)}</g>')
+    for kind, lines, attrs in (("caption", caption, f'fill="{style.ink}"'),
+                               ("message", message, f'fill="{img.message_colour}" font-weight="bold"')):
+        if lines:
+            ys = [next(rows) for _ in lines]
+            body = (escape(lines[0]) if len(lines) == 1 else
+                    "".join(f'<tspan x="0" y="{_f(y)}">{escape(t)}</tspan>' for t, y in zip(lines, ys)))
+            out.append(f'<text data-kind="{kind}" x="0" y="{_f(ys[0])}" font-size="{_f(st)}" {attrs}>{body}</text>')
     out.append("</svg>")
     return "".join(out)

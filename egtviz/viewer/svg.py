@@ -1,22 +1,45 @@
 """Image-plane panels as inline SVG: a pure function from an ``ImagePlane`` to a string.
 
-The SVG is in pixel units (``viewBox`` = the image, plus a margin for the axes'
-tick labels and for the arrows that point to epipoles outside the image). It
-draws only what the scene layer computed (:class:`egtviz.scene.ImagePlane`):
+The SVG is in pixel units of the image: its ``viewBox`` is the panel's view
+(:class:`~egtviz.viewer.panel_view.ViewBox`, by default the image rectangle)
+plus margins for the axes' tick labels and the status lines under the frame.
+Sizes of text, lines and marks are given in CSS pixels by a
+:class:`PanelStyle` at a panel width ``panel_px`` and converted to image
+pixels through the view box, ``size_user = size_px * viewBox_width / panel_px``:
+the panel shown ``W`` CSS pixels wide writes its text at ``size_px * W /
+panel_px`` CSS pixels whatever the image's size in pixels (2 px or 4000 px).
+It draws only what the scene layer computed (:class:`egtviz.scene.ImagePlane`):
 points, epipoles, clipped epipolar lines, epipolar conics, the mirror rim.
+
+How the GUI calls it: ``image_plane_svg(plane, view=view, style=PRESENT,
+panel_px=620)``, with ``view`` from :mod:`egtviz.viewer.panel_view`
+(``fit_view``, ``zoom``, ``pan``; ``None`` = the image rectangle), ``style``
+``NORMAL`` or ``PRESENT`` (presentation mode) and ``panel_px`` the width the
+panel will have on screen if the app knows it (else the style's own width).
+:mod:`egtviz.viewer.figure_export` writes the same SVG with a fixed size and
+renders it to PNG.
 
 Testability contract (the browser tests rely on it):
 
-* the root ``<svg>`` carries ``data-egtviz="image-plane"`` and
-  ``data-camera="<camera name>"``;
-* drawn elements carry ``data-kind``: ``border``, ``point`` (with
-  ``data-index``, 0-based, one per point inside the image: a ``<g>`` holding
-  the disc and its number, or a bare disc when the point is not numbered),
-  ``epipole`` (with
-  ``data-label`` and ``data-where`` = ``inside`` | ``outside`` | ``infinity``),
+* the root ``<svg>`` carries ``data-egtviz="image-plane"``,
+  ``data-camera="<camera name>"``, ``data-style`` (``normal`` |
+  ``present``) and ``data-view`` (``u0 v0 width height`` of the view);
+* drawn elements carry ``data-kind``: ``border`` (the image rectangle),
+  ``frame`` (the view's axes box), ``axes``, ``point`` (with ``data-index``,
+  0-based, one per point inside the image: a ``<g>`` holding the disc and its
+  number, or a bare disc when the point is not numbered), ``point-outside``
+  (the same for a visible point outside the image but inside the view: a
+  hollow disc), ``epipole`` (with ``data-label``, ``data-where`` = ``inside``
+  | ``outside`` | ``infinity`` (relative to the image) and ``data-drawn`` =
+  ``mark`` (a cross at the epipole, inside the view) | ``arrow`` (at the
+  frame, pointing to it)), ``epipole-arrow``, ``epipole-label``,
   ``epipolar-line`` (with ``data-index``, one per drawn line),
   ``epipolar-conic`` (with ``data-index``; a conic may have several pieces),
-  ``rim``, ``message``, ``hidden-count``, ``numbering-note``.
+  ``rim``, ``message``, ``hidden-count``, ``numbering-note``;
+* every text that labels a mark (point numbers, epipole labels) is placed by
+  :func:`~egtviz.viewer.panel_view.place_labels` clear of the marks, arrows and
+  other labels, and carries ``data-box="x0 y0 x1 y1"``: the box it was placed
+  in (image pixels).
 
 Point labels are 1-based, like EGT's ``f_3Dwfenum``; ``data-index`` is 0-based.
 Above ``MAX_NUMBERED_POINTS`` points in an image only the selected and
@@ -27,18 +50,17 @@ from __future__ import annotations
 
 import math
 import zlib
+from dataclasses import dataclass
 from functools import lru_cache
 from html import escape
 from typing import Any
 
 import numpy as np
 
-from .palette import EPIPOLE_COLOUR, POINT_COLOURS, RIM_COLOUR, point_colour
+from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
+from .panel_view import ViewBox, image_view, place_labels, tick_values
 
-_COLOURS = tuple(POINT_COLOURS)
-_N_COLOURS = len(_COLOURS)
-
-__all__ = ["image_plane_svg", "empty_svg"]
+__all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "empty_svg", "image_plane_svg", "panel_layout"]
 
 #: Above this many points in an image only the selected and highlighted points are numbered (more are unreadable).
 MAX_NUMBERED_POINTS = 40
@@ -46,29 +68,181 @@ MAX_NUMBERED_POINTS = 40
 #: Most conic vertices drawn in one panel (200 conics x 129 samples would be ~260 kB of SVG per update).
 CONIC_VERTEX_BUDGET = 10_000
 
+#: Advance of one character in ems, an upper bound over common sans-serif fonts (DejaVu Sans Bold digits: 0.696).
+CHAR_EM = 0.7
+
+#: Narrower characters (DejaVu Sans: space, comma, full stop 0.318 em; parentheses 0.39 em; hyphen 0.361 em).
+_NARROW_EM = {" ": 0.35, ",": 0.35, ".": 0.35, ":": 0.35, ";": 0.35, "(": 0.42, ")": 0.42, "-": 0.42, "'": 0.35,
+              "i": 0.35, "j": 0.35, "l": 0.35, "t": 0.45, "f": 0.45, "r": 0.5, "m": 0.98, "w": 0.84}
+#: Other lower-case letters (DejaVu Sans: 0.52-0.64 em).
+_LOWER_EM = 0.64
+
+
+@dataclass(frozen=True)
+class PanelStyle:
+    """How a panel looks: sizes in CSS pixels when the panel is ``panel_px`` CSS pixels wide, and colours."""
+
+    name: str
+    """``normal`` or ``present`` (written as ``data-style``)."""
+    panel_px: float
+    """The panel width the sizes are meant for, when the caller does not give one."""
+    tick_px: float
+    """Axis tick labels and the axis names."""
+    label_px: float
+    """Point numbers and epipole labels."""
+    status_px: float
+    """Status lines under the frame and messages."""
+    line_px: float
+    """Epipolar lines and conics (the selected point's are three times as thick)."""
+    mark_px: float
+    """Radius of a point's disc."""
+    frame_px: float
+    """The image border and the axes."""
+    ink: str
+    """Text and axes colour."""
+    background: str
+    point_colours: tuple[str, ...]
+
+
+#: The workbench's look (sizes for the 480 px column of a 1600 px window).
+NORMAL = PanelStyle("normal", panel_px=480.0, tick_px=11.0, label_px=13.0, status_px=11.5, line_px=1.3,
+                    mark_px=4.5, frame_px=1.2, ink="#333333", background="#f4f4f4", point_colours=POINT_COLOURS)
+#: Presentation mode: 16 px and larger text on a 620 px panel (a 1920 x 1080 screen), thick lines, high contrast.
+PRESENT = PanelStyle("present", panel_px=620.0, tick_px=17.0, label_px=19.0, status_px=17.0, line_px=2.6,
+                     mark_px=7.0, frame_px=2.2, ink="#000000", background="#ffffff",
+                     point_colours=PRESENT_POINT_COLOURS)
+
 
 def _f(x: float) -> str:
     """Compact coordinate formatting: five significant digits (images may be 2 px or 4000 px wide)."""
     return f"{x:.5g}"
 
 
-def _nice_step(span: float) -> float:
-    """A 1-2-5 tick step giving about 5-8 ticks over ``span``."""
-    raw = span / 6.0
-    mag = 10.0 ** math.floor(math.log10(raw))
-    for m in (1.0, 2.0, 5.0, 10.0):
-        if raw <= m * mag:
-            return m * mag
-    return 10.0 * mag
+@lru_cache(maxsize=4096)
+def _text_px(text: str, size_px: float) -> float:
+    """Upper bound of a one-line text's width in CSS pixels (``CHAR_EM`` per character, less for narrow ones)."""
+    return sum(_NARROW_EM.get(ch, _LOWER_EM if ch.islower() else CHAR_EM) for ch in text) * size_px
 
 
-def _border_exit(w: float, h: float, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
-    """Where the segment from the image centre towards ``target`` leaves the image, and its unit direction.
+@dataclass(frozen=True)
+class PanelLayout:
+    """Where a panel's frame, axes and status lines go; lengths in image pixels (the SVG's user units)."""
 
-    Used only to place an arrow marker (layout, not geometry): the epipole itself
-    comes from the scene layer.
+    view: ViewBox
+    panel_px: float
+    """Panel width in CSS pixels the layout is made for."""
+    height_px: float
+    """Panel height in CSS pixels at that width."""
+    k: float
+    """Image pixels per CSS pixel (multiply a CSS size by ``k`` to draw it)."""
+    viewbox: tuple[float, float, float, float]
+    u_ticks: tuple[float, ...]
+    v_ticks: tuple[float, ...]
+    decimals: int
+    """Decimals of the tick labels (the same on both axes: one step)."""
+    rows_y: tuple[float, ...]
+    """Baselines of the status rows under the frame."""
+
+    def px(self, css: float) -> float:
+        """A CSS size in image pixels."""
+        return css * self.k
+
+
+def _tick_labels(values: Any, decimals: int) -> list[str]:
+    """Tick labels; ``-0`` is written ``0``."""
+    return [f"{v:.{decimals}f}" if abs(v) >= 0.5 * 10.0 ** -decimals else f"{0:.{decimals}f}" for v in values]
+
+
+@lru_cache(maxsize=64)
+def panel_layout(view: ViewBox, style: PanelStyle, panel_px: float, n_rows: int) -> PanelLayout:
+    """The layout of a panel ``panel_px`` CSS pixels wide showing ``view``, with ``n_rows`` status rows.
+
+    The axes frame is the view; the left margin holds the v tick labels, the
+    top margin the u tick labels, the right margin the axis name ``u``, the
+    bottom the name ``v`` and the status rows. The scale is
+    ``s = (panel_px - left - right) / view.width`` CSS pixels per image pixel,
+    the same along v (square pixels), and the tick step is the smallest 1-2-5
+    step whose labels do not touch (:func:`~egtviz.viewer.panel_view.tick_values`).
     """
-    c = np.array([w / 2.0, h / 2.0])
+    t = style.tick_px
+    tick_len, gap = 0.45 * t, 0.35 * t
+    left, right = 5 * CHAR_EM * t + tick_len + gap, 3.0 * t
+    decimals = 0
+    for _ in range(3):  # margins depend on the labels, labels on the scale: settles in two rounds
+        plot_w = max(panel_px - left - right, 0.35 * panel_px)
+        s = plot_w / view.width
+        ends = _tick_labels(np.array([view.u0, view.u1, view.v0, view.v1]), decimals)
+        u_gap = max(_text_px(e, t) for e in ends) + 1.2 * t
+        u_ticks, du = tick_values(view.u0, view.u1, s, u_gap)
+        v_ticks, dv = tick_values(view.v0, view.v1, s, 2.0 * t)
+        decimals = max(du, dv)
+        v_labels = _tick_labels(v_ticks, decimals) or ["0"]
+        u_labels = _tick_labels(u_ticks, decimals) or ["0"]
+        left = max(_text_px(x, t) for x in v_labels) + tick_len + gap + 0.3 * t
+        last_right = (u_ticks[-1] - view.u1) * s + _text_px(u_labels[-1], t) / 2 if len(u_ticks) else 0.0
+        right = max(last_right, 0.0) + gap + 1.4 * t
+    plot_w = max(panel_px - left - right, 0.35 * panel_px)
+    s = plot_w / view.width
+    k = 1.0 / s
+    top = tick_len + gap + 1.1 * t
+    row = 1.3 * style.status_px
+    first = max(1.45 * t, 0.35 * t + row)
+    bottom = first + (max(n_rows, 1) - 1) * row + 0.45 * style.status_px
+    plot_h = view.height * s
+    height = top + plot_h + bottom
+    rows = tuple(view.v1 + (first + i * row) * k for i in range(max(n_rows, 1)))
+    vb = (view.u0 - left * k, view.v0 - top * k, panel_px * k, height * k)
+    return PanelLayout(view, float(panel_px), float(height), k, vb, tuple(u_ticks.tolist()), tuple(v_ticks.tolist()),
+                       decimals, rows)
+
+
+@lru_cache(maxsize=64)
+def _axes_svg(lay: PanelLayout, style: PanelStyle) -> str:
+    """The view's frame with ticks: u along the top edge, v along the left edge (v grows downwards)."""
+    v, k, t = lay.view, lay.k, style.tick_px
+    tick, gap, lw = 0.45 * t * k, 0.35 * t * k, style.frame_px * k
+    parts = [f'<rect data-kind="frame" x="{_f(v.u0)}" y="{_f(v.v0)}" width="{_f(v.width)}" height="{_f(v.height)}" '
+             f'fill="none" stroke="{style.ink}" stroke-width="{_f(lw)}"/>']
+    path = []
+    texts = []
+    for val, lab in zip(lay.u_ticks, _tick_labels(lay.u_ticks, lay.decimals)):
+        path.append(f"M{_f(val)} {_f(v.v0)}v{_f(-tick)}")
+        texts.append(f'<text x="{_f(val)}" y="{_f(v.v0 - tick - gap)}" text-anchor="middle">{lab}</text>')
+    for val, lab in zip(lay.v_ticks, _tick_labels(lay.v_ticks, lay.decimals)):
+        path.append(f"M{_f(v.u0)} {_f(val)}h{_f(-tick)}")
+        texts.append(f'<text x="{_f(v.u0 - tick - gap)}" y="{_f(val + 0.35 * t * k)}" text-anchor="end">{lab}</text>')
+    last = _tick_labels(lay.u_ticks[-1:], lay.decimals)
+    u_x = max(v.u1, (lay.u_ticks[-1] + _text_px(last[0], t) * k / 2) if last else v.u1) + gap
+    parts.append(f'<path d="{"".join(path)}" stroke="{style.ink}" stroke-width="{_f(lw)}"/>')
+    parts.append(
+        f'<g font-size="{_f(t * k)}" fill="{style.ink}">{"".join(texts)}'
+        f'<text x="{_f(u_x)}" y="{_f(v.v0 - tick - gap)}" font-style="italic">u</text>'
+        f'<text x="{_f(v.u0 - tick - gap)}" y="{_f(lay.rows_y[0])}" font-style="italic" text-anchor="end">v</text></g>'
+    )
+    return f'<g data-kind="axes">{"".join(parts)}</g>'
+
+
+def _svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixed_size: bool,
+              max_height: str | None) -> str:
+    """The root ``<svg>`` tag and a background covering the whole view box."""
+    x, y, w, h = lay.viewbox
+    mh = "" if max_height is None else f";max-height:{escape(max_height)}"
+    size = (f'width="{_f(lay.panel_px)}" height="{_f(lay.height_px)}"' if fixed_size else 'width="100%"')
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="{kind}"{attrs} data-style="{style.name}" '
+        f'viewBox="{_f(x)} {_f(y)} {_f(w)} {_f(h)}" {size} '
+        f'style="display:block;font-family:sans-serif;background:{style.background}{mh}">'
+        f'<rect x="{_f(x)}" y="{_f(y)}" width="{_f(w)}" height="{_f(h)}" fill="{style.background}"/>'
+    )
+
+
+def _border_exit(view: ViewBox, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the ray from the view's centre towards ``target`` leaves the view (``inset`` inside it), and its direction.
+
+    Used only to place an arrow marker (layout, not geometry): the epipole
+    itself comes from the scene layer.
+    """
+    c = np.array(view.centre)
     d = np.asarray(target, float) - c
     n = float(np.hypot(*d))
     if n == 0.0 or not np.isfinite(n):
@@ -76,27 +250,29 @@ def _border_exit(w: float, h: float, target: np.ndarray, inset: float) -> tuple[
     d = d / n
     ts = []
     if abs(d[0]) > 1e-12:
-        ts.append(((w / 2.0 - inset) / abs(d[0])))
+        ts.append((view.width / 2.0 - inset) / abs(d[0]))
     if abs(d[1]) > 1e-12:
-        ts.append(((h / 2.0 - inset) / abs(d[1])))
+        ts.append((view.height / 2.0 - inset) / abs(d[1]))
     t = min(ts) if ts else 0.0
     return c + t * d, d
 
 
-def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: float) -> str:
-    """An arrow whose head is at ``tip`` pointing along ``d``."""
+def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: float) -> tuple[str, np.ndarray]:
+    """An arrow whose head is at ``tip`` pointing along ``d``, and its bounding box ``(x0, y0, x1, y1)``."""
     tail = tip - d * length
-    head = length * 0.35
+    head = length * 0.38
     nrm = np.array([-d[1], d[0]])
     p1 = tip - d * head + nrm * head * 0.5
     p2 = tip - d * head - nrm * head * 0.5
-    return (
+    P = np.array([tail, tip, p1, p2])
+    box = np.r_[P.min(axis=0) - width, P.max(axis=0) + width]
+    svg = (
         f'<line x1="{_f(tail[0])}" y1="{_f(tail[1])}" x2="{_f(tip[0])}" y2="{_f(tip[1])}" '
         f'stroke="{colour}" stroke-width="{_f(width)}"/>'
         f'<polygon points="{_f(tip[0])},{_f(tip[1])} {_f(p1[0])},{_f(p1[1])} {_f(p2[0])},{_f(p2[1])}" '
         f'fill="{colour}"/>'
     )
-
+    return svg, box
 
 def _points_attr(P: np.ndarray, *, integer: bool) -> str:
     """A polyline's ``points`` attribute in one %-format (a 200-conic panel has ~25 000 vertices).
@@ -126,30 +302,6 @@ def _int_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             tabs.append(t)
         _INT_TABLES = (tabs[0], tabs[1], tabs[2])
     return _INT_TABLES
-
-
-def _int_rows_joined(V: np.ndarray, prefixes: list[str], suffixes: list[str]) -> str:
-    """``prefix + "x,y x,y ..." + suffix`` for each row of whole numbers ``V`` (n, 2k), concatenated.
-
-    Exactly what ``"%d,%d "`` would write, but the numbers come from lookup
-    tables and the whole block is one ``join`` (a 200-conic panel has 10 000
-    numbers: one ``%d`` each costs several times more).
-    """
-    n, m = V.shape
-    if n == 0:
-        return ""
-    if m == 0 or V.min() < _INT_LO or V.max() >= _INT_HI:
-        tpl = ("%d,%d " * (m // 2))[:-1]
-        return "".join(p + tpl % tuple(r) + q for p, r, q in zip(prefixes, V.tolist(), suffixes))
-    comma, space, bare = _int_tables()
-    J = V - _INT_LO
-    out = np.empty((n, m + 2), dtype=object)
-    out[:, 0] = prefixes
-    out[:, 1:m:2] = comma[J[:, 0::2]]
-    out[:, 2:m:2] = space[J[:, 1:-1:2]]
-    out[:, m] = bare[J[:, -1]]
-    out[:, m + 1] = suffixes
-    return "".join(out.ravel().tolist())
 
 
 #: ``rint(x * 10**dp)`` in ``[_FIX_LO, _FIX_HI)`` is written from a lookup table (``"%.{dp}f"``).
@@ -208,13 +360,13 @@ def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
-def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) -> str:
+def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: bool, colours: tuple[str, ...]) -> str:
     """The ``epipolar-conic`` polylines of a panel, in index order, formatted in bulk.
 
     An arc with NaN vertices is split into its finite runs. Past
     ``CONIC_VERTEX_BUDGET`` vertices only every k-th sample is kept (and each
     run's last). On a large image (whole pixels) all runs are rounded in one
-    numpy pass and written as one stream of table strings.
+    numpy pass and written as one stream of table strings (``integer``).
     """
     idx = [i for i, arcs in enumerate(conics) for piece in arcs if len(piece) >= 2]
     runs = [piece for arcs in conics for piece in arcs if len(piece) >= 2]
@@ -238,8 +390,8 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) ->
         lengths = np.add.reduceat(keep, ends - lengths)
     thick = f' stroke-width="{_f(lw * 3.0)}"'
     prefixes = [f'<polyline data-kind="epipolar-conic" data-index="{i}" points="' for i in idx]
-    suffixes = [f'" stroke="{_COLOURS[i % _N_COLOURS]}"{thick if i == selected_point else ""}/>' for i in idx]
-    Q = np.rint(V).astype(np.int64) if s >= 200 else None
+    suffixes = [f'" stroke="{colours[i % len(colours)]}"{thick if i == selected_point else ""}/>' for i in idx]
+    Q = np.rint(V).astype(np.int64) if integer else None
     if Q is None or Q.min() < _INT_LO or Q.max() >= _INT_HI:
         ends = np.cumsum(lengths)
         return "".join(p + _points_attr(V[e - k:e], integer=Q is not None) + q
@@ -261,7 +413,7 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, s: float) ->
 
 
 @lru_cache(maxsize=16)
-def _line_tags(idx_bytes: bytes, selected_point: int | None, thick: str) -> np.ndarray:
+def _line_tags(idx_bytes: bytes, selected_point: int | None, thick: str, colours: tuple[str, ...]) -> np.ndarray:
     """The text around the four coordinates of each ``epipolar-line`` (the same from one drag step to the next)."""
     idx = np.frombuffer(idx_bytes, dtype=np.intp).tolist()
     tags = np.empty((len(idx), 5), dtype=object)
@@ -269,49 +421,9 @@ def _line_tags(idx_bytes: bytes, selected_point: int | None, thick: str) -> np.n
     tags[:, 1] = '" y1="'
     tags[:, 2] = '" x2="'
     tags[:, 3] = '" y2="'
-    tags[:, 4] = [f'" stroke="{_COLOURS[i % _N_COLOURS]}"{thick if i == selected_point else ""}/>' for i in idx]
+    tags[:, 4] = [f'" stroke="{colours[i % len(colours)]}"{thick if i == selected_point else ""}/>' for i in idx]
     tags.setflags(write=False)
     return tags
-
-
-@lru_cache(maxsize=64)
-def axes_svg(w: float, h: float, font: float, lw: float) -> str:
-    """Pixel axes with ticks and labels: u along the top edge, v along the left edge (origin top-left)."""
-    step = _nice_step(max(w, h))
-    tick = font * 0.5
-    ticks: list[str] = []
-    u = 0.0
-    while u <= w + 1e-9:
-        ticks.append(f'<line x1="{_f(u)}" y1="0" x2="{_f(u)}" y2="{_f(-tick)}" stroke="#333" stroke-width="{_f(lw)}"/>')
-        ticks.append(
-            f'<text x="{_f(u)}" y="{_f(-tick * 1.4)}" font-size="{_f(font * 0.8)}" text-anchor="middle" '
-            f'fill="#333">{u:g}</text>'
-        )
-        u += step
-    v = 0.0
-    while v <= h + 1e-9:
-        ticks.append(f'<line x1="0" y1="{_f(v)}" x2="{_f(-tick)}" y2="{_f(v)}" stroke="#333" stroke-width="{_f(lw)}"/>')
-        ticks.append(
-            f'<text x="{_f(-tick * 1.4)}" y="{_f(v + font * 0.3)}" font-size="{_f(font * 0.8)}" text-anchor="end" '
-            f'fill="#333">{v:g}</text>'
-        )
-        v += step
-    return (
-        f'<g data-kind="axes">{"".join(ticks)}'
-        f'<text x="{_f(w + tick)}" y="{_f(-tick * 1.4)}" font-size="{_f(font)}" font-style="italic">u</text>'
-        f'<text x="{_f(-tick * 1.4)}" y="{_f(h + font * 1.2)}" font-size="{_f(font)}" font-style="italic" '
-        f'text-anchor="end">v</text></g>'
-    )
-
-
-def _points_group(P: np.ndarray, in_image: np.ndarray, selected_point: int | None, highlighted: frozenset,
-                  show_labels: bool, c: str, r_pt: float, lw: float, font: float) -> str:
-    """The ``point`` group of a panel; reused while its pixels and marks are unchanged (the other camera's
-    panel during a camera drag)."""
-    P = np.ascontiguousarray(P, dtype=np.float64)
-    in_image = np.ascontiguousarray(in_image, dtype=bool)
-    return _points_group_of(P.tobytes(), in_image.tobytes(), selected_point, frozenset(highlighted), show_labels,
-                            c, r_pt, lw, font)
 
 
 def numbered_points(n_in_image: int, show_labels: bool) -> bool:
@@ -319,54 +431,102 @@ def numbered_points(n_in_image: int, show_labels: bool) -> bool:
     return show_labels and n_in_image <= MAX_NUMBERED_POINTS
 
 
-@lru_cache(maxsize=16)
-def _points_group_of(P_bytes: bytes, in_image_bytes: bytes, selected_point: int | None, highlighted: frozenset,
-                     show_labels: bool, c: str, r_pt: float, lw: float, font: float) -> str:
-    """Numbered points are ``<g data-kind="point">`` (a disc and its number); the others a bare disc.
+def _label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> str:
+    """A text written in its placed box, on the side towards its mark (``mark_x``), baseline near the bottom.
 
-    A bare ``<circle>`` per point keeps a 200-point panel at a third of the DOM
-    elements: the browser parses and lays out every panel on every update.
+    Left of the mark it ends at the box's right edge, right of it it starts at
+    the left edge, above or below it is centred: the box's slack (its width is
+    an upper bound) goes away from the mark.
+    """
+    x0, y0, x1, y1 = (float(b) for b in box)
+    if x1 <= mark_x:
+        x, anchor = x1, "end"
+    elif x0 >= mark_x:
+        x, anchor = x0, "start"
+    else:
+        x, anchor = (x0 + x1) / 2, "middle"
+    return (f'<text x="{_f(x)}" y="{_f(y1 - 0.17 * size)}" text-anchor="{anchor}" '
+            f'data-box="{_f(x0)} {_f(y0)} {_f(x1)} {_f(y1)}"{attrs}>{text}</text>')
+
+
+@dataclass(frozen=True)
+class _EpipoleLabel:
+    """An epipole's label to place: its anchor (the cross, or the arrow's tail) and what to keep clear."""
+
+    text: str
+    anchor: tuple[float, float]
+    radius: float
+    obstacle: tuple[float, float, float, float]
+
+
+@lru_cache(maxsize=16)
+def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
+           highlighted: frozenset, show_labels: bool, style: PanelStyle, k: float, dp: int,
+           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple]:
+    """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
+
+    Cached: during a drag the panel of the camera that does not move keeps its
+    pixels, and often its epipoles.
     """
     P = np.frombuffer(P_bytes).reshape(-1, 2)
     in_image = np.frombuffer(in_image_bytes, dtype=bool)
+    in_view = np.frombuffer(in_view_bytes, dtype=bool)
+    colours = style.point_colours
+    nc = len(colours)
+    c = f"%.{dp}f"
+    r_pt = style.mark_px * k
+    ring_r = r_pt * 2.0
+    lw = style.line_px * k
     idx = np.flatnonzero(in_image).tolist()
-    Q = P[in_image]
-    dp = int(c[2:-1])
+    outside = np.flatnonzero(in_view & ~in_image).tolist()
+    number_all = numbered_points(len(idx), show_labels)
+    marked = {i for i in idx + outside if i == selected_point or i in highlighted}
+    # Points outside the view (zoomed in) keep their disc for the contract, clipped, but get no number.
+    numbered = [i for i in idx + outside if show_labels and in_view[i] and (number_all or i in marked)]
+    # Placement order: epipole labels, then the selected, the highlighted, the others by index.
+    numbered.sort(key=lambda i: (i != selected_point, i not in marked, i))
+    size = style.label_px * k
+    shown = np.flatnonzero(in_view).tolist()
+    halo = 0.25 * style.label_px * k
+    obstacles = [np.column_stack([P[shown] - r_pt - lw, P[shown] + r_pt + lw])] if shown else []
+    if marked:
+        M = P[sorted(marked)]
+        obstacles.append(np.column_stack([M - ring_r - lw, M + ring_r + lw]))
+    obstacles.extend(np.array([e.obstacle]) for e in epipoles)
+    O = np.concatenate(obstacles) if obstacles else np.zeros((0, 4))
+    anchors = [e.anchor for e in epipoles] + [tuple(P[i]) for i in numbered]
+    radii = [e.radius for e in epipoles] + [ring_r if i in marked else r_pt for i in numbered]
+    sizes = ([(_text_px(e.text, style.label_px) * k + halo, 0.95 * size + halo) for e in epipoles]
+             + [(_text_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in numbered])
+    boxes = place_labels(anchors, radii, sizes, O, bounds, gap=0.3 * size) if anchors else np.zeros((0, 4))
+    ep_boxes = tuple(tuple(b) for b in boxes[: len(epipoles)])
+    label_of = dict(zip(numbered, boxes[len(epipoles):]))
     disc = f'" r="{_f(r_pt)}" fill="'
-    body = ""
-    if idx:
-        # Bare discs for all, in one table: index, cx, cy, colour.
-        table = np.empty((len(idx), 7), dtype=object)
-        table[:, 0] = [f'<circle data-kind="point" data-index="{i}" cx="' for i in idx]
-        table[:, 1:4:2] = _fixed_strs(Q, dp)
-        table[:, 2] = '" cy="'
-        table[:, 4] = disc
-        table[:, 5] = [_COLOURS[i % _N_COLOURS] for i in idx]
-        table[:, 6] = '"/>'
-        rows = table.sum(axis=1).tolist()
-        number_all = numbered_points(len(idx), show_labels)
-        marked = {i for i in idx if i == selected_point or i in highlighted}
-        dl = r_pt * 1.4
-        sw = _f(lw * 3)
-        for k, (i, (x, y)) in enumerate(zip(idx, Q.tolist())):
-            if not (number_all or i in marked):
+    rows = []
+    halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}"'
+    for kind, members in (("point", idx), ("point-outside", outside)):
+        for i in members:
+            x, y = P[i]
+            col = colours[i % nc]
+            hollow = kind == "point-outside"
+            fill = "#fff" if hollow else col
+            stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
+            if i not in label_of and i not in marked:
+                rows.append(f'<circle data-kind="{kind}" data-index="{i}" cx="{c % x}" cy="{c % y}{disc}{fill}"'
+                            f"{stroke}/>")
                 continue
-            col = _COLOURS[i % _N_COLOURS]
             ring = ""
             if i in marked:
-                ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(r_pt * 2.2)}" fill="none" stroke="#000" '
-                        f'stroke-width="{_f(lw * 2)}" data-selected="{"true" if i == selected_point else "false"}"/>')
+                ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(ring_r)}" fill="none" stroke="{style.ink}" '
+                        f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if i == selected_point else "false"}"/>')
             label = ""
-            if show_labels:
-                label = (f'<text x="{c % (x + dl)}" y="{c % (y - dl)}" fill="{col}" stroke="#fff" '
-                         f'stroke-width="{sw}">{i + 1}</text>')
-            rows[k] = (f'<g data-kind="point" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{col}"/>'
-                       f"{label}</g>")
-        body = "".join(rows)
-    return (
-        f'<g stroke="#000" stroke-width="{_f(lw * 0.6)}" font-size="{_f(font)}" font-weight="bold" '
-        f'paint-order="stroke">{body}</g>'
-    )
+            if i in label_of:
+                label = _label_text(label_of[i], size, str(i + 1), halo_attr, x)
+            rows.append(f'<g data-kind="{kind}" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
+                        f'{stroke}/>{label}</g>')
+    body = (f'<g stroke="{style.ink}" stroke-width="{_f(lw * 0.5)}" font-size="{_f(size)}" font-weight="bold" '
+            f'fill="{style.ink}" paint-order="stroke">{"".join(rows)}</g>')
+    return body, ep_boxes
 
 
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
@@ -380,6 +540,40 @@ def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "
     )
 
 
+def _wrap(clauses: list[str], max_px: float, size_px: float) -> list[str]:
+    """Join clauses with ``"; "`` into lines no wider than ``max_px`` (a clause longer than that gets a line)."""
+    lines: list[str] = []
+    for cl in clauses:
+        if lines and _text_px(lines[-1] + "; " + cl, size_px) <= max_px:
+            lines[-1] += "; " + cl
+        else:
+            lines.append(cl)
+    return lines
+
+
+def _extend_segments(L: np.ndarray, view: ViewBox) -> np.ndarray:
+    """Each segment (x1, y1, x2, y2) extended along its own line to the view's edges (rows that miss it: NaN).
+
+    The scene layer clips epipolar lines to the image; a view larger than the
+    image shows the same straight lines over its whole box (Liang-Barsky
+    clipping of ``p = a + t (b - a)`` to the box).
+    """
+    a, d = L[:, 0:2], L[:, 2:4] - L[:, 0:2]
+    lo = np.full(len(L), -np.inf)
+    hi = np.full(len(L), np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for j, (mn, mx) in enumerate(((view.u0, view.u1), (view.v0, view.v1))):
+            t1, t2 = (mn - a[:, j]) / d[:, j], (mx - a[:, j]) / d[:, j]
+            flat = d[:, j] == 0
+            t_lo = np.where(flat, np.where((a[:, j] >= mn) & (a[:, j] <= mx), -np.inf, np.inf), np.minimum(t1, t2))
+            t_hi = np.where(flat, np.where((a[:, j] >= mn) & (a[:, j] <= mx), np.inf, -np.inf), np.maximum(t1, t2))
+            lo, hi = np.maximum(lo, t_lo), np.minimum(hi, t_hi)
+    ok = (hi > lo) & np.isfinite(lo) & np.isfinite(hi)
+    out = np.full_like(L, np.nan)
+    out[ok] = np.column_stack([a[ok] + lo[ok, None] * d[ok], a[ok] + hi[ok, None] * d[ok]])
+    return out
+
+
 def image_plane_svg(
     plane: Any,
     *,
@@ -388,148 +582,181 @@ def image_plane_svg(
     show_labels: bool = True,
     revision: int | None = None,
     max_height: str | None = None,
+    view: ViewBox | None = None,
+    style: PanelStyle = NORMAL,
+    panel_px: float | None = None,
+    fixed_size: bool = False,
 ) -> str:
     """Inline SVG of one camera's image plane, in pixel units.
 
     Args:
         plane: an :class:`egtviz.scene.ImagePlane` (read: ``camera``, ``kind``,
-            ``width``, ``height``, ``points``, ``in_image``, ``n_hidden``,
-            ``epipoles``, ``lines``, ``conics``, ``rim``, ``message``).
+            ``width``, ``height``, ``points``, ``visible``, ``in_image``,
+            ``n_hidden``, ``epipoles``, ``lines``, ``conics``, ``rim``, ``message``).
         selected_point: 0-based index of the selected scene point: drawn with a
             ring, its epipolar line/conic thicker.
         highlighted: 0-based indices of highlighted points (a ring too).
         show_labels: write the point numbers (1-based) next to the points.
-        max_height: a CSS ``max-height`` for the SVG (it keeps its aspect ratio).
         revision: written as ``data-rev`` on the root (lets a browser test or
             the benchmark recognise a given update).
+        max_height: a CSS ``max-height`` for the SVG (it keeps its aspect ratio).
+        view: the part of the image plane shown (:mod:`egtviz.viewer.panel_view`);
+            ``None``: the image rectangle.
+        style: ``NORMAL`` or ``PRESENT``.
+        panel_px: the panel's width on screen in CSS pixels, if known: the
+            style's sizes are met at that width (default ``style.panel_px``).
+        fixed_size: write ``width``/``height`` in pixels (a figure file)
+            instead of ``width="100%"`` (a panel that follows its column).
 
     Returns:
         The ``<svg>`` element as a string (see the module docstring for the
         ``data-*`` attributes).
     """
     w, h = float(plane.width), float(plane.height)
-    s = max(w, h)
-    font = s / 32.0
-    margin = font * 3.2
-    r_pt = s / 110.0
-    lw = s / 400.0
-    n_inf_total = sum(1 for ep in (plane.epipoles or ()) if ep.at_infinity or ep.xy is None)
-    in_image = np.asarray(plane.in_image, bool).reshape(-1)
-    numbering_note = show_labels and not numbered_points(int(in_image.sum()), True)
-    bottom = margin * (0.45 + 0.55 * (n_inf_total + 1 + numbering_note))
-    vb = f"{_f(-margin)} {_f(-margin)} {_f(w + 2 * margin)} {_f(h + margin + bottom)}"
+    image = image_view(plane)
+    view = image if view is None else view
+    panel_px = float(style.panel_px if panel_px is None else panel_px)
+    if not (math.isfinite(panel_px) and panel_px > 0):
+        raise ValueError(f"panel_px must be a finite number of CSS pixels > 0, got {panel_px}")
+    P = np.ascontiguousarray(np.asarray(plane.points, float).reshape(-1, 2))
+    in_image = np.ascontiguousarray(np.asarray(plane.in_image, bool).reshape(-1))
+    n_in = int(in_image.sum())
+    epipoles = tuple(plane.epipoles or ())
+
+    # Status rows under the frame: epipoles at infinity, the counts, the numbering note.
+    n_points, n_hidden = len(P), int(plane.n_hidden)
+    n_outside = int(n_points - n_hidden - n_in)
+    clauses = [f"{n_in} of {n_points} points in the image"]
+    if n_hidden:
+        why = "behind the camera" if plane.kind == "pinhole" else "in the blind cone"
+        clauses.append(f"{n_hidden} hidden ({why})")
+    if n_outside > 0:
+        clauses.append(f"{n_outside} outside the image")
+    status_lines = _wrap(clauses, 0.8 * panel_px, style.status_px)
+    at_inf = [ep for ep in epipoles if ep.at_infinity or ep.xy is None]
+    numbering_note = show_labels and not numbered_points(n_in, True)
+    lay = panel_layout(view, style, panel_px, len(at_inf) + len(status_lines) + int(numbering_note))
+    k = lay.k
+    lw = style.line_px * k
+
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
-    mh = "" if max_height is None else f";max-height:{escape(max_height)}"
+    attrs = (f' data-camera="{escape(str(plane.camera))}" data-camera-kind="{escape(str(plane.kind))}"{rev} '
+             f'data-view="{_f(view.u0)} {_f(view.v0)} {_f(view.width)} {_f(view.height)}"')
     out: list[str] = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="image-plane" data-camera="{escape(str(plane.camera))}" '
-        f'data-camera-kind="{escape(str(plane.kind))}"{rev} viewBox="{vb}" width="100%" '
-        f'style="display:block;font-family:sans-serif;background:#f4f4f4{mh}">',
+        _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
         f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#ffffff" '
-        f'stroke="#333" stroke-width="{_f(lw * 1.5)}"/>',
+        f'stroke="{style.ink}" stroke-width="{_f(style.frame_px * k)}"/>',
+        _axes_svg(lay, style),
     ]
-
-    out.append(axes_svg(w, h, font, lw))
-
-    # Clip everything drawn inside the image to the image rectangle.
+    # Clip everything drawn on the image plane to the view.
     clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in str(plane.camera))
     clip_id += f"-{zlib.crc32(str(plane.camera).encode()):08x}"  # "a b" and "a_b" stay distinct
-    out.append(f'<defs><clipPath id="{clip_id}"><rect x="0" y="0" width="{_f(w)}" height="{_f(h)}"/></clipPath></defs>')
-    out.append(f'<g clip-path="url(#{clip_id})">')
+    out.append(f'<defs><clipPath id="{clip_id}"><rect x="{_f(view.u0)}" y="{_f(view.v0)}" width="{_f(view.width)}" '
+               f'height="{_f(view.height)}"/></clipPath></defs><g clip-path="url(#{clip_id})">')
 
     if plane.rim is not None:
         for run in _finite_runs(plane.rim):
             out.append(
-                f'<polygon data-kind="rim" points="{_points_attr(run, integer=False)}" fill="none" stroke="{RIM_COLOUR}" '
-                f'stroke-width="{_f(lw * 1.5)}" stroke-dasharray="{_f(lw * 6)} {_f(lw * 4)}"/>'
+                f'<polygon data-kind="rim" points="{_points_attr(run, integer=False)}" fill="none" '
+                f'stroke="{RIM_COLOUR}" '
+                f'stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw * 5)} {_f(lw * 3)}"/>'
             )
 
-    # Bulk formatting: one %-template per element kind (a 200-point panel in about a millisecond).
-    dp = min(6, max(1, 3 - math.floor(math.log10(s))))
-    c = f"%.{dp}f"
+    # Decimals: a quarter of a CSS pixel; whole image pixels once one is at most a CSS pixel wide.
+    dp = int(min(6, max(0, math.ceil(math.log10(4.0 / k)))))
+    integer = k >= 1.0
+    colours = style.point_colours
+    thick = f' stroke-width="{_f(lw * 2.5)}"'
     if plane.lines is not None:
         L = np.asarray(plane.lines, float).reshape(-1, 4)
+        if view != image:
+            L = _extend_segments(L, view)
         ok = np.all(np.isfinite(L), axis=1)
-        thick = f' stroke-width="{_f(lw * 3.0)}"'
         idx = np.flatnonzero(ok)
         table = np.empty((len(idx), 9), dtype=object)
         if len(idx):
-            table[:, 0::2] = _line_tags(idx.tobytes(), selected_point, thick)
-            table[:, 1:9:2] = _fixed_strs(L[ok], dp)
-        out.append(f'<g stroke-width="{_f(lw * 1.2)}">{"".join(table.ravel().tolist())}</g>')
+            table[:, 0::2] = _line_tags(idx.tobytes(), selected_point, thick, colours)
+            table[:, 1:9:2] = _fixed_strs(L[ok], max(dp, 1))
+        out.append(f'<g stroke-width="{_f(lw)}">{"".join(table.ravel().tolist())}</g>')
 
     if plane.conics is not None:
-        out.append(f'<g fill="none" stroke-width="{_f(lw * 1.2)}">{_conics_svg(plane.conics, selected_point, lw, s)}</g>')
+        out.append(f'<g fill="none" stroke-width="{_f(lw)}">'
+                   f'{_conics_svg(plane.conics, selected_point, lw, integer, colours)}</g>')
 
-    P = np.asarray(plane.points, float).reshape(-1, 2)
-    out.append(_points_group(P, in_image, selected_point, frozenset(highlighted), show_labels, c, r_pt, lw, font))
-    out.append("</g>")  # end of clipped group
-
-    # Epipoles: inside (a cross), outside (an arrow at the border), at infinity (an arrow and a label).
-    n_inf = 0
-    for ep in plane.epipoles or ():
-        label = escape(str(ep.label))
+    # Epipoles: in the view, a cross; elsewhere an arrow at the frame pointing to it; labels placed later.
+    size = style.label_px * k
+    a = style.mark_px * 1.8 * k
+    arrow_len = 2.6 * style.label_px * k
+    st = style.status_px * k
+    row = iter(lay.rows_y)
+    ep_marks: list[tuple[Any, str, str, str]] = []  # (epipole, where, drawn, svg of the mark and its text)
+    ep_labels: list[_EpipoleLabel] = []
+    for ep in epipoles:
+        label = str(ep.label)
+        where = "inside" if ep.inside else "outside"
         if ep.at_infinity or ep.xy is None:
             d = np.asarray(ep.direction, float) if ep.direction is not None else np.array([1.0, 0.0])
-            target = np.array([w / 2.0, h / 2.0]) + d * s * 10.0
-            tip, dd = _border_exit(w, h, target, inset=-margin * 0.15)
-            ty = h + margin * (0.85 + 0.55 * n_inf)
-            n_inf += 1
-            out.append(
-                f'<g data-kind="epipole" data-label="{label}" data-where="infinity">'
-                f"{_arrow(tip, dd, margin * 0.7, EPIPOLE_COLOUR, lw * 2.5)}"
-                f'<text x="0" y="{_f(ty)}" font-size="{_f(font)}" fill="{EPIPOLE_COLOUR}">'
-                f"{label} at infinity, direction ({d[0]:.2f}, {d[1]:.2f})</text></g>"
-            )
+            tip, dd = _border_exit(view, np.array(view.centre) + d * 1e6 * max(view.width, view.height), 0.3 * a)
+            svg, _ = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
+            text = (f'<text x="{_f(view.u0)}" y="{_f(next(row))}" font-size="{_f(st)}" fill="{EPIPOLE_COLOUR}">'
+                    f"{escape(label)} at infinity, direction ({d[0]:.2f}, {d[1]:.2f})</text>")
+            ep_marks.append((ep, "infinity", "arrow", f'<g data-kind="epipole-arrow">{svg}</g>{text}'))
             continue
-        x, y = (float(c) for c in ep.xy)
-        if ep.inside:
-            a = r_pt * 1.8
-            out.append(
-                f'<g data-kind="epipole" data-label="{label}" data-where="inside">'
-                f'<line x1="{_f(x - a)}" y1="{_f(y - a)}" x2="{_f(x + a)}" y2="{_f(y + a)}" stroke="{EPIPOLE_COLOUR}" '
-                f'stroke-width="{_f(lw * 2.5)}"/>'
-                f'<line x1="{_f(x - a)}" y1="{_f(y + a)}" x2="{_f(x + a)}" y2="{_f(y - a)}" stroke="{EPIPOLE_COLOUR}" '
-                f'stroke-width="{_f(lw * 2.5)}"/>'
-                f'<text x="{_f(x + a)}" y="{_f(y + a + font)}" font-size="{_f(font)}" fill="{EPIPOLE_COLOUR}" '
-                f'font-style="italic" paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 3)}">{label}</text></g>'
-            )
+        x, y = (float(v) for v in ep.xy)
+        if view.contains([x, y])[0]:
+            svg = (f'<path d="M{_f(x - a)} {_f(y - a)}L{_f(x + a)} {_f(y + a)}M{_f(x - a)} {_f(y + a)}'
+                   f'L{_f(x + a)} {_f(y - a)}" stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 1.8)}"/>')
+            text = label if ep.inside else f"{label} ({x:.4g}, {y:.4g})"
+            ep_labels.append(_EpipoleLabel(text, (x, y), a, (x - a, y - a, x + a, y + a)))
+            ep_marks.append((ep, where, "mark", svg))
         else:
-            tip, dd = _border_exit(w, h, np.array([x, y]), inset=-margin * 0.15)
-            tx = min(max(tip[0] - dd[0] * margin * 0.9, font), w - font * 5)
-            ty = min(max(tip[1] - dd[1] * margin * 0.9, font), h - font * 0.5)
-            out.append(
-                f'<g data-kind="epipole" data-label="{label}" data-where="outside" data-x="{x:.5g}" data-y="{y:.5g}">'
-                f'<g data-kind="epipole-arrow">{_arrow(tip, dd, margin * 0.7, EPIPOLE_COLOUR, lw * 2.5)}</g>'
-                f'<text x="{_f(tx)}" y="{_f(ty)}" font-size="{_f(font * 0.85)}" fill="{EPIPOLE_COLOUR}" '
-                f'paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 3)}">'
-                f"{label} ({x:.4g}, {y:.4g})</text></g>"
-            )
+            tip, dd = _border_exit(view, np.array([x, y]), 0.3 * a)
+            svg, box = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
+            tail = tip - dd * arrow_len
+            ep_labels.append(_EpipoleLabel(f"{label} ({x:.4g}, {y:.4g})", (float(tail[0]), float(tail[1])),
+                                           0.2 * size, tuple(float(b) for b in box)))
+            ep_marks.append((ep, where, "arrow", f'<g data-kind="epipole-arrow">{svg}</g>'))
 
-    # Status lines under the image: hidden points and messages.
-    n_points = len(P)
-    n_hidden = int(plane.n_hidden)
-    n_outside = int(n_points - n_hidden - int(in_image.sum()))
-    status = f"{int(in_image.sum())} of {n_points} points in the image"
-    if n_hidden:
-        why = "behind the camera" if plane.kind == "pinhole" else "in the blind cone"
-        status += f"; {n_hidden} hidden ({why})"
-    if n_outside > 0:
-        status += f"; {n_outside} outside the image"
-    ty = h + margin * (0.85 + 0.55 * n_inf)
-    out.append(
-        f'<text data-kind="hidden-count" data-hidden="{n_hidden}" x="{_f(w)}" y="{_f(ty)}" text-anchor="end" '
-        f'font-size="{_f(font * 0.85)}" fill="#333">{escape(status)}</text>'
-    )
-    if numbering_note:  # a line of its own: appended to the status it ran off the panel
+    in_view = np.ascontiguousarray(view.contains(P))
+    points_svg, ep_boxes = _marks(P.tobytes(), in_image.tobytes(), in_view.tobytes(), selected_point,
+                                  frozenset(highlighted), show_labels, style, k, dp,
+                                  (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
+    out.append(points_svg)
+    out.append("</g>")  # end of clipped group
+
+    halo = 0.25 * style.label_px * k
+    placed = iter(zip(ep_labels, ep_boxes))
+    for ep, where, drawn, mark in ep_marks:
+        label = escape(str(ep.label))
+        text = ""
+        if where != "infinity":
+            lab, box = next(placed)
+            text = _label_text(box, size, escape(lab.text),
+                               f' data-kind="epipole-label" font-size="{_f(size)}" fill="{EPIPOLE_COLOUR}" '
+                               f'font-style="italic" paint-order="stroke" stroke="#fff" stroke-width="{_f(halo)}"',
+                               lab.anchor[0])
+        xy = "" if ep.xy is None else f' data-x="{float(ep.xy[0]):.5g}" data-y="{float(ep.xy[1]):.5g}"'
+        out.append(f'<g data-kind="epipole" data-label="{label}" data-where="{where}" data-drawn="{drawn}"{xy}>'
+                   f"{mark}{text}</g>")
+
+    # Status rows (the epipoles at infinity took the first ones).
+    ys = [next(row) for _ in status_lines]
+    spans = (escape(status_lines[0]) if len(status_lines) == 1 else
+             "".join(f'<tspan x="{_f(view.u1)}" y="{_f(y)}">{escape(s)}</tspan>' for s, y in zip(status_lines, ys)))
+    out.append(f'<text data-kind="hidden-count" data-hidden="{n_hidden}" x="{_f(view.u1)}" y="{_f(ys[0])}" '
+               f'text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">{spans}</text>')
+    if numbering_note:
         out.append(
-            f'<text data-kind="numbering-note" x="{_f(w)}" y="{_f(ty + margin * 0.55)}" text-anchor="end" '
-            f'font-size="{_f(font * 0.85)}" fill="#333">numbers shown for the selected point only '
-            f"(more than {MAX_NUMBERED_POINTS} points)</text>"
+            f'<text data-kind="numbering-note" x="{_f(view.u1)}" y="{_f(next(row))}" text-anchor="end" '
+            f'font-size="{_f(st)}" fill="{style.ink}">numbers: selected point only '
+            f"(over {MAX_NUMBERED_POINTS} points)</text>"
         )
     if plane.message:
+        cu, cv = view.centre
         out.append(
-            f'<text data-kind="message" x="{_f(w / 2)}" y="{_f(h / 2)}" text-anchor="middle" font-size="{_f(font * 1.1)}" '
-            f'fill="#a00" paint-order="stroke" stroke="#fff" stroke-width="{_f(lw * 4)}">{escape(str(plane.message))}</text>'
+            f'<text data-kind="message" x="{_f(cu)}" y="{_f(cv)}" text-anchor="middle" font-size="{_f(st)}" '
+            f'fill="#a00" paint-order="stroke" stroke="#fff" stroke-width="{_f(halo)}">'
+            f"{escape(str(plane.message))}</text>"
         )
     out.append("</svg>")
     return "".join(out)

@@ -1,0 +1,265 @@
+"""Where an image-plane panel looks, and where its labels go: view boxes, fit, zoom, pan, ticks, label placement.
+
+Pure layout on pixel coordinates that the scene layer computed (no geometry,
+no viser). A :class:`ViewBox` is the rectangle of the image plane a panel
+shows; the panel's axes frame is that rectangle.
+
+How the GUI uses it (one ``ViewBox`` per panel, kept by the app, ``None`` =
+the image rectangle)::
+
+    view = fit_view(plane)                 # "fit": all content, as MATLAB's automatic axes
+    view = zoom(view, 1.25)                # "zoom in" (zoom(view, 1 / 1.25): "zoom out")
+    view = pan(view, 0.1, 0.0)             # "pan right" by a tenth of the view's width
+    view = image_view(plane)               # "image": back to the image rectangle
+    svg = image_plane_svg(plane, view=view, style=PRESENT, panel_px=620)
+
+A view keeps its aspect ratio through ``zoom`` and ``pan``; ``fit_view``
+gives the image's aspect ratio, so the panel keeps its size on screen.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "FIT_MARGIN",
+    "FIT_MAX_EXTENT",
+    "ViewBox",
+    "fit_view",
+    "image_view",
+    "pan",
+    "place_labels",
+    "tick_values",
+    "zoom",
+]
+
+#: Fraction of the content's span added on each side by :func:`fit_view`.
+FIT_MARGIN = 0.06
+
+#: Content further than this many image sizes from the image is left out of the fit (it is shown by an arrow):
+#: an epipole a million pixels away would otherwise shrink the image to a dot.
+FIT_MAX_EXTENT = 20.0
+
+
+@dataclass(frozen=True)
+class ViewBox:
+    """A rectangle of the image plane in pixels: ``u0 <= u <= u0 + width``, ``v0 <= v <= v0 + height``.
+
+    ``v`` grows downwards, as in the image, so ``(u0, v0)`` is the top-left corner.
+    """
+
+    u0: float
+    v0: float
+    width: float
+    height: float
+
+    def __post_init__(self) -> None:
+        values = (self.u0, self.v0, self.width, self.height)
+        if not all(math.isfinite(float(x)) for x in values):
+            raise ValueError(f"ViewBox: u0, v0, width, height must be finite, got {values}")
+        if not (self.width > 0 and self.height > 0):
+            raise ValueError(f"ViewBox: width and height must be > 0, got {self.width} x {self.height}")
+
+    @property
+    def u1(self) -> float:
+        """Right edge."""
+        return self.u0 + self.width
+
+    @property
+    def v1(self) -> float:
+        """Bottom edge."""
+        return self.v0 + self.height
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        """``(u, v)`` of the centre."""
+        return self.u0 + self.width / 2.0, self.v0 + self.height / 2.0
+
+    def contains(self, uv: Any) -> np.ndarray:
+        """``(N,)`` mask of the rows of ``uv`` (N, 2) inside the box (edges included; NaN rows are outside)."""
+        P = np.asarray(uv, float).reshape(-1, 2)
+        with np.errstate(invalid="ignore"):
+            return ((P[:, 0] >= self.u0) & (P[:, 0] <= self.u1) & (P[:, 1] >= self.v0) & (P[:, 1] <= self.v1))
+
+
+def image_view(plane: Any) -> ViewBox:
+    """The image rectangle ``[0, width] x [0, height]`` of an ``ImagePlane``."""
+    return ViewBox(0.0, 0.0, float(plane.width), float(plane.height))
+
+
+def _content(plane: Any) -> np.ndarray:
+    """Every finite pixel a panel draws: image corners, points, finite epipoles, rim and conic samples."""
+    w, h = float(plane.width), float(plane.height)
+    parts = [np.array([[0.0, 0.0], [w, h]])]
+    parts.append(np.asarray(plane.points, float).reshape(-1, 2))
+    for ep in plane.epipoles or ():
+        if ep.xy is not None and not ep.at_infinity:
+            parts.append(np.asarray(ep.xy, float).reshape(1, 2))
+    if plane.rim is not None:
+        parts.append(np.asarray(plane.rim, float).reshape(-1, 2))
+    for arcs in plane.conics or ():
+        parts.extend(np.asarray(a, float).reshape(-1, 2) for a in arcs)
+    P = np.concatenate(parts)
+    P = P[np.all(np.isfinite(P), axis=1)]
+    # Leave out what lies absurdly far from the image (see FIT_MAX_EXTENT).
+    reach = FIT_MAX_EXTENT * max(w, h)
+    near = (P[:, 0] > -reach) & (P[:, 0] < w + reach) & (P[:, 1] > -reach) & (P[:, 1] < h + reach)
+    return P[near]
+
+
+def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
+    """The smallest view with the image's aspect ratio that shows all the panel's content, plus a margin.
+
+    Content: the image rectangle, every visible point (also outside the
+    image), every finite epipole, the mirror rim and the epipolar conics'
+    samples (not further than ``FIT_MAX_EXTENT`` image sizes from the image).
+    With ``[a, b]`` the content's range along an axis and ``m`` the margin,
+    the range shown is ``[a - m (b - a), b + m (b - a)]``, then the shorter
+    side is widened about its centre until ``width / height`` is the image's.
+
+    Args:
+        plane: an :class:`egtviz.scene.ImagePlane`.
+        margin: fraction of the span added on each side (>= 0).
+
+    Returns:
+        The fitted :class:`ViewBox`.
+    """
+    if not margin >= 0:
+        raise ValueError(f"margin must be >= 0, got {margin}")
+    P = _content(plane)
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    span = hi - lo
+    lo, hi = lo - margin * span, hi + margin * span
+    aspect = float(plane.width) / float(plane.height)
+    w, h = hi - lo
+    if w / h < aspect:
+        w = h * aspect
+    else:
+        h = w / aspect
+    cu, cv = (lo + hi) / 2.0
+    return ViewBox(float(cu - w / 2.0), float(cv - h / 2.0), float(w), float(h))
+
+
+def zoom(view: ViewBox, factor: float, about: tuple[float, float] | None = None) -> ViewBox:
+    """The view magnified by ``factor`` (> 1 zooms in) about the pixel ``about`` (default: the view's centre).
+
+    The pixel ``about`` stays where it is on screen: ``u' = c + (u - c) / factor``.
+    """
+    if not (math.isfinite(factor) and factor > 0):
+        raise ValueError(f"factor must be a finite number > 0, got {factor}")
+    cu, cv = view.centre if about is None else (float(about[0]), float(about[1]))
+    return ViewBox(cu + (view.u0 - cu) / factor, cv + (view.v0 - cv) / factor,
+                   view.width / factor, view.height / factor)
+
+
+def pan(view: ViewBox, du: float, dv: float) -> ViewBox:
+    """The view moved by ``du`` of its width to the right and ``dv`` of its height down (fractions, any sign)."""
+    return ViewBox(view.u0 + du * view.width, view.v0 + dv * view.height, view.width, view.height)
+
+
+def tick_values(lo: float, hi: float, px_per_unit: float, min_gap_px: float) -> tuple[np.ndarray, int]:
+    """Ticks on ``[lo, hi]`` at the smallest 1-2-5 step at least ``min_gap_px`` apart on screen.
+
+    Args:
+        lo, hi: the axis range (pixels of the image).
+        px_per_unit: CSS pixels per image pixel on screen.
+        min_gap_px: the least distance between two ticks on screen (room for a label).
+
+    Returns:
+        ``(values, decimals)``: the tick values, and the number of decimals
+        that writes the step exactly (``0.5`` -> 1, ``20`` -> 0).
+    """
+    raw = min_gap_px / px_per_unit
+    mag = 10.0 ** math.floor(math.log10(raw))
+    step = next(m * mag for m in (1.0, 2.0, 5.0, 10.0) if m * mag >= raw * (1 - 1e-9))
+    first = math.ceil(lo / step - 1e-9)
+    last = math.floor(hi / step + 1e-9)
+    values = np.arange(first, last + 1) * step
+    decimals = max(0, -math.floor(math.log10(step) + 1e-9))
+    return values, decimals
+
+
+#: Label positions tried around a mark, in order (EGT writes numbers to the upper right):
+#: unit offsets (dx, dy) of the label's box from the mark, v downwards.
+_DIRECTIONS = ((1, -1), (1, 0), (1, 1), (-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1))
+#: Distances of the candidate rings, in units of (mark radius + gap).
+_RINGS = (1.0, 2.0, 3.5)
+
+
+def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: tuple[float, float, float, float],
+                 gap: float) -> np.ndarray:
+    """Greedy, deterministic label placement: each label next to its mark, clear of marks and earlier labels.
+
+    Label ``i`` (in the given order, most important first) tries boxes of
+    size ``sizes[i]`` touching the square of half-side ``radii[i] + gap``
+    around ``anchors[i]``, on eight sides (upper right first), then the same
+    eight at 2 and 3.5 times the distance. The cost of a box is its area overlapping
+    the ``obstacles`` and the labels already placed, plus its area outside
+    ``bounds``; the first box of least cost wins.
+
+    Args:
+        anchors: (n, 2) mark centres.
+        radii: (n,) half-size of each mark.
+        sizes: (n, 2) label widths and heights.
+        obstacles: (m, 4) boxes ``(x0, y0, x1, y1)`` to keep clear (the marks, arrows).
+        bounds: ``(x0, y0, x1, y1)`` the labels should stay inside.
+        gap: space between a mark and its label.
+
+    Returns:
+        (n, 4) the chosen label boxes ``(x0, y0, x1, y1)``.
+    """
+    A = np.asarray(anchors, float).reshape(-1, 2)
+    R = np.asarray(radii, float).reshape(-1)
+    S = np.asarray(sizes, float).reshape(-1, 2)
+    O = np.asarray(obstacles, float).reshape(-1, 4)
+    n = len(A)
+    if n == 0:
+        return np.empty((0, 4))
+    # Only obstacles within reach of a label's farthest candidate can cost it anything: one numpy pass finds
+    # them, then each label walks its candidates in plain Python and stops at the first free one.
+    reach = (R + gap) * _RINGS[-1] + S.max(axis=1)
+    if len(O):
+        near = ((O[None, :, 0] <= A[:, None, 0] + reach[:, None]) & (O[None, :, 2] >= A[:, None, 0] - reach[:, None])
+                & (O[None, :, 1] <= A[:, None, 1] + reach[:, None]) & (O[None, :, 3] >= A[:, None, 1] - reach[:, None]))
+        near_boxes = [O[m].tolist() for m in near]
+    else:
+        near_boxes = [[] for _ in range(n)]
+    bx0, by0, bx1, by1 = (float(b) for b in bounds)
+    placed: list[tuple[float, float, float, float]] = []
+    for (ax, ay), r, (w, h), others in zip(A.tolist(), R.tolist(), S.tolist(), near_boxes):
+        best, best_cost = None, math.inf
+        for ring in _RINGS:
+            d = (r + gap) * ring
+            for dx, dy in _DIRECTIONS:
+                # The box touches the square of half-side d around the anchor; above/below it is centred.
+                x0 = ax + d if dx > 0 else ax - d - w if dx < 0 else ax - w / 2
+                y0 = ay + d if dy > 0 else ay - d - h if dy < 0 else ay - h / 2
+                x1, y1 = x0 + w, y0 + h
+                area = w * h
+                c = area - max(min(x1, bx1) - max(x0, bx0), 0.0) * max(min(y1, by1) - max(y0, by0), 0.0)
+                for o in others:
+                    ow = min(x1, o[2]) - max(x0, o[0])
+                    if ow > 0:
+                        oh = min(y1, o[3]) - max(y0, o[1])
+                        if oh > 0:
+                            c += ow * oh
+                for o in placed:
+                    ow = min(x1, o[2]) - max(x0, o[0])
+                    if ow > 0:
+                        oh = min(y1, o[3]) - max(y0, o[1])
+                        if oh > 0:
+                            c += ow * oh
+                if c <= 1e-6 * area:  # rounding, not an overlap: take the first free box
+                    c = 0.0
+                if c < best_cost:
+                    best, best_cost = (x0, y0, x1, y1), c
+                if best_cost == 0.0:
+                    break
+            if best_cost == 0.0:
+                break
+        placed.append(best)
+    return np.array(placed)
