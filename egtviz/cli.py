@@ -120,6 +120,22 @@ def _run_figure(args) -> int:
     return figure_export.run(args)
 
 
+def _add_lessons(subparsers) -> None:
+    """``lessons``, ``progress`` and ``check`` (``egtviz.lessons.cli``)."""
+    from .lessons.cli import add_check_arguments, add_lessons_arguments, add_progress_arguments
+
+    add_lessons_arguments(subparsers.add_parser(
+        "lessons", help="list the lessons (name, then title)", description="List the course's lessons."))
+    add_progress_arguments(subparsers.add_parser(
+        "progress", help="print the learners' progress", description="Print a table of learners, lessons and tasks done."))
+    add_check_arguments(subparsers.add_parser(
+        "check", help="validate lesson files and scene files",
+        description="Validate lesson (.toml) and scene (.json) files: file, line and reason for each error."))
+
+
+_LESSON_COMMANDS = {"lessons": "run_lessons", "progress": "run_progress", "check": "run_check"}
+
+
 def _serve_options_epilog() -> str:
     """The ``serve`` options as the top-level help shows them (``egtviz --port 8081`` means ``egtviz serve ...``)."""
     from .viewer.cli import add_arguments
@@ -144,11 +160,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"egtviz {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{serve,scene,servo,figure,bench,version}",
+    sub = parser.add_subparsers(dest="command", metavar="{serve,lessons,progress,check,scene,servo,figure,bench,version}",
                                 help="what to do (default: serve)")
     from .viewer.cli import add_parser as add_serve
 
     add_serve(sub)
+    _add_lessons(sub)
     _add_scene(sub)
     from .servo.cli import add_parser as add_servo
 
@@ -190,6 +207,10 @@ def main(argv: list[str] | None = None) -> int:
         return _run_scene(args)
     if args.command == "figure":
         return _run_figure(args)
+    if args.command in _LESSON_COMMANDS:
+        from .lessons import cli as lessons_cli
+
+        return getattr(lessons_cli, _LESSON_COMMANDS[args.command])(args)
     if args.command == "serve":
         refused = _check_scene_argument(args)
         if refused is not None:

@@ -159,6 +159,7 @@ class FitResult:
 
     @property
     def title(self) -> str:
+        """The method's name as the lab shows it."""
         return METHOD_TITLES[self.method]
 
 
@@ -175,6 +176,11 @@ class LabResult:
     fits: tuple[FitResult, ...]
 
     def fit(self, method: str) -> FitResult:
+        """The result of ``method``.
+
+        Raises:
+            SceneError: the lab did not run that method.
+        """
         for f in self.fits:
             if f.method == method:
                 return f
@@ -245,7 +251,7 @@ def _fit(method: Method, data: Correspondences, settings: LabSettings, e_true: t
     nan = math.nan
     try:
         F, inliers = _estimate(method, data.measured1, data.measured2, settings)
-    except GeometryError as exc:
+    except (GeometryError, np.linalg.LinAlgError) as exc:  # degenerate data: reported, the other fits still run
         return FitResult(method, None, None, None, nan, nan, nan, (nan, nan), None, nan, nan, str(exc))
     good = ~data.outlier
     e1, e2 = epipoles_from_fundamental(F)

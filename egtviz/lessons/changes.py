@@ -1,0 +1,398 @@
+"""Scene changes a lesson step makes: a fixed vocabulary of small frozen records.
+
+Each ``[[steps.changes]]`` table names its kind with ``do`` and is parsed by :func:`parse_change`. The changes
+that alter the scene are applied to a :class:`~egtviz.scene.SceneModel` by :func:`apply` (through the model's
+own validated API, so the scene layer's checks and limits hold); :class:`SetRange`, :class:`SetLab` and
+:class:`SetLens` are records for the runner and the GUI (a field's slider range, the estimation lab's
+settings, the convention lens's toggles), which :func:`apply` returns untouched.
+
+The kinds (``do = ...``) and their keys are listed in ``docs/lessons.md``; :func:`parse_change` reads them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from ..scene import SceneError, SceneModel
+from ..scene.lab import LabSettings
+from ..scene.lens import LensToggles
+from ..scene.limits import (
+    ANGLE_DEG,
+    COORDINATE,
+    FOCAL_LENGTH,
+    IMAGE_SIZE,
+    MAX_POINTS,
+    MIRROR_PARAMETER,
+    PANORAMIC_FOCAL_PIXELS,
+    PIXELS_PER_METRE,
+    PRINCIPAL_POINT,
+    SKEW,
+    Range,
+)
+from . import fields
+from .errors import EntryError
+
+DISPLAY_OPTIONS = ("rays", "planes", "frames", "labels", "surfaces")
+"""What ``show`` / ``hide`` switch (the ``show_<what>`` fields of :class:`~egtviz.scene.DisplayOptions`)."""
+
+RANGED_FIELDS: dict[str, Range] = {
+    "position": COORDINATE,
+    "ypr_deg": ANGLE_DEG,
+    "focal_length": FOCAL_LENGTH,
+    "pixels_per_metre": PIXELS_PER_METRE,
+    "principal_point": PRINCIPAL_POINT,
+    "skew": SKEW,
+    "width": IMAGE_SIZE,
+    "height": IMAGE_SIZE,
+    "a": MIRROR_PARAMETER,
+    "b": MIRROR_PARAMETER,
+    "focal_pixels": PANORAMIC_FOCAL_PIXELS,
+}
+"""Camera fields a ``set_range`` may narrow, with the shared limit the range must lie in."""
+
+_POINT_INDEX = Range(0, MAX_POINTS - 1, "", integer=True)
+_SEED = Range(0, 2**31 - 1, "", integer=True)
+_EXTENT = Range(1e-3, COORDINATE.high, "m")
+_COUNT = Range(8, MAX_POINTS, "", integer=True)
+
+
+@dataclass(frozen=True)
+class Show:
+    """Switch a display option on (``show``) or off (``hide``)."""
+
+    what: str
+    on: bool = True
+
+    do: ClassVar[str] = "show"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.set_option(f"show_{self.what}", self.on)
+
+
+@dataclass(frozen=True)
+class MoveCamera:
+    """Place a camera: new ``position`` and/or ``ypr_deg`` (the spec's own angle convention)."""
+
+    camera: str
+    position: tuple[float, float, float] | None = None
+    ypr_deg: tuple[float, float, float] | None = None
+
+    do: ClassVar[str] = "move"
+
+    def _apply(self, model: SceneModel) -> None:
+        values = {k: v for k, v in (("position", self.position), ("ypr_deg", self.ypr_deg)) if v is not None}
+        model.update_camera(self.camera, **values)
+
+
+@dataclass(frozen=True)
+class MovePoint:
+    """Move point ``point`` to ``to``."""
+
+    point: int
+    to: tuple[float, float, float]
+
+    do: ClassVar[str] = "move"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.set_point(self.point, self.to)
+
+
+@dataclass(frozen=True)
+class Highlight:
+    """Draw attention to these cameras and ``"point:<i>"`` (replaces the previous highlight)."""
+
+    names: tuple[str, ...]
+
+    do: ClassVar[str] = "highlight"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.highlight(list(self.names))
+
+
+@dataclass(frozen=True)
+class Lock:
+    """Lock (``locked=True``) or unlock these gizmos: camera names and ``"point:<i>"``."""
+
+    names: tuple[str, ...]
+    locked: bool = True
+
+    do: ClassVar[str] = "lock"
+
+    def _apply(self, model: SceneModel) -> None:
+        scene = model.scene
+        for n in self.names:  # unlocking an unknown name would otherwise pass silently
+            if n.startswith("point:"):
+                if not n[6:].isdigit() or int(n[6:]) >= len(scene.points):
+                    raise SceneError(f"names: no point {n!r} (have {len(scene.points)} points)")
+            else:
+                scene.camera(n)
+        with model.batch("lock"):  # all or nothing
+            for n in self.names:
+                model.lock(n, self.locked)
+
+
+@dataclass(frozen=True)
+class Select:
+    """Select a point (its epipolar plane is drawn), or clear the selection (``point=None``)."""
+
+    point: int | None
+
+    do: ClassVar[str] = "select"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.select_point(self.point)
+
+
+@dataclass(frozen=True)
+class SetPair:
+    """Choose the two cameras whose epipolar geometry is drawn."""
+
+    cameras: tuple[str, str]
+
+    do: ClassVar[str] = "set_pair"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.set_pair(*self.cameras)
+
+
+@dataclass(frozen=True)
+class SetField:
+    """Set one field of a camera spec (``focal_length``, ``principal_point``, ``mirror``, ...)."""
+
+    camera: str
+    field: str
+    value: Any
+
+    do: ClassVar[str] = "set_field"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.update_camera(self.camera, **{self.field: self.value})
+
+
+@dataclass(frozen=True)
+class SetPoints:
+    """Replace every point."""
+
+    points: tuple[tuple[float, float, float], ...]
+
+    do: ClassVar[str] = "set_points"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.set_points(list(self.points))
+
+
+@dataclass(frozen=True)
+class RandomPoints:
+    """``n`` points drawn uniformly in the cube of half-side ``extent`` round ``center`` (seeded)."""
+
+    n: int
+    seed: int = 0
+    center: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    extent: float = 2.0
+
+    do: ClassVar[str] = "random_points"
+
+    def _apply(self, model: SceneModel) -> None:
+        model.randomize_points(self.n, self.seed, center=self.center, extent=self.extent)
+
+
+@dataclass(frozen=True)
+class SetRange:
+    """Record: the GUI offers only ``low..high`` for ``camera``'s ``field`` (each component of a vector field)."""
+
+    camera: str
+    field: str
+    low: float
+    high: float
+
+    do: ClassVar[str] = "set_range"
+
+    def _apply(self, model: SceneModel) -> SetRange:
+        spec = model.scene.camera(self.camera)  # SceneError: no such camera
+        if self.field not in {f.name for f in dataclasses.fields(spec)}:
+            raise EntryError("field", f"camera {self.camera!r} ({spec.kind}) has no field {self.field!r}")
+        return self
+
+
+@dataclass(frozen=True)
+class SetLab:
+    """Record: new values for some of the estimation lab's settings (:class:`~egtviz.scene.lab.LabSettings`)."""
+
+    values: tuple[tuple[str, Any], ...]
+
+    do: ClassVar[str] = "set_lab"
+
+    def _apply(self, model: SceneModel) -> SetLab:
+        return self
+
+    def applied_to(self, settings: LabSettings) -> LabSettings:
+        """``settings`` with this record's values (checked by :class:`LabSettings`)."""
+        return dataclasses.replace(settings, **dict(self.values))
+
+
+@dataclass(frozen=True)
+class SetLens:
+    """Record: new values for some of the convention lens's toggles (:class:`~egtviz.scene.lens.LensToggles`)."""
+
+    values: tuple[tuple[str, bool], ...]
+
+    do: ClassVar[str] = "set_lens"
+
+    def _apply(self, model: SceneModel) -> SetLens:
+        return self
+
+    def applied_to(self, toggles: LensToggles) -> LensToggles:
+        """``toggles`` with this record's values."""
+        return dataclasses.replace(toggles, **dict(self.values))
+
+
+Change = (
+    Show | MoveCamera | MovePoint | Highlight | Lock | Select | SetPair | SetField | SetPoints | RandomPoints
+    | SetRange | SetLab | SetLens
+)
+Record = SetRange | SetLab | SetLens
+
+
+def apply(model: SceneModel, change: Change) -> Record | None:
+    """Apply ``change`` to ``model``; a record (:data:`Record`) is returned for the runner instead.
+
+    Raises:
+        SceneError: the scene layer refused the change (a missing camera or point, a value out of range);
+            the model is unchanged.
+        EntryError: a ``set_range`` naming a field the camera does not have.
+    """
+    return change._apply(model)
+
+
+# -- parsing -------------------------------------------------------------------------------------------
+
+_KEYS = {
+    "show": ("do", "what"),
+    "hide": ("do", "what"),
+    "move": ("do", "camera", "position", "ypr_deg", "point", "to"),
+    "highlight": ("do", "names"),
+    "lock": ("do", "names"),
+    "unlock": ("do", "names"),
+    "select": ("do", "point"),
+    "set_pair": ("do", "cameras"),
+    "set_field": ("do", "camera", "field", "value"),
+    "set_points": ("do", "points"),
+    "random_points": ("do", "n", "seed", "center", "extent"),
+    "set_range": ("do", "camera", "field", "low", "high"),
+    "set_lab": ("do", *(f.name for f in dataclasses.fields(LabSettings))),
+    "set_lens": ("do", *(f.name for f in dataclasses.fields(LensToggles))),
+}
+CHANGE_KINDS = tuple(_KEYS)
+"""The values ``do`` accepts."""
+
+_SETTABLE = frozenset(
+    {"focal_length", "pixels_per_metre", "principal_point", "skew", "width", "height", "mirror", "a", "b",
+     "focal_pixels", "position", "ypr_deg", "xi"}
+)
+
+
+def parse_change(table: Any) -> Change:
+    """One ``[[steps.changes]]`` table as a change record (types and ranges checked here; names of cameras
+    and points are checked when the change is applied to the step's scene).
+
+    Raises:
+        EntryError: naming the offending key.
+    """
+    if not isinstance(table, dict):
+        raise EntryError(None, f"expected a table, got {fields.short(table)}")
+    do = table.get("do")
+    if type(do) is not str or do not in _KEYS:
+        raise EntryError("do", f"expected one of {', '.join(CHANGE_KINDS)}, got {fields.short(do)}")
+    fields.refuse_unknown(table, _KEYS[do], f"a {do!r} change")
+    if do in ("show", "hide"):
+        what = fields.text(table, "what")
+        if what not in DISPLAY_OPTIONS:
+            raise EntryError("what", f"expected one of {', '.join(DISPLAY_OPTIONS)}, got {fields.short(what)}")
+        return Show(what, do == "show")
+    if do == "move":
+        if "point" in table:
+            for key in ("camera", "position", "ypr_deg"):
+                if key in table:
+                    raise EntryError(key, "a move names a camera (position, ypr_deg) or a point (to), not both")
+            return MovePoint(fields.whole(table, "point", _POINT_INDEX),
+                             fields.numbers(table, "to", 3, COORDINATE))  # type: ignore[arg-type]
+        if "to" in table:
+            raise EntryError("to", "'to' moves a point: name it with 'point'")
+        camera = fields.text(table, "camera")
+        position = fields.numbers(table, "position", 3, COORDINATE, required=False)
+        ypr = fields.numbers(table, "ypr_deg", 3, ANGLE_DEG, required=False)
+        if position is None and ypr is None:
+            raise EntryError(None, "a camera move needs 'position', 'ypr_deg' or both")
+        return MoveCamera(camera, position, ypr)  # type: ignore[arg-type]
+    if do == "highlight":
+        return Highlight(fields.name_list(table, "names"))
+    if do in ("lock", "unlock"):
+        return Lock(fields.name_list(table, "names"), do == "lock")
+    if do == "select":
+        return Select(fields.whole(table, "point", _POINT_INDEX) if "point" in table else None)
+    if do == "set_pair":
+        names = fields.name_list(table, "cameras")
+        if len(names) != 2 or names[0] == names[1]:
+            raise EntryError("cameras", f"expected two different camera names, got {fields.short(list(names))}")
+        return SetPair(names)  # type: ignore[arg-type]
+    if do == "set_field":
+        camera = fields.text(table, "camera")
+        field = fields.text(table, "field")
+        if field not in _SETTABLE:
+            raise EntryError("field", f"expected one of {', '.join(sorted(_SETTABLE))}, got {fields.short(field)}")
+        if "value" not in table:
+            raise EntryError("value", "missing")
+        value = table["value"]
+        if isinstance(value, list):
+            value = tuple(value)
+        if isinstance(value, dict) or not isinstance(value, (int, float, str, tuple)) or isinstance(value, bool):
+            raise EntryError("value", f"expected a number, a list of numbers or text, got {fields.short(value)}")
+        return SetField(camera, field, value)
+    if do == "set_points":
+        pts = table.get("points")
+        if not isinstance(pts, list) or len(pts) > MAX_POINTS:
+            raise EntryError("points", f"expected a list of at most {MAX_POINTS} [x, y, z], got {fields.short(pts)}")
+        out = []
+        for p in pts:
+            out.append(fields.numbers({"points": p}, "points", 3, COORDINATE))
+        return SetPoints(tuple(out))  # type: ignore[arg-type]
+    if do == "random_points":
+        return RandomPoints(
+            fields.whole(table, "n", _COUNT),
+            fields.whole(table, "seed", _SEED, required=False, default=0),
+            fields.numbers(table, "center", 3, COORDINATE, required=False) or (0.0, 0.0, 1.0),  # type: ignore[arg-type]
+            fields.number(table, "extent", _EXTENT, required=False, default=2.0),
+        )
+    if do == "set_range":
+        camera = fields.text(table, "camera")
+        field = fields.text(table, "field")
+        if field not in RANGED_FIELDS:
+            raise EntryError("field", f"expected one of {', '.join(RANGED_FIELDS)}, got {fields.short(field)}")
+        limit = RANGED_FIELDS[field]
+        low = fields.number(table, "low", limit)
+        high = fields.number(table, "high", limit)
+        if not low < high:
+            raise EntryError("high", f"expected high > low ({low:g}), got {high:g}")
+        return SetRange(camera, field, low, high)
+    if do == "set_lab":
+        values = {k: v for k, v in table.items() if k != "do"}
+        try:
+            LabSettings(**values)
+        except (ValueError, TypeError) as exc:
+            raise EntryError(_named_key(str(exc), values), str(exc)) from None
+        return SetLab(tuple(sorted(values.items())))
+    values = {k: v for k, v in table.items() if k != "do"}
+    for k, v in values.items():
+        if type(v) is not bool:
+            raise EntryError(k, f"expected true or false, got {fields.short(v)}")
+    return SetLens(tuple(sorted(values.items())))
+
+
+def _named_key(message: str, values: dict) -> str | None:
+    """The key of ``values`` a message starts with, if any."""
+    for k in values:
+        if message.startswith(k):
+            return k
+    return None

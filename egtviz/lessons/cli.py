@@ -1,0 +1,147 @@
+"""``egtviz lessons``, ``egtviz progress`` and ``egtviz check PATH...``: argument setup and runners.
+
+The lead wires each ``add_*_arguments`` / ``run_*`` pair into ``egtviz/cli.py`` as a sub-command. Every
+runner returns the exit status and never lets a traceback through for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from ..files import FileSafetyError, printable, read_limited
+from ..scene.limits import MAX_SCENE_FILE_BYTES
+from .errors import LessonError
+from .locate import json_locator, scene_entry_path
+
+__all__ = [
+    "add_check_arguments",
+    "add_lessons_arguments",
+    "add_progress_arguments",
+    "check_file",
+    "run_check",
+    "run_lessons",
+    "run_progress",
+]
+
+
+def add_lessons_arguments(parser: argparse.ArgumentParser) -> None:
+    """``egtviz lessons``: no arguments."""
+    parser.description = "List the lessons shipped with egtviz: one line each, its name then its title."
+
+
+def run_lessons(args: argparse.Namespace) -> int:
+    """Print ``name  title`` per shipped lesson; 2 if a shipped lesson is broken."""
+    from .catalog import list_lessons
+
+    try:
+        lessons = list_lessons()
+    except LessonError as exc:
+        print(f"egtviz: {exc}", file=sys.stderr)
+        return 2
+    width = max((len(info.name) for info in lessons), default=0)
+    for info in lessons:
+        print(f"{info.name:<{width}}  {printable(info.title)}")
+    return 0
+
+
+def add_progress_arguments(parser: argparse.ArgumentParser) -> None:
+    """``egtviz progress [--database PATH]``."""
+    parser.description = "Print a table of the learners, the lessons they started, their step and tasks done."
+    parser.add_argument("--database", default=None, help="the progress database (default: in the user's data folder)")
+
+
+def run_progress(args: argparse.Namespace) -> int:
+    """Print the progress table (learner, lesson, step, tasks done, attempts); 2 if the database cannot be read."""
+    import sqlite3
+
+    from .progress import ProgressStore
+
+    try:
+        rows = ProgressStore(args.database).summary()
+    except (OSError, sqlite3.Error) as exc:
+        print(f"egtviz: progress database: {exc}", file=sys.stderr)
+        return 2
+    if not rows:
+        print("no progress recorded yet")
+        return 0
+    header = ("learner", "lesson", "step", "tasks done", "attempts")
+    table = [header] + [(printable(r.learner), r.lesson, str(r.step + 1), str(r.tasks_passed), str(r.attempts))
+                        for r in rows]
+    widths = [max(len(row[i]) for row in table) for i in range(len(header))]
+    for row in table:
+        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
+    return 0
+
+
+def add_check_arguments(parser: argparse.ArgumentParser) -> None:
+    """``egtviz check PATH...``."""
+    parser.description = (
+        "Validate lesson files (.toml) and scene files (.json) with the viewer's own validation and limits; "
+        "print 'file:line: reason' for each error. Exit status 2 if any file has an error."
+    )
+    parser.add_argument("paths", nargs="+", metavar="PATH", help="lesson (.toml) or scene (.json) files")
+
+
+def check_file(path: str) -> str | None:
+    """None if ``path`` is a valid lesson (``.toml``) or scene file (anything else), else ``file:line: reason``.
+
+    Scene files go through the scene layer's own reader (``scene_from_bytes``, as ``load_scene_file``); the line
+    of a refused entry is found in the JSON text (:func:`~egtviz.lessons.locate.json_locator`).
+    """
+    shown = printable(path)
+    if path.endswith(".toml"):
+        from .format import load_lesson
+
+        try:
+            load_lesson(path)
+        except LessonError as exc:
+            return str(exc)
+        return None
+    from ..scene import SceneFileError, scene_from_bytes
+
+    try:
+        data = read_limited(path, MAX_SCENE_FILE_BYTES)
+    except FileSafetyError as exc:
+        return f"{shown}:1: {str(exc).removeprefix(shown + ': ')}"
+    try:
+        scene_from_bytes(data, "scene")
+    except SceneFileError as exc:
+        reason = str(exc).removeprefix("scene: ")
+        line = 1
+        if reason.startswith("line "):  # JSON syntax: "line L, column C: ..."
+            head = reason.split(",", 1)[0]
+            line = int(head[5:]) if head[5:].isdigit() else 1
+        else:
+            text = data.decode("utf-8", errors="replace")
+            line = json_locator(text).line(*scene_entry_path(reason))
+        return f"{shown}:{line}: {reason}"
+    return None
+
+
+def run_check(args: argparse.Namespace) -> int:
+    """Check each path (:func:`check_file`): ``path: ok`` or ``file:line: reason``; 2 if any failed."""
+    failed = 0
+    for path in args.paths:
+        message = check_file(os.fspath(path))
+        if message is None:
+            print(f"{printable(path)}: ok")
+        else:
+            failed += 1
+            print(message)
+    return 2 if failed else 0
+
+
+def _main(argv: list[str] | None = None) -> int:  # pragma: no cover - the lead's egtviz/cli.py replaces this
+    parser = argparse.ArgumentParser(prog="egtviz")
+    sub = parser.add_subparsers(dest="command", required=True)
+    add_lessons_arguments(sub.add_parser("lessons"))
+    add_progress_arguments(sub.add_parser("progress"))
+    add_check_arguments(sub.add_parser("check"))
+    args = parser.parse_args(argv)
+    return {"lessons": run_lessons, "progress": run_progress, "check": run_check}[args.command](args)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(_main())

@@ -1,0 +1,267 @@
+"""Lesson files: TOML, one lesson per file, parsed and validated into a frozen :class:`Lesson`.
+
+A file has ``title``, ``summary``, ``prerequisites`` (names of other lessons), ``scene`` (the name of a
+built-in scene, or a ``[scene]`` table in the scene file's vocabulary, checked by the scene layer exactly
+like a scene file), and ``[[steps]]``, each with ``title``, ``text`` (Markdown with ``$...$`` formulas),
+``[[steps.changes]]`` (:mod:`egtviz.lessons.changes`) and ``[[steps.tasks]]`` (:mod:`egtviz.lessons.tasks`).
+The format is described for authors in ``docs/lessons.md``.
+
+Loading validates everything a runner will need: every step's changes are applied, in order, to a
+headless :class:`~egtviz.scene.SceneModel` (a change naming a missing camera, or moving one out of range,
+is refused as the viewer would refuse it), every task is checked against the scene of its step, and every
+task's ``solution`` is applied to a copy. Each refusal is one :class:`LessonError` ``file:line: reason``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..files import FileSafetyError, printable, read_limited
+from ..scene import SCENES, Scene, SceneError, SceneFileError, SceneModel
+from ..scene.io import scene_from_dict
+from ..scene.lab import LabSettings, make_correspondences
+from . import fields
+from .changes import Change, SetField, parse_change
+from .changes import apply as apply_change
+from .errors import EntryError, LessonError
+from .locate import Locator, scene_entry_path, toml_locator
+from .markup import MarkupError, render_markdown
+from .tasks import InliersRecallTask, SampsonBelowTask, Task, parse_task
+
+__all__ = ["MAX_LESSON_FILE_BYTES", "Lesson", "Step", "load_lesson", "parse_lesson"]
+
+MAX_LESSON_FILE_BYTES = 1_000_000
+"""Largest lesson file read (1 MB; a long lesson is about 20 kB)."""
+MAX_STEPS = 60
+MAX_CHANGES = 100
+"""Changes of one step (and of one task's solution)."""
+MAX_TASKS = 20
+"""Tasks of one step."""
+MAX_PREREQUISITES = 20
+_TOP = ("title", "summary", "prerequisites", "scene", "steps")
+_STEP = ("title", "text", "changes", "tasks")
+_LESSON_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,79}")
+
+
+@dataclass(frozen=True)
+class Step:
+    """One screen of a lesson."""
+
+    title: str
+    text: str
+    """Markdown as written, formulas in ``$...$``."""
+    html: str
+    """The text as shown: Markdown with the formulas rendered to MathML (:func:`render_markdown`)."""
+    changes: tuple[Change, ...] = ()
+    tasks: tuple[Task, ...] = ()
+
+
+@dataclass(frozen=True)
+class Lesson:
+    """A validated lesson."""
+
+    name: str
+    """The file name without ``.toml`` (e.g. ``06-pinhole-epipolar``)."""
+    title: str
+    summary: str
+    prerequisites: tuple[str, ...]
+    scene: Scene
+    """The starting scene."""
+    steps: tuple[Step, ...]
+    source: str = ""
+    """Where the lesson was read from (for messages)."""
+
+    @property
+    def task_count(self) -> int:
+        """Tasks in all steps."""
+        return sum(len(s.tasks) for s in self.steps)
+
+
+def load_lesson(path: str | os.PathLike, *, known_lessons: frozenset[str] | None = None) -> Lesson:
+    """Read and validate a lesson file (a regular file of at most :data:`MAX_LESSON_FILE_BYTES`).
+
+    Args:
+        path: the ``.toml`` file; its name without the suffix is the lesson's name.
+        known_lessons: names a prerequisite may take; default: the ``.toml`` files next to ``path``.
+
+    Raises:
+        LessonError: ``file:line: reason`` for the first problem found.
+    """
+    shown = printable(os.fspath(path))
+    try:
+        data = read_limited(path, MAX_LESSON_FILE_BYTES)
+    except FileSafetyError as exc:
+        raise LessonError(shown, 1, str(exc).removeprefix(f"{shown}: ")) from None
+    if known_lessons is None:
+        folder = Path(path).parent
+        try:
+            known_lessons = frozenset(p.stem for p in folder.glob("*.toml"))
+        except OSError:
+            known_lessons = frozenset()
+    return parse_lesson(data, source=shown, name=Path(path).stem, known_lessons=known_lessons)
+
+
+def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: frozenset[str] | None = None) -> Lesson:
+    """A lesson from the text of a lesson file (see :func:`load_lesson`).
+
+    Raises:
+        LessonError: ``file:line: reason``.
+    """
+    source = printable(source)
+    if isinstance(data, (bytes, bytearray)):
+        if len(data) > MAX_LESSON_FILE_BYTES:
+            raise LessonError(source, 1, f"more than the {MAX_LESSON_FILE_BYTES / 1e6:g} MB limit")
+        try:
+            text = bytes(data).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise LessonError(source, bytes(data)[: exc.start].count(b"\n") + 1, "not UTF-8 text") from None
+    else:
+        text = data
+    text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
+    if not _LESSON_NAME.fullmatch(name):
+        raise LessonError(source, 1, f"lesson name {printable(name)!r}: expected lower-case letters, digits and '-'")
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        line = int(m.group(1)) if m else 1
+        reason = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc)) or "invalid TOML"
+        raise LessonError(source, line, f"not valid TOML: {reason}") from None
+    except RecursionError:
+        raise LessonError(source, 1, "not valid TOML: nested too deeply") from None
+    return _Reader(source, name, toml_locator(text), known_lessons).lesson(doc)
+
+
+class _Reader:
+    """Turns the parsed TOML into a :class:`Lesson`, every error located."""
+
+    def __init__(self, source: str, name: str, where: Locator, known: frozenset[str] | None) -> None:
+        self.source = source
+        self.name = name
+        self.where = where
+        self.known = known
+
+    def error(self, path: tuple, reason: str) -> LessonError:
+        return LessonError(self.source, self.where.line(*path), reason)
+
+    def entry(self, path: tuple, exc: EntryError, what: str) -> LessonError:
+        key = (exc.key,) if exc.key else ()
+        return self.error(path + key, f"{what}: {exc}")
+
+    def lesson(self, doc: dict) -> Lesson:
+        try:
+            fields.refuse_unknown(doc, _TOP, "a lesson")
+            title = fields.text(doc, "title")
+            summary = fields.text(doc, "summary", limit=2000, multiline=True)
+            prerequisites = fields.name_list(doc, "prerequisites", required=False, limit=MAX_PREREQUISITES)
+        except EntryError as exc:
+            raise self.entry((), exc, "lesson") from None
+        for p in prerequisites:
+            if self.known is not None and p not in self.known:
+                raise self.error(("prerequisites",), f"prerequisites: no lesson named {printable(p)!r}")
+            if p == self.name:
+                raise self.error(("prerequisites",), "prerequisites: a lesson cannot require itself")
+        scene = self.scene(doc.get("scene"))
+        steps_data = doc.get("steps")
+        if not isinstance(steps_data, list) or not steps_data or len(steps_data) > MAX_STEPS:
+            raise self.error(("steps",), f"steps: expected 1 to {MAX_STEPS} [[steps]] tables")
+        model = SceneModel(scene)
+        steps = tuple(self.step(i, s, model) for i, s in enumerate(steps_data))
+        return Lesson(self.name, title, summary, prerequisites, scene, steps, self.source)
+
+    def scene(self, value: object) -> Scene:
+        if value is None:
+            raise self.error((), f"scene: missing (a built-in name: {', '.join(SCENES)}; or a [scene] table)")
+        if isinstance(value, str):
+            if value not in SCENES:
+                raise self.error(("scene",), f"scene: expected a built-in scene ({', '.join(SCENES)}) or a "
+                                             f"[scene] table, got {fields.short(value)}")
+            return SCENES[value]()
+        if not isinstance(value, dict):
+            raise self.error(("scene",), f"scene: expected a name or a table, got {fields.short(value)}")
+        try:
+            return scene_from_dict(value, "scene")
+        except SceneFileError as exc:
+            reason = str(exc).removeprefix("scene: ")
+            raise self.error(("scene", *scene_entry_path(reason)), f"scene: {reason}") from None
+
+    def step(self, i: int, data: object, model: SceneModel) -> Step:
+        at = ("steps", i)
+        if not isinstance(data, dict):
+            raise self.error(at, f"steps[{i}]: expected a table")
+        try:
+            fields.refuse_unknown(data, _STEP, "a step")
+            title = fields.text(data, "title")
+            text = fields.text(data, "text", limit=fields.MAX_TEXT, multiline=True)
+        except EntryError as exc:
+            raise self.entry(at, exc, f"steps[{i}]") from None
+        try:
+            html = render_markdown(text)
+        except MarkupError as exc:
+            raise self.error(at + ("text",), f"steps[{i}].text: {exc}") from None
+        changes = self.changes(at, data.get("changes", []), model)
+        tasks = self.tasks(at, data.get("tasks", []), model)
+        return Step(title, text, html, changes, tasks)
+
+    def changes(self, at: tuple, value: object, model: SceneModel) -> tuple[Change, ...]:
+        if not isinstance(value, list) or len(value) > MAX_CHANGES:
+            raise self.error(at + ("changes",), f"changes: expected at most {MAX_CHANGES} [[steps.changes]] tables")
+        out = []
+        for j, table in enumerate(value):
+            here = at + ("changes", j)
+            what = f"steps[{at[1]}].changes[{j}]"
+            try:
+                change = parse_change(table)
+            except EntryError as exc:
+                raise self.entry(here, exc, what) from None
+            self.apply(model, change, here, what, table)
+            out.append(change)
+        return tuple(out)
+
+    def apply(self, model: SceneModel, change: Change, here: tuple, what: str, table: object) -> None:
+        try:
+            apply_change(model, change)
+        except EntryError as exc:
+            raise self.entry(here, exc, what) from None
+        except SceneError as exc:
+            raise self.error(here + _offending_key(change, table, str(exc)), f"{what}: {exc}") from None
+
+    def tasks(self, at: tuple, value: object, model: SceneModel) -> tuple[Task, ...]:
+        if not isinstance(value, list) or len(value) > MAX_TASKS:
+            raise self.error(at + ("tasks",), f"tasks: expected at most {MAX_TASKS} [[steps.tasks]] tables")
+        out: list[Task] = []
+        for j, table in enumerate(value):
+            here = at + ("tasks", j)
+            what = f"steps[{at[1]}].tasks[{j}]"
+            try:
+                task = parse_task(table, default_id=f"task{j + 1}")
+                if any(t.id == task.id for t in out):
+                    raise EntryError("id", f"another task of this step has the id {task.id!r}")
+                task.validate(model.scene)
+            except EntryError as exc:
+                raise self.entry(here, exc, what) from None
+            if isinstance(task, (SampsonBelowTask, InliersRecallTask)):
+                try:
+                    make_correspondences(model.scene, LabSettings())
+                except SceneError as exc:
+                    raise self.error(here, f"{what}: {exc}") from None
+            trial = SceneModel(model.scene)
+            for change in task.solution:
+                self.apply(trial, change, here + ("solution",), f"{what}.solution", {})
+            out.append(task)
+        return tuple(out)
+
+
+def _offending_key(change: Change, table: object, message: str) -> tuple[str, ...]:
+    """The key of a change's table that a scene-layer refusal is about (empty: the table itself)."""
+    keys = [k for k in (table if isinstance(table, dict) else ()) if k != "do"]
+    if "no camera named" in message and "camera" in keys:
+        return ("camera",)
+    if isinstance(change, SetField) and "value" in keys:
+        return ("value",)
+    named = [k for k in keys if f"{k}:" in message] or [k for k in keys if k in message]
+    return tuple(named[:1])
