@@ -172,14 +172,15 @@ def test_egtviz_lessons_prints_one_line_per_lesson_name_first(capsys):
 
 
 def test_an_installed_wheel_reads_the_lessons_bundled_in_the_package(tmp_path, monkeypatch):
-    """In a wheel the lessons sit in ``egtviz/_lessons`` (hatch force-include); the catalog prefers them."""
+    """In a wheel (no checkout around the package) the lessons sit in ``egtviz/_lessons`` (hatch force-include)."""
+    from egtviz import resources
     from egtviz.lessons import catalog
 
-    bundled = tmp_path / "egtviz" / "_lessons"
+    bundled = tmp_path / "site-packages" / "egtviz" / "_lessons"
     bundled.mkdir(parents=True)
     source = lessons_folder() / "01-frames-and-poses.toml"
     (bundled / "01-frames-and-poses.toml").write_bytes(source.read_bytes())
-    monkeypatch.setattr(catalog.resources, "files", lambda package: tmp_path / package)
+    monkeypatch.setattr(resources, "_PACKAGE", bundled.parent)
     assert catalog.lessons_folder() == bundled
     assert [info.name for info in list_lessons()] == ["01-frames-and-poses"]
     assert load("01-frames-and-poses").source == "lessons/01-frames-and-poses.toml"
