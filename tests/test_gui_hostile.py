@@ -354,12 +354,17 @@ def test_an_exception_in_any_callback_reaches_the_tab(tab, monkeypatch):
 
 def test_every_callback_of_the_viewer_is_registered_safely():
     """No bare ``on_update``/``on_click``/``on_upload`` call: each goes through ``fields.on_event``."""
+    import importlib
     import inspect
+    import pkgutil
     import re
 
-    from egtviz.viewer import app, scene3d, servo_demo
+    import egtviz.viewer
 
-    for module in (app, scene3d, servo_demo):
+    names = [m.name for m in pkgutil.iter_modules(egtviz.viewer.__path__)]
+    assert {"app", "scene3d", "servo_player"} <= set(names)
+    for name in names:
+        module = importlib.import_module(f"egtviz.viewer.{name}")
         src = inspect.getsource(module)
         bare = re.findall(r"\.on_(?:update|click|upload)\(", src)
         assert bare == [], f"{module.__name__}: {len(bare)} callbacks registered without fields.on_event"

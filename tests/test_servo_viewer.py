@@ -1,4 +1,4 @@
-"""Headless tests of the servo demo unit (egtviz.viewer.servo_demo) on a real viser server.
+"""Headless tests of the servo demos (egtviz.viewer.servo_demo and its per-demo classes) on a real viser server.
 
 A websocket stand-in (egtviz.viewer.headless.FakeTab) is the browser tab; GUI
 handle values are set directly (their callbacks run synchronously).
@@ -15,7 +15,9 @@ import pytest
 import viser
 
 from egtviz.viewer.headless import FakeTab
-from egtviz.viewer.servo_demo import ServoDemo
+from egtviz.viewer.servo_demo import SERVO_DEMOS, ServoDemo, make_servo_demo
+from egtviz.viewer.servo_panoramic_demo import PanoramicServoDemo
+from egtviz.viewer.servo_pinhole_demo import PinholeServoDemo
 from egtviz.viewer.servo_svg import ServoImage, servo_image_svg
 
 
@@ -53,7 +55,7 @@ def _trail_len(svg: str, i: int) -> int:
 
 
 def test_pinhole_demo_steps_and_scrubs(client):
-    demo = ServoDemo(client, "pinhole", steps=60, autoplay=False)
+    demo = make_servo_demo(client, "pinhole", steps=60, autoplay=False)
     try:
         assert demo.wait(30) and demo.error == ""
         r = demo.result
@@ -93,7 +95,7 @@ def test_pinhole_demo_steps_and_scrubs(client):
 
 
 def test_pinhole_play_pause(client):
-    demo = ServoDemo(client, "pinhole", steps=200, autoplay=False, speed="4x")
+    demo = make_servo_demo(client, "pinhole", steps=200, autoplay=False, speed="4x")
     try:
         assert demo.wait(30)
         demo.play()
@@ -109,7 +111,7 @@ def test_pinhole_play_pause(client):
 
 
 def test_panoramic_demo_biconics(client):
-    demo = ServoDemo(client, "panoramic", steps=80, autoplay=False)
+    demo = make_servo_demo(client, "panoramic", steps=80, autoplay=False)
     try:
         assert demo.wait(30) and demo.error == ""
         s0 = _kinds(demo.svg)
@@ -144,19 +146,19 @@ def _fire(handle, client, value) -> None:
 @pytest.mark.parametrize(
     "field, text, message",
     [
-        ("f_beta", "-1", "beta must be between 0 and 100, got -1"),
-        ("f_steps", "0", "max steps must be between 1 and 10000, got 0"),
-        ("f_steps", "1e9", "max steps must be between 1 and 10000, got 1000000000"),
-        ("f_noise", "-3", "noise must be between 0 px and 50 px, got -3 px"),
-        ("f_seed", "1.5", "seed must be a whole number, got 1.5"),
-        ("f_seed", "abc", "seed: expected a number, got 'abc'"),
-        ("f_noise", "nan", "noise: expected a number, got 'nan'"),
+        ("beta", "-1", "beta must be between 0 and 100, got -1"),
+        ("steps", "0", "max steps must be between 1 and 10000, got 0"),
+        ("steps", "1e9", "max steps must be between 1 and 10000, got 1000000000"),
+        ("noise_px", "-3", "noise must be between 0 px and 50 px, got -3 px"),
+        ("seed", "1.5", "seed must be a whole number, got 1.5"),
+        ("seed", "abc", "seed: expected a number, got 'abc'"),
+        ("noise_px", "nan", "noise: expected a number, got 'nan'"),
     ],
 )
 def test_bad_run_fields_are_refused_with_a_notification(client, notes, field, text, message):
-    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    demo = make_servo_demo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
     try:
-        handle = getattr(demo, field)
+        handle = demo.fields[field]
         shown, params = handle.value, demo.params()
         handle.value = text
         assert notes[-1] == ("Value refused", message)
@@ -168,10 +170,10 @@ def test_bad_run_fields_are_refused_with_a_notification(client, notes, field, te
 
 
 def test_run_fields_are_judged_once_the_user_stops_typing(client, notes):
-    demo = ServoDemo(client, "panoramic", steps=20, autorun=False, autoplay=False, field_delay=0.15)
+    demo = make_servo_demo(client, "panoramic", steps=20, autorun=False, autoplay=False, field_delay=0.15)
     try:
         for text in ("0", "0.", "0.5"):  # keystrokes; "0." alone is not a number
-            demo.f_noise.value = text
+            demo.fields["noise_px"].value = text
             time.sleep(0.02)
         deadline = time.time() + 5
         while demo.params()["noise_px"] != 0.5 and time.time() < deadline:
@@ -182,7 +184,7 @@ def test_run_fields_are_judged_once_the_user_stops_typing(client, notes):
 
 
 def test_set_params_refuses_bad_values_and_changes_nothing(client):
-    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    demo = make_servo_demo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
     try:
         before = demo.params()
         for bad in ({"beta": -1.0}, {"steps": 0}, {"noise_px": -3.0}, {"seed": 1.5}, {"seed": True},
@@ -190,26 +192,27 @@ def test_set_params_refuses_bad_values_and_changes_nothing(client):
             with pytest.raises(ValueError):
                 demo.set_params(**bad)
             assert demo.params() == before
-        with pytest.raises(ValueError, match="not a parameter"):
-            ServoDemo.set_params(demo, wheels=2)
+        with pytest.raises(ValueError, match="wheels: not a parameter of the pinhole demo"):
+            demo.set_params(wheels=2)
         demo.set_params(beta=0.5, steps=30, seed="4294967295")
         assert demo.params() == {**before, "beta": 0.5, "steps": 30, "seed": 4294967295}
-        assert demo.f_beta.value == "0.5" and demo.f_steps.value == "30" and demo.f_seed.value == "4294967295"
+        f = demo.fields
+        assert f["beta"].value == "0.5" and f["steps"].value == "30" and f["seed"].value == "4294967295"
     finally:
         demo.close()
     with pytest.raises(ValueError, match="beta"):
-        ServoDemo(client, "pinhole", beta=-1.0, autorun=False)
+        make_servo_demo(client, "pinhole", beta=-1.0, autorun=False)
 
 
 def test_forged_drop_downs_and_slider_are_refused(client, notes):
-    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    demo = make_servo_demo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
     try:
         assert demo.run(wait=True) and demo.result is not None
-        _fire(demo.f_estimator, client, "magic")
+        _fire(demo.fields["estimator"], client, "magic")
         assert notes[-1] == ("Value refused", "F estimator: expected one of true, linear, normalized, sampson, got 'magic'")
-        assert demo.f_estimator.value == "true" and demo.params()["f_algorithm"] is None
-        _fire(demo.f_speed, client, "1000x")
-        assert "speed" in notes[-1][1] and demo.f_speed.value == "1x"
+        assert demo.fields["estimator"].value == "true" and demo.params()["f_algorithm"] is None
+        _fire(demo.fields["speed"], client, "1000x")
+        assert "speed" in notes[-1][1] and demo.fields["speed"].value == "1x"
         _fire(demo.slider, client, "abc")
         assert notes[-1] == ("Value refused", "time: expected a number of seconds, got 'abc'")
         demo.step(3)  # still working
@@ -219,13 +222,13 @@ def test_forged_drop_downs_and_slider_are_refused(client, notes):
 
 
 def test_a_failing_run_is_shown_not_raised(client, notes, monkeypatch):
-    import egtviz.viewer.servo_demo as servo_demo
+    from egtviz.viewer import servo_pinhole_demo
 
     def refuse(**kw):
         raise ValueError("beta: the simulation refused it")
 
-    monkeypatch.setattr(servo_demo, "simulate_pinhole", refuse)
-    demo = ServoDemo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
+    monkeypatch.setattr(servo_pinhole_demo, "simulate_pinhole", refuse)
+    demo = make_servo_demo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
     try:
         assert demo.run(wait=True)
         assert demo.result is None
@@ -242,7 +245,7 @@ def test_a_failing_run_is_shown_not_raised(client, notes, monkeypatch):
 
 
 def test_rerun_while_running_is_refused_and_close_stops(client):
-    demo = ServoDemo(client, "panoramic", steps=400, autorun=False, autoplay=True)
+    demo = make_servo_demo(client, "panoramic", steps=400, autorun=False, autoplay=True)
     try:
         assert demo.run()
         assert not demo.run()  # one run at a time
@@ -306,3 +309,91 @@ def test_servo_svg_pure():
     k = _kinds(svg)
     assert k["point"] == 2 and k["desired"] == 2 and k["trail"] == 2 and k["epipole"] == 1
     assert "epipolar-line" not in k and 'data-rev="7"' in svg and "hi &lt;b&gt;" in svg
+
+
+def test_one_class_per_demo_and_the_factory(client):
+    assert SERVO_DEMOS == {"pinhole": PinholeServoDemo, "panoramic": PanoramicServoDemo}
+    with pytest.raises(ValueError, match="kind: expected one of 'pinhole', 'panoramic', got 'stereo'"):
+        make_servo_demo(client, "stereo")
+    for bad in ({"beta": 1.0}, {"estimator": "linear"}):  # pin-hole parameters: the panoramic demo has none
+        with pytest.raises(ValueError, match=f"{next(iter(bad))}: not a parameter of the panoramic demo"):
+            make_servo_demo(client, "panoramic", autorun=False, **bad)
+    demo = make_servo_demo(client, "panoramic", steps=20, autorun=False, autoplay=False, show_panel=False)
+    try:
+        assert type(demo) is PanoramicServoDemo and isinstance(demo, ServoDemo)
+        assert set(demo.fields) == {"seed", "noise_px", "steps", "speed"}
+        assert demo.params() == {"seed": 0, "noise_px": 0.0, "steps": 20}
+        assert demo.run(wait=True) and demo.error == "" and demo.panel is None  # no panel: plays all the same
+        demo.step(5)
+        assert demo.frame == 5 and 'data-frame="5"' in demo.svg
+    finally:
+        demo.close()
+    demo = PinholeServoDemo(client, beta=0.25, estimator="sampson", autorun=False, autoplay=False)
+    try:
+        assert set(demo.fields) == {"seed", "beta", "estimator", "noise_px", "steps", "speed"}
+        assert demo.params() == {"seed": 0, "noise_px": 0.0, "steps": 1000, "beta": 0.25, "f_algorithm": 3}
+    finally:
+        demo.close()
+
+
+def test_the_viewer_modules_branch_on_no_kind_and_register_callbacks_safely():
+    import inspect
+
+    from egtviz.viewer import (
+        servo_demo,
+        servo_panoramic_demo,
+        servo_pinhole_demo,
+        servo_player,
+    )
+
+    for module in (servo_demo, servo_player, servo_pinhole_demo, servo_panoramic_demo):
+        src = inspect.getsource(module)
+        assert re.findall(r"kind\s*[!=]=", src) == [], module.__name__
+        assert re.findall(r"\.on_(?:update|click|upload)\(", src) == [], module.__name__
+
+
+def _line_ends(svg: str) -> dict[int, np.ndarray]:
+    out = {}
+    for m in re.finditer(r'data-kind="epipolar-line" data-index="(\d+)" x1="([-\d.e]+)" y1="([-\d.e]+)" '
+                         r'x2="([-\d.e]+)" y2="([-\d.e]+)"', svg):
+        out[int(m.group(1))] = np.array([float(v) for v in m.groups()[1:]]).reshape(2, 2)
+    return out
+
+
+def test_the_viewer_draws_the_frames_geometry(client):
+    """The image plane and the 3D nodes show the run's ServoFrames (the viewer computes no geometry)."""
+    demo = make_servo_demo(client, "pinhole", steps=30, autoplay=False)
+    try:
+        assert demo.wait(30) and demo.error == ""
+        demo.seek(17)
+        g, frames = demo.frames.at(17), demo.frames
+        drawn = _line_ends(demo.svg)
+        assert sorted(drawn) == [i for i in range(len(g.lines)) if np.all(np.isfinite(g.lines[i]))]
+        for i, seg in drawn.items():
+            assert np.abs(seg - g.lines[i]).max() < 0.01
+        assert np.allclose(demo.nodes["body"].position, frames.body_poses[17][:3, 3])
+        joints = frames.links[17, :, :3, 3]  # the arm: link meshes, or the stick figure without rtb-data's meshes
+        shown = ([h.position for h in demo.nodes["links"]] if "links" in demo.nodes
+                 else demo.nodes["joints"].points)
+        assert np.allclose(np.asarray(shown, float), joints, atol=1e-6)
+        segs, _ = frames.ray_segments(17, demo.points)
+        assert np.allclose(demo.nodes["rays"].points, segs, atol=1e-6)
+    finally:
+        demo.close()
+
+
+@pytest.mark.parametrize("kind", ["pinhole", "panoramic"])
+def test_the_two_axes_of_the_controls_plot_share_their_zero(client, kind):
+    demo = make_servo_demo(client, kind, steps=40, autoplay=False)
+    try:
+        assert demo.wait(30) and demo.error == ""
+        scales = demo.plot_controls.scales
+        (lv, hv), (lw, hw) = scales["v"]["range"], scales["w"]["range"]
+        assert lv <= 0 <= hv and lw <= 0 <= hw and hv > lv and hw > lw
+        assert -lv / (hv - lv) == pytest.approx(-lw / (hw - lw), abs=1e-12)  # zero at the same height
+        u = demo.result.controls[demo.CONTROL_KEY]
+        for j, (_, _, axis) in enumerate(demo.CONTROL_SERIES):  # every sample inside its axis
+            lo, hi = scales[axis]["range"]
+            assert lo <= u[:, j].min() and u[:, j].max() <= hi
+    finally:
+        demo.close()

@@ -3,7 +3,9 @@
 - :func:`simulate_pinhole`: pin-hole camera on a Puma 560, Rives' hybrid task function.
 - :func:`simulate_panoramic`: panoramic camera on a holonomic robot, bi-conics then translation.
 
-Both return a :class:`ServoResult` (time series + summary, ``to_json_dict()``). Each
+Both return a :class:`ServoResult` (time series + summary, ``to_json_dict()``);
+:mod:`egtviz.servo.frames` derives what a viewer draws at every frame of it (epipolar lines, bi-conics,
+epipoles, the arm's forward kinematics, paths and trails). Each
 demo keeps its pure control-law functions, its state-update step and its
 ``simulate_*`` loop apart, so a viewer can replay or step them. No viewer imports here.
 """

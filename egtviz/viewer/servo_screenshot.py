@@ -1,7 +1,7 @@
-"""``python -m egtviz.viewer.servo_screenshot [pinhole|panoramic] [OUT.png] [--frac F]``: a demo mid-run.
+"""``python -m egtviz.viewer.servo_screenshot [pinhole|panoramic] [OUT.png] [--frac F] [--size WxH]``: a demo mid-run.
 
-Starts an in-process server with the demo, opens it in headless Chromium, waits
-for the run, shows the frame at ``F`` of the run (default 0.3) and saves the picture.
+Starts an in-process server with the demo, opens it in headless Chromium (a window of ``W x H`` CSS pixels,
+default 1366x768), waits for the run, shows the frame at ``F`` of the run (default 0.3) and saves the picture.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 SVG_SELECTOR = 'svg[data-egtviz="servo-image"]'
 
 
-def take(kind: str, out: str | Path, *, frac: float = 0.3, width: int = 1600, height: int = 900) -> Path:
+def take(kind: str, out: str | Path, *, frac: float = 0.3, width: int = 1366, height: int = 768) -> Path:
     import viser
 
     from .app import EgtvizApp
@@ -49,9 +49,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("kind", choices=["pinhole", "panoramic"])
     p.add_argument("out", nargs="?", default=None)
     p.add_argument("--frac", type=float, default=0.3, help="where in the run (0..1)")
+    p.add_argument("--size", default="1366x768", help="window size WxH in CSS pixels (default 1366x768)")
     a = p.parse_args(argv)
+    try:
+        width, height = (int(v) for v in a.size.lower().split("x"))
+    except ValueError:
+        p.error(f"--size: expected WxH, e.g. 1366x768, got {a.size!r}")
+    if not (0.0 <= a.frac <= 1.0 and 200 <= width <= 4000 and 200 <= height <= 4000):
+        p.error("--frac must be in [0, 1] and --size between 200x200 and 4000x4000")
     out = a.out or f"assets/screenshot-servo-{a.kind}.png"
-    print(take(a.kind, out, frac=a.frac))
+    print(take(a.kind, out, frac=a.frac, width=width, height=height))
     return 0
 
 

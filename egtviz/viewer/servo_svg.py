@@ -42,11 +42,7 @@ from .svg import (
     panel_layout,
 )
 
-__all__ = ["ServoImage", "servo_image_svg", "shared_zero_ranges", "trail_indices"]
-
-#: Most vertices per trail (older samples are thinned, the newest is always kept).
-TRAIL_VERTICES = 160
-
+__all__ = ["ServoImage", "servo_image_svg", "shared_zero_ranges"]
 
 @dataclass(frozen=True)
 class ServoImage:
@@ -70,13 +66,6 @@ class ServoImage:
     caption: str = ""
     message: str = ""
     message_colour: str = "#a00"
-
-
-def trail_indices(k: int, limit: int = TRAIL_VERTICES) -> np.ndarray:
-    """Sample indices ``0..k`` thinned to at most ``limit`` (always containing 0 and ``k``)."""
-    if k + 1 <= limit:
-        return np.arange(k + 1)
-    return np.unique(np.r_[np.linspace(0, k, limit).astype(int), k])
 
 
 def shared_zero_ranges(a: tuple[float, float], b: tuple[float, float], pad: float = 0.05

@@ -1,4 +1,5 @@
-"""Real-browser test of ``egtviz serve --demo pinhole`` (headless Debian Chromium, in-process server).
+"""Real-browser tests of ``egtviz serve --demo pinhole`` and ``--demo panoramic`` (headless Debian Chromium,
+in-process server, a 1366x768 window).
 
 Skips only when /usr/bin/chromium is missing and ``CI`` is unset.
 """
@@ -21,26 +22,30 @@ if not chromium_available():
 SVG = 'svg[data-egtviz="servo-image"]'
 
 
-def test_pinhole_demo_plays_in_the_browser():
+@pytest.mark.parametrize("kind, curve", [("pinhole", "epipolar-line"), ("panoramic", "epipolar-conic")])
+def test_demo_plays_in_the_browser(kind, curve):
     from egtviz.viewer.cli import start
 
-    server, app = start("127.0.0.1", 0, demo="pinhole")
+    server, app = start("127.0.0.1", 0, demo=kind)
     try:
         with chromium() as browser:
-            page = browser.new_page(viewport={"width": 1000, "height": 650})
+            page = browser.new_page(viewport={"width": 1366, "height": 768})
             page.goto(f"http://127.0.0.1:{server.get_port()}")
             page.wait_for_selector(SVG, timeout=60_000)
             demo = app.wait_for_demo()[0]
-            assert demo.wait(60)
+            assert demo.kind == kind and demo.wait(60)
             demo.pause()
             demo.seek(0)
             page.wait_for_function(f"() => document.querySelector('{SVG}')?.dataset.frame === '0'", timeout=30_000)
             n = len(demo.result.desired_features)
             counts = page.evaluate(f"""() => {{ const s = document.querySelector('{SVG}');
                 return {{point: s.querySelectorAll('[data-kind="point"]').length,
-                         line: s.querySelectorAll('[data-kind="epipolar-line"]').length,
+                         curve: new Set([...s.querySelectorAll('[data-kind="{curve}"]')].map(e => e.dataset.index)).size,
+                         epipole: s.querySelectorAll('[data-kind="epipole"]').length,
                          desired: s.querySelectorAll('[data-kind="desired"]').length}}; }}""")
-            assert counts["point"] == n and counts["desired"] == n and counts["line"] >= n - 1
+            # Every feature and its desired position; a line or bi-conic per feature; e (and e' through a mirror).
+            assert counts["point"] == n and counts["desired"] == n and counts["curve"] >= n - 1
+            assert counts["epipole"] == len(demo.frames.at(0).epipoles) >= 1
             # Press the real Play button: the image plane changes (new frame, trails appear).
             page.get_by_role("button", name="Play").first.click()
             page.wait_for_function(

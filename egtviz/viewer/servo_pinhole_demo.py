@@ -1,0 +1,162 @@
+"""The pin-hole servo demo in the browser: a camera on a Puma 560 under Rives' hybrid task (EGT reference, section 7).
+
+In 3D: the arm (rtb-data's link meshes, placed at the link frames of :class:`~egtviz.servo.frames.DHChain`; a stick
+figure if the meshes are missing), the camera frustum on the end effector (black), the target frustum (green), the
+numbered scene points, the viewing rays and the camera's path. The image plane shows the epipolar line of each
+desired feature in the current image and the epipole (:func:`egtviz.servo.frames.pinhole_frames`). Run fields
+beside the shared ones (:class:`~egtviz.viewer.servo_player.ServoPlayer`): beta and the F estimator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import lru_cache
+from typing import Any, ClassVar
+
+import numpy as np
+import viser
+
+from egtviz.geometry.poses import Pose, quat_wxyz_from_matrix
+from egtviz.servo import ServoResult, simulate_pinhole
+from egtviz.servo.frames import DHChain, ServoFrames, pinhole_frames
+from egtviz.servo.pinhole_arm import (
+    TARGET_Q,
+    camera_pose_from_q,
+    default_intrinsics,
+    default_scene,
+    puma,
+)
+
+from .fields import NumberRule
+from .servo_player import RUN_RULES, Choice, ServoPlayer
+
+__all__ = ["ESTIMATOR_CHOICES", "PinholeServoDemo", "puma_meshes"]
+
+#: The F estimator field's options and the simulation's ``f_algorithm`` of each.
+ESTIMATOR_CHOICES = {"true": None, "linear": 1, "normalized": 2, "sampson": 3}
+
+
+@lru_cache(maxsize=1)
+def puma_chain() -> DHChain:
+    """The Puma 560's Denavit-Hartenberg chain (forward kinematics of its link frames)."""
+    return DHChain.of_robot(puma()[0])
+
+
+@lru_cache(maxsize=1)
+def puma_meshes() -> list[tuple[np.ndarray, np.ndarray]] | None:
+    """``(vertices, faces)`` of the Puma 560's 7 link meshes (base, links 1-6) from rtb-data, or ``None``.
+
+    Offline: the STL files ship with the ``rtb-data`` package; nothing is downloaded.
+    Mesh ``j`` is drawn at link frame ``j`` of :meth:`DHChain.link_poses` (0 = base).
+    """
+    try:
+        import trimesh
+
+        robot, _ = puma()
+        paths = [robot.basemesh] + [link.mesh for link in robot.links]
+        if any(p is None for p in paths):
+            return None
+        out = []
+        for p in paths:
+            m = trimesh.load(str(p), force="mesh")
+            out.append((np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)))
+        return out
+    except Exception:  # noqa: BLE001 - no meshes: the stick figure is drawn instead
+        return None
+
+
+class PinholeServoDemo(ServoPlayer):
+    """The pin-hole demo in one tab.
+
+    Args:
+        client: the viser client (tab) to draw in.
+        beta: weight of the translation task (0: rotation only).
+        estimator: F from the ``"true"`` poses or estimated (``"linear"``, ``"normalized"``, ``"sampson"``).
+        **options: the shared ones of :class:`~egtviz.viewer.servo_player.ServoPlayer` (seed, noise_px, steps,
+            speed, autorun, autoplay, on_back, show_panel, field_delay).
+    """
+
+    kind: ClassVar[str] = "pinhole"
+    TITLE: ClassVar[str] = "Visual servoing: pin-hole camera on a Puma 560"
+    INTRO: ClassVar[str] = ("Rives' hybrid task: the *rotation* puts every feature on its epipolar line (priority "
+                            "task), then the *translation* (weight beta) brings it to its desired position.")
+    DEFAULT_STEPS: ClassVar[int] = 1000
+    RULES: ClassVar[dict[str, NumberRule]] = {**RUN_RULES, "beta": NumberRule("beta", "", 0.0, 100.0)}
+    CHOICES: ClassVar[dict[str, Choice]] = {**ServoPlayer.CHOICES,
+                                            "estimator": ("F estimator", tuple(ESTIMATOR_CHOICES))}
+    CONTROL_TITLE: ClassVar[str] = "Camera twist (camera frame): v solid, ω dashed"
+    CONTROL_KEY: ClassVar[str] = "camera_twist"
+    CONTROL_SERIES: ClassVar[tuple[tuple[str, str, str], ...]] = (
+        ("v_x", "#0072B2", "v"), ("v_y", "#D55E00", "v"), ("v_z", "#009E73", "v"),
+        ("ω_x", "#0072B2", "w"), ("ω_y", "#D55E00", "w"), ("ω_z", "#009E73", "w"))
+    DASHED_RATES: ClassVar[bool] = True
+
+    def __init__(self, client: viser.ClientHandle, *, beta: float = 1.0, estimator: str = "true",
+                 **options: Any) -> None:
+        super().__init__(client, beta=beta, estimator=estimator, **options)
+
+    def _setup_model(self) -> None:
+        self.intrinsics = default_intrinsics()
+        self.target_pose = camera_pose_from_q(TARGET_Q)
+        self.points = default_scene(self.target_pose)
+        self.width, self.height = self.intrinsics.width, self.intrinsics.height
+
+    def _build_scene(self) -> None:
+        api = self.client.scene
+        n = self.nodes
+        api.add_grid("/servo/grid", width=3.0, height=3.0, cell_size=0.1, section_size=0.5, position=(0.5, 0.0, 0.0))
+        meshes = puma_meshes()
+        if meshes is not None:
+            tone = [(95, 95, 105)] + [(170, 178, 190)] * 6
+            n["links"] = [api.add_mesh_simple(f"/servo/arm/link{j}", v, f, color=tone[j], flat_shading=False)
+                          for j, (v, f) in enumerate(meshes)]
+        else:
+            n["sticks"] = api.add_line_segments("/servo/arm/sticks", np.zeros((1, 2, 3), np.float32),
+                                                (150, 150, 160), thickness=0.035)
+            n["joints"] = api.add_point_cloud("/servo/arm/joints", np.zeros((1, 3), np.float32), (60, 60, 70),
+                                              point_size=0.06, point_shape="circle")
+        fov, aspect = self.intrinsics.fov_y, self.intrinsics.aspect
+        n["target"] = api.add_camera_frustum("/servo/target", fov=fov, aspect=aspect, scale=0.07, color=(0, 158, 115),
+                                             thickness=0.004, wxyz=self.target_pose.quat_wxyz,
+                                             position=self.target_pose.t)
+        api.add_label("/servo/target/label", "target", position=(0.0, -0.06, 0.0), font_screen_scale=0.9)
+        n["body"] = api.add_camera_frustum("/servo/camera", fov=fov, aspect=aspect, scale=0.07, color=(20, 20, 20),
+                                           thickness=0.005)
+        api.add_label("/servo/camera/label", "camera", position=(0.0, -0.06, 0.0), font_screen_scale=0.9)
+        self._add_common_nodes(point_size=0.022, label_lift=0.02, label_scale=0.7, path_width=0.004,
+                               ray_width=0.0025)
+        self._pose_arm(puma_chain().link_poses(TARGET_Q)[0])
+        centre = 0.5 * (self.points.mean(axis=0) + self.target_pose.t)
+        self._view(centre, centre + np.array([0.9, -1.6, 0.9]))
+
+    def _add_run_fields(self) -> None:
+        self._add_number_field("beta", "beta", "Weight of the translation (secondary) task, >= 0; 0 = rotation only.")
+        self._add_choice_field("estimator", "F estimator",
+                               "F from the true poses, or estimated from the noisy features at every step.")
+
+    def _simulation_kwargs(self, values: dict[str, Any]) -> dict[str, Any]:
+        return {"beta": float(values["beta"]), "f_algorithm": ESTIMATOR_CHOICES[values["estimator"]]}
+
+    def _simulate_run(self, kw: dict[str, Any], progress: Callable[[int, int], None]) -> ServoResult:
+        return simulate_pinhole(**kw, progress=progress)
+
+    def _derive_frames(self, result: ServoResult, stop: Callable[[], bool]) -> ServoFrames | None:
+        target = result.extras.get("target_pose")
+        target_pose = self.target_pose if target is None else Pose.from_matrix(target)
+        return pinhole_frames(result, self.intrinsics, target_pose, chain=puma_chain(), stop=stop)
+
+    def _draw_body(self, k: int) -> None:
+        super()._draw_body(k)
+        if self.frames is not None and self.frames.links is not None:
+            self._pose_arm(self.frames.links[k])
+
+    def _pose_arm(self, links: np.ndarray) -> None:
+        """Place the link meshes (or the stick figure) at the link frames (J + 1, 4, 4)."""
+        if "links" in self.nodes:
+            for h, T in zip(self.nodes["links"], links):
+                h.position = T[:3, 3]
+                h.wxyz = quat_wxyz_from_matrix(T[:3, :3])
+        else:
+            P = links[:, :3, 3].astype(np.float32)
+            self.nodes["sticks"].points = np.stack([P[:-1], P[1:]], axis=1)
+            self.nodes["joints"].points = P
