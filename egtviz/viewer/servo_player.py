@@ -379,7 +379,7 @@ class ServoPlayer(ABC):
     def _build_panel(self) -> None:
         gui = self.client.gui
         self.panel = gui.add_panel()
-        with self.panel.add_tab("Image plane and plots"):
+        with self.panel.add_tab("Image and plots"):
             self.image_html = gui.add_html("")
             self.plot_controls = self._uplot(self.CONTROL_TITLE, self.CONTROL_SERIES, dual=True)
             self._error_series = (("rotation", "#D55E00", "e"), ("translation", "#0072B2", "e"),
