@@ -1,4 +1,4 @@
-"""The camera-model interface, its registry, the adapters of the pin-hole and catadioptric cameras, and the
+"""The camera-model interface, its registry (the pin-hole, catadioptric and unified cameras themselves), and the
 epipolar curves of any pair of models."""
 
 import itertools
@@ -9,15 +9,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from egtviz.geometry import DegenerateConfigurationError, GeometryError, PinholeCamera, Pose
+from egtviz.geometry import (
+    DegenerateConfigurationError,
+    GeometryError,
+    PinholeCamera,
+    Pose,
+)
 from egtviz.geometry.camera_model import (
     CAMERA_MODELS,
     CameraModel,
     CameraModelInfo,
     ParameterSpec,
-    PinholeModel,
     Projection,
-    as_camera_model,
+    camera_model_info,
     parameters_from_specs,
 )
 from egtviz.geometry.catadioptric import CatadioptricCamera
@@ -79,23 +83,30 @@ def test_registry_lists_every_model_once_with_its_class_and_parameters():
 def test_registry_entry_with_the_wrong_class_is_refused():
     info = CameraModelInfo("pinhole", "x", "egtviz.geometry.unified:UnifiedCamera")
     with pytest.raises(GeometryError, match="its kind 'unified' is not 'pinhole'"):
-        info.cls  # noqa: B018
+        info.cls
 
 
-def test_existing_cameras_are_not_models_but_their_adapters_are():
-    # The interface is structural: PinholeCamera lacks e.g. ``centre`` and ``baseline_images`` (see the docs).
-    assert not isinstance(PinholeCamera(), CameraModel)
-    assert not isinstance(CatadioptricCamera(), CameraModel)
-    assert isinstance(PinholeModel(PinholeCamera()), CameraModel)
-    with pytest.raises(GeometryError, match="camera: expected a PinholeCamera"):
-        PinholeModel(CatadioptricCamera())
-    assert as_camera_model(PinholeCamera()).kind == "pinhole"
-    assert as_camera_model(CatadioptricCamera(mirror=HyperbolicMirror())).kind == "hyperbolic"
-    assert as_camera_model(CatadioptricCamera(mirror=ParabolicMirror())).kind == "parabolic"
-    unified = UnifiedCamera()
-    assert as_camera_model(unified) is unified
-    with pytest.raises(GeometryError, match="cam1: expected a camera model or a pin-hole or catadioptric camera"):
-        as_camera_model(np.eye(3), "cam1")
+def test_the_cameras_themselves_are_the_models_and_report_their_kind():
+    assert isinstance(PinholeCamera(), CameraModel)
+    assert isinstance(CatadioptricCamera(), CameraModel)
+    assert PinholeCamera().kind == "pinhole"
+    assert CatadioptricCamera(mirror=HyperbolicMirror()).kind == "hyperbolic"
+    assert CatadioptricCamera(mirror=ParabolicMirror()).kind == "parabolic"
+    assert camera_model_info(CatadioptricCamera(mirror=ParabolicMirror())) is CAMERA_MODELS["parabolic"]
+    assert camera_model_info(UnifiedCamera()) is CAMERA_MODELS["unified"]
+    # A catadioptric camera's parameters are its kind's: a, b (hyperbolic) or h (parabolic), then the CCD's.
+    assert [p.name for p in CatadioptricCamera(mirror=ParabolicMirror()).PARAMETERS][:2] == ["h", "focal_pixels"]
+    with pytest.raises(GeometryError, match="camera: expected a registered camera model"):
+        camera_model_info(np.eye(3))
+
+
+def test_cross_parameter_ranges_are_refused_by_the_models():
+    with pytest.raises(GeometryError, match=r"b/a: expected 0.01..100, got 0.001"):
+        CAMERA_MODELS["hyperbolic"].build(Pose(), a=10.0, b=0.01)
+    with pytest.raises(GeometryError, match=r"focal_length \* ku: expected 1..1e\+06 px, got 0.5"):
+        CAMERA_MODELS["pinhole"].build(Pose(), focal_length=0.001, ku=500.0)
+    with pytest.raises(GeometryError, match=r"skew / \(focal_length \* ku\): expected -1..1, got 2"):
+        CAMERA_MODELS["pinhole"].build(Pose(), skew=1600.0)
 
 
 @pytest.mark.parametrize(
@@ -211,13 +222,13 @@ def test_pinhole_pair_lines_are_those_of_the_fundamental_matrix(seed):
     cam1, cam2 = random_model(rng, "pinhole"), random_model(rng, "pinhole")
     X = points_seen_by(rng, cam1, 15)
     pair = epipolar_curves(cam1, cam2, X)
-    F = epipolar_pair(cam1.camera, cam2.camera).F
+    F = epipolar_pair(cam1, cam2).F
     l_F = np.column_stack([cam1.project(X).pixels, np.ones(len(X))]) @ F.T  # l2 = F m1
     cross = np.cross(l_F / np.linalg.norm(l_F, axis=1, keepdims=True),
                      pair.second.lines / np.linalg.norm(pair.second.lines, axis=1, keepdims=True))
     assert np.abs(cross).max() < 1e-9
     # The single epipole of each image spans F's null spaces (F e1 = 0, F^T e2 = 0), with the pair's flags.
-    ep = epipolar_pair(cam1.camera, cam2.camera)
+    ep = epipolar_pair(cam1, cam2)
     e1, e2 = pair.first.epipoles[0], pair.second.epipoles[0]
     assert np.linalg.norm(F @ e1) < 1e-9 * np.linalg.norm(e1)
     assert np.linalg.norm(F.T @ e2) < 1e-9 * np.linalg.norm(e2)
@@ -230,7 +241,7 @@ def test_catadioptric_pair_conics_are_those_of_the_panoramic_route():
     cam1, cam2 = random_model(rng, "hyperbolic"), random_model(rng, "parabolic")
     X = rng.normal(size=(12, 3)) * 3.0
     pair = epipolar_curves(cam1, cam2, X)
-    for mine, theirs in zip((pair.first.conics, pair.second.conics), epipolar_conics(cam1.camera, cam2.camera, X),
+    for mine, theirs in zip((pair.first.conics, pair.second.conics), epipolar_conics(cam1, cam2, X),
                              strict=True):
         sign = np.sign(np.einsum("nij,nij->n", mine, theirs))
         np.testing.assert_allclose(mine, sign[:, None, None] * theirs, atol=1e-9)
@@ -238,7 +249,7 @@ def test_catadioptric_pair_conics_are_those_of_the_panoramic_route():
 
 def test_points_on_the_baseline_have_no_curve_and_coincident_centres_raise():
     cam1 = UnifiedCamera(Pose(t=[0.0, 0.0, 0.0]), 0.5)
-    cam2 = PinholeModel(PinholeCamera(Pose(t=[2.0, 0.0, 0.0])))
+    cam2 = PinholeCamera(Pose(t=[2.0, 0.0, 0.0]))
     X = np.array([[1.0, 0.0, 0.0], [5.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
     pair = epipolar_curves(cam1, cam2, X)
     assert np.isnan(pair.normals[:2]).all() and np.isfinite(pair.normals[2]).all()
@@ -252,4 +263,4 @@ def test_points_on_the_baseline_have_no_curve_and_coincident_centres_raise():
     with pytest.raises(DegenerateConfigurationError, match="centres coincide"):
         epipolar_curves(cam1, cam1.moved(Pose(np.diag([1.0, -1.0, -1.0]))), X)
     with pytest.raises(GeometryError, match="cam2: expected a camera model"):
-        epipolar_curves(cam1, PinholeCamera(), X)
+        epipolar_curves(cam1, np.eye(3), X)

@@ -45,7 +45,8 @@ def test_default_scene_sees_all_points_in_both_cameras():
 def test_panoramic_scene_draws_conics_through_the_points():
     d = compute_derived(panoramic_scene())
     for name, ip in d.image_planes.items():
-        assert ip.kind == "panoramic" and ip.visible.all()
+        assert d.cameras[name].kind == "hyperbolic" and ip.visible.all()
+        assert ip.rim is not None and ip.no_image == "in the blind cone"
         assert ip.conics is not None and len(ip.conics) == 8
         assert len(ip.epipoles) == 2
         for i, arcs in enumerate(ip.conics):

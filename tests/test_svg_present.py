@@ -36,7 +36,7 @@ PANEL_1920, PANEL_1366 = 620.0, 330.0
 
 def plane(**kw) -> ImagePlane:
     pts = np.array([[100.0, 100.0], [320.0, 240.0], [700.0, 100.0], [np.nan, np.nan]])
-    base = dict(camera="cam", kind="pinhole", width=640, height=480, points=pts,
+    base = dict(camera="cam", width=640, height=480, points=pts,
                 visible=np.array([True, True, True, False]), in_image=np.array([True, True, False, False]),
                 n_hidden=1)
     base.update(kw)

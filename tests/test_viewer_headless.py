@@ -334,10 +334,11 @@ def test_panoramic_and_mixed_pairs(tabs):
     for name in panos:
         assert kinds(view.svgs[name], "epipolar-conic")
         assert len(kinds(view.svgs[name], "epipole")) >= 1
-    assert "Panoramic pair" in view.readout
-    # a mixed pin-hole / panoramic pair must draw without errors
+    assert 'data-relation="essential"' in view.readout and "No F between pixels" in view.readout
+    # a mixed pin-hole / panoramic pair must draw without errors, and says which relation holds
     view.pair_dropdown.value = f"cam1 & {panos[0]}"
     assert view.model.scene.drawn_pair == ("cam1", panos[0])
+    assert "d2&#7488; E d1 = 0" in view.readout and "rank" not in view.readout
     assert not kinds(view.svgs["cam1"], "message") or "cannot draw" not in kinds(view.svgs["cam1"], "message")[0].text
 
 

@@ -10,7 +10,8 @@ import viser
 from egtviz.scene import SceneModel, compute_derived, default_scene, panoramic_scene
 from egtviz.viewer.headless import start_headless
 from egtviz.viewer.palette import point_rgb
-from egtviz.viewer.scene3d import MAX_RAY_POINTS, Scene3D, _put_array
+from egtviz.viewer.models.pinhole import IMAGE_PLANE_DEPTH
+from egtviz.viewer.scene3d import MAX_RAY_POINTS, Scene3D
 
 
 @pytest.fixture
@@ -137,41 +138,6 @@ def test_the_dragged_gizmo_is_not_re_posed_and_points_follow_the_model(server):
     assert not gizmo.disable_axes and tuple(s3._cams["cam1"]["frustum"].color) != (230, 159, 0)
 
 
-def test_array_assignment_matches_viser_own(server):
-    api = server.scene
-    rng = np.random.default_rng(0)
-    for kind in ("segments", "cloud"):
-        if kind == "segments":
-            make = lambda name: api.add_line_segments(name, np.zeros((1, 2, 3), np.float32), (0, 0, 0))  # noqa: E731
-            pts = rng.normal(size=(7, 2, 3)).astype(np.float32)
-        else:
-            make = lambda name: api.add_point_cloud(name, np.zeros((1, 3), np.float32), (0, 0, 0), point_size=0.1)  # noqa: E731
-            pts = rng.normal(size=(7, 3)).astype(np.float32)
-        ours, theirs = make(f"/ours_{kind}"), make(f"/theirs_{kind}")
-        queued: dict = {"ours": [], "theirs": []}
-        for key, h in (("ours", ours), ("theirs", theirs)):
-            original = h._queue_update
-            h._queue_update = lambda name, value, key=key, original=original: (
-                queued[key].append((name, value)), original(name, value))
-        cols = rng.integers(0, 255, size=pts.shape, dtype=np.uint8)
-        for value in (pts, pts, pts * 2):  # the second is unchanged: nothing queued
-            for prop, v in (("points", value), ("colors", cols)):
-                theirs.__setattr__(prop, v)
-                _put_array(ours, prop, v)
-        assert [n for n, _ in queued["ours"]] == [n for n, _ in queued["theirs"]]
-        for (_, a), (_, b) in zip(queued["ours"], queued["theirs"]):
-            assert a.dtype == b.dtype and np.array_equal(a, b)
-        for prop in ("points", "colors"):
-            a, b = getattr(ours._impl.props, prop), getattr(theirs._impl.props, prop)
-            assert a.dtype == b.dtype and np.array_equal(a, b)
-            assert not any(a is v for _, v in queued["ours"])  # the node's array is not the queued one
-        pts[:] = 0  # the caller's array is not kept either
-        assert not np.array_equal(ours._impl.props.points, pts.reshape(ours._impl.props.points.shape))
-    ours.remove()
-    with pytest.raises(RuntimeError, match="removed"):
-        _put_array(ours, "points", np.ones((2, 3), np.float32))
-
-
 def test_image_plane_lines_in_3d_follow_the_ray_rule():
     model = SceneModel(default_scene())
     model.randomize_points(40, seed=4, center=tuple(model.scene.points_array().mean(axis=0)), extent=2.0)
@@ -183,7 +149,8 @@ def test_image_plane_lines_in_3d_follow_the_ray_rule():
         view.model.select_point(9)
         derived = compute_derived(view.model.scene)
         for name, nodes in cams.items():
-            L = derived.image_in_3d[name]["lines"][9]
+            seg = derived.image_planes[name].lines[9]  # the epipolar line's ends on the image plane (pixels)
+            L = derived.cameras[name].image_to_world(seg, IMAGE_PLANE_DEPTH)
             want = np.array([(a, b) for a, b in zip(L[:-1], L[1:]) if np.isfinite(a).all() and np.isfinite(b).all()],
                             np.float32).reshape(-1, 2, 3)
             assert len(want) and nodes["img_lines"].visible
@@ -192,9 +159,48 @@ def test_image_plane_lines_in_3d_follow_the_ray_rule():
         view.model.set_points(view.model.scene.points_array()[:MAX_RAY_POINTS])
         derived = compute_derived(view.model.scene)
         for name, nodes in cams.items():
-            n_lines = int(np.isfinite(derived.image_in_3d[name]["lines"]).all(axis=2).all(axis=1).sum())
+            n_lines = int(np.isfinite(derived.image_planes[name].lines).all(axis=2).all(axis=1).sum())
             assert len(nodes["img_lines"].points) >= n_lines > 1
     finally:
         for f in fakes:
             f.close()
         server.stop()
+
+
+def test_the_mirror_is_a_reflective_mesh_above_its_ccd_sent_once_per_shape(server, monkeypatch):
+    import io
+
+    import trimesh
+
+    from egtviz.viewer.models.catadioptric import MIRROR_METALLIC, MIRROR_ROUGHNESS
+
+    model = SceneModel(panoramic_scene())
+    s3 = scene3d_on(server)
+    s3.draw(model.scene, model.derived)
+    name = model.scene.cameras[0].name
+    drawing = s3._cams[name]["drawing"]
+    mirror_node = drawing.mirror
+    cam = model.derived.cameras[name]
+    # A glTF mesh under the camera's gizmo (the mirror frame), with a metallic, smooth material.
+    assert mirror_node.name == f"{s3._cams[name]['gizmo'].name}/mirror"
+    mesh = trimesh.load(io.BytesIO(mirror_node.glb_data), file_type="glb", force="mesh")
+    V = np.asarray(mesh.vertices)
+    material = mesh.visual.material
+    assert material.metallicFactor == pytest.approx(MIRROR_METALLIC)
+    assert material.roughnessFactor == pytest.approx(MIRROR_ROUGHNESS)
+    # The mesh is the mirror's surface in its own frame (glTF stores y up: rotate back), about the focus.
+    v_ref, _ = cam.mirror.surface(16, 48)
+    assert len(V) == len(v_ref)
+    assert np.abs(np.sort(np.linalg.norm(V, axis=1)) - np.sort(np.linalg.norm(v_ref, axis=1))).max() < 1e-5
+    # The CCD sits on the axis below the focus, ccd_offset away: the mirror is above its CCD.
+    np.testing.assert_allclose(drawing.ccd.position, (0.0, 0.0, -cam.mirror.ccd_offset), atol=1e-9)
+    assert cam.mirror.ccd_offset > 0
+    # A drag moves the gizmo only: the mesh is not sent again; a new mirror shape is.
+    sent = count_messages(server.scene, monkeypatch)
+    spec = model.scene.camera(name)
+    model.set_camera_pose(name, np.add(spec.position, (0.3, 0.0, 0.0)), spec.pose.R, drag_id=1)
+    s3.draw(model.scene, model.derived)
+    assert drawing.mirror is mirror_node and not any("Glb" in type(m).__name__ for m in sent)
+    model.update_camera(name, b=0.2)
+    s3.draw(model.scene, model.derived)
+    assert drawing.mirror is not mirror_node and any("Glb" in type(m).__name__ for m in sent)

@@ -23,7 +23,6 @@ def plane(**kw) -> ImagePlane:
     pts = np.array([[100.0, 100.0], [320.0, 240.0], [700.0, 100.0], [np.nan, np.nan]])
     base = dict(
         camera="cam A",
-        kind="pinhole",
         width=640,
         height=480,
         points=pts,
@@ -143,7 +142,7 @@ def test_conics_and_rim_for_a_panoramic_plane():
     rim = np.column_stack([320 + 200 * np.cos(2 * t), 240 + 200 * np.sin(2 * t)])
     eps = (Epipole("e1", np.array([320.0, 100.0]), None, False, True),
            Epipole("e1'", np.array([320.0, 400.0]), None, False, True))
-    p = plane(kind="panoramic", conics=((arc,), (broken,), (), (arc,)), rim=rim, epipoles=eps)
+    p = plane(no_image="in the blind cone", conics=((arc,), (broken,), (), (arc,)), rim=rim, epipoles=eps)
     svg = image_plane_svg(p)
     conics = kinds(svg, "epipolar-conic")
     assert sorted({c.get("data-index") for c in conics}) == ["0", "1", "3"]
@@ -187,7 +186,7 @@ def test_many_conics_are_thinned_but_keep_their_ends():
     arc = np.column_stack([320 + 100 * np.cos(t), 240 + 100 * np.sin(t)])
     n = 200
     pts = np.full((n, 2), np.nan)
-    p = plane(kind="panoramic", points=pts, visible=np.zeros(n, bool), in_image=np.zeros(n, bool), n_hidden=n,
+    p = plane(no_image="in the blind cone", points=pts, visible=np.zeros(n, bool), in_image=np.zeros(n, bool), n_hidden=n,
               conics=tuple((arc,) for _ in range(n)))
     conics = kinds(image_plane_svg(p), "epipolar-conic")
     assert len(conics) == n

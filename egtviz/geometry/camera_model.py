@@ -11,8 +11,12 @@ sphere models). Everything the rest of egtviz needs from a camera goes through :
   (one point for the pin-hole, the two rays :math:`\pm d` for sphere models), with visibility flags; for
   the line towards another camera's centre these are the epipoles;
 - ``plane_image_conics(normals)`` / ``plane_image_lines(normals)``: the exact image of each plane
-  :math:`n \cdot (X - c) = 0` through the centre, a symmetric conic :math:`m^T C m = 0` (None when the model has
-  no conic) and a line :math:`l \cdot m = 0` (None when the model does not image planes to lines);
+  :math:`n \cdot (X - c) = 0` through the centre, a symmetric conic :math:`m^T C m = 0` (the double line
+  :math:`l l^T` for the pin-hole) and a line :math:`l \cdot m = 0` (None when the model does not image planes to
+  lines);
+- ``light_paths(X_world)``: the light's way from each point to the sensor, as world polylines (3D drawing);
+- ``projective_calibration``: :math:`K` when the model images linearly (a pin-hole), else None;
+- ``no_image``: where the points without an image are, in a few words;
 - ``plane_image_arcs(normals, n_samples)``: the same images sampled as polylines, only the arcs the camera
   really shows, inside its drawn image region;
 - ``rim(n)``: the boundary of that region as a closed polyline;
@@ -22,47 +26,49 @@ sphere models). Everything the rest of egtviz needs from a camera goes through :
 :data:`CAMERA_MODELS` maps each kind name to a :class:`CameraModelInfo` (its class, label and parameter
 ranges), one registration line per model. How to add a model: ``docs/camera_models.md``.
 
-This module also adapts the pin-hole and catadioptric cameras to the interface (:class:`PinholeModel`,
-:class:`CatadioptricModel`) through their public API only.
+The models are :class:`~egtviz.geometry.pinhole.PinholeCamera`, :class:`~egtviz.geometry.catadioptric.CatadioptricCamera`
+(two kinds, ``hyperbolic`` and ``parabolic``, one per mirror shape) and :class:`~egtviz.geometry.unified.UnifiedCamera`.
 """
 
 from __future__ import annotations
 
 import importlib
 import math
-from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import GeometryError, as_vector
-from .catadioptric import UNIFIED_FLIP, CatadioptricCamera
-from .epipolar import lines_of_planes
-from .homogeneous import clip_lines_to_rect, normalize_homogeneous
-from .mirrors import HyperbolicMirror, ParabolicMirror
-from .panoramic_epipolar import conic_from_plane, sample_plane_conics
-from .pinhole import Intrinsics, PinholeCamera
+from ._validate import (
+    GeometryError,
+    _to_float64,
+    as_count,
+    as_scalar,
+    as_vector,
+    short_repr,
+)
 from .poses import Pose
 
 __all__ = [
     "CAMERA_MODELS",
+    "IMAGE_SIZE_PARAMETERS",
+    "PRINCIPAL_POINT_PARAMETERS",
     "CameraModel",
     "CameraModelInfo",
     "CameraProjection",
-    "CatadioptricModel",
     "DirectionImages",
-    "HyperbolicModel",
-    "ParabolicModel",
     "ParameterSpec",
-    "PinholeModel",
     "Projection",
-    "double_line_conics",
-    "as_camera_model",
     "as_direction",
     "as_normals",
+    "camera_model_info",
+    "check_pose",
     "check_sample_count",
+    "double_line_conics",
     "finite_nonzero_rows",
+    "normals_with_planes",
     "parameters_from_specs",
     "rectangle_rim",
 ]
@@ -103,14 +109,12 @@ class ParameterSpec:
         """``value`` as a float (an int for integer parameters) inside ``[min, max]``, or a GeometryError naming it."""
         unit = f" {self.unit}" if self.unit else ""
         expected = f"{'a whole number' if self.integer else 'a number'} in [{self.min:g}, {self.max:g}]{unit}"
-        if isinstance(value, bool):
-            raise GeometryError(f"{self.name}: expected {expected}, got {value!r}")
         try:
-            x = float(value)
-        except (TypeError, ValueError) as exc:
-            raise GeometryError(f"{self.name}: expected {expected}, got {value!r}") from exc
-        if not (math.isfinite(x) and self.min <= x <= self.max) or (self.integer and x != int(x)):
-            raise GeometryError(f"{self.name}: expected {expected}, got {value!r}")
+            x = as_scalar(value, self.name, max_abs=None)  # refuses booleans, strings, None, NaN, inf
+        except GeometryError as exc:
+            raise GeometryError(f"{self.name}: expected {expected}, got {short_repr(value)}") from exc
+        if not (self.min <= x <= self.max) or (self.integer and x != int(x)):
+            raise GeometryError(f"{self.name}: expected {expected}, got {short_repr(value)}")
         return int(x) if self.integer else x
 
 
@@ -162,12 +166,18 @@ class Projection(Protocol):
 
 @runtime_checkable
 class CameraModel(Protocol):
-    """A central camera model (see the module docstring). Instances are immutable: moving returns a new one."""
+    """A central camera model (see the module docstring). Instances are immutable: moving returns a new one.
 
-    kind: ClassVar[str]
+    ``kind`` and ``PARAMETERS`` are class attributes for a model class with one kind (pin-hole, unified) and
+    properties of the instance for one with several (the catadioptric camera: its mirror decides).
+    """
+
+    kind: str
     """The registry key of the model."""
-    PARAMETERS: ClassVar[tuple[ParameterSpec, ...]]
+    PARAMETERS: tuple[ParameterSpec, ...]
     """The model's scalar parameters and their accepted ranges."""
+    no_image: str
+    """Where the points lie that have no image, in a few words (``"behind the camera"``)."""
     pose: Pose
     width: int
     height: int
@@ -177,9 +187,14 @@ class CameraModel(Protocol):
         """(3,) the single viewpoint in world coordinates."""
         ...
 
-    @classmethod
-    def from_parameters(cls, pose: Pose, **values: float) -> CameraModel:
-        """The model at ``pose`` with the given parameters (defaults for the others)."""
+    @property
+    def projective_calibration(self) -> np.ndarray | None:
+        r"""(3, 3) :math:`K` when every visible point images at :math:`m \sim K R^T (X - c)` (a pin-hole camera: then
+        pixels of two such cameras obey :math:`m_2^T F m_1 = 0`), else None."""
+        ...
+
+    def from_parameters(self, pose: Pose, **values: float) -> CameraModel:
+        """A model of this kind at ``pose`` with the given parameters (defaults for the others)."""
         ...
 
     def parameters(self) -> dict[str, float | int]:
@@ -187,7 +202,7 @@ class CameraModel(Protocol):
         ...
 
     def moved(self, pose: Pose) -> CameraModel:
-        """The same camera at another pose."""
+        """The same camera at another pose: the fast path for a drag (only the pose is new and checked)."""
         ...
 
     def project(self, X_world: npt.ArrayLike) -> Projection:
@@ -198,13 +213,18 @@ class CameraModel(Protocol):
         """Unit world rays (N, 3) of pixels (N, 2); NaN rows for pixels that are no ray's image."""
         ...
 
+    def light_paths(self, X_world: npt.ArrayLike) -> np.ndarray:
+        """(N, k, 3) world polylines of the light from each point to the sensor (point, ..., sensor end); NaN
+        rows for points that have no image."""
+        ...
+
     def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
         """Images of the line through the centre along ``direction_world`` (3,)."""
         ...
 
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray | None:
+    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
         """Exact image conics (N, 3, 3) of planes through the centre, unit Frobenius norm; NaN rows for zero or
-        NaN normals; None if the model's plane images are not conics."""
+        NaN normals."""
         ...
 
     def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray | None:
@@ -212,8 +232,9 @@ class CameraModel(Protocol):
         lines."""
         ...
 
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[list[np.ndarray]]:
-        """Per normal, the visible arcs (k, 2) of the plane's image inside the drawn region (empty: none)."""
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[Sequence[np.ndarray]]:
+        """Per normal, a sequence (list or tuple) of the visible arcs (k, 2) of the plane's image inside the drawn
+        region (empty: none)."""
         ...
 
     def rim(self, n: int = 128) -> np.ndarray:
@@ -238,11 +259,17 @@ def rectangle_rim(width: int, height: int) -> np.ndarray:
     return np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h], [0.0, 0.0]])
 
 
+MAX_SAMPLES = 100_000
+"""Most samples of one curve or rim."""
+
+
 def check_sample_count(n: int, name: str, minimum: int) -> int:
-    """``n`` as an int of at least ``minimum``, or a GeometryError naming ``name``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < minimum:
-        raise GeometryError(f"{name}: expected an integer >= {minimum}, got {n!r}")
-    return int(n)
+    """``n`` as an int in ``minimum..MAX_SAMPLES``, or a GeometryError naming ``name``."""
+    try:
+        return as_count(n, name, minimum=minimum, maximum=MAX_SAMPLES)
+    except GeometryError as exc:
+        raise GeometryError(f"{name}: expected an integer >= {minimum} and <= {MAX_SAMPLES}, got "
+                            f"{short_repr(n)}") from exc
 
 
 def finite_nonzero_rows(normals: np.ndarray) -> np.ndarray:
@@ -250,7 +277,8 @@ def finite_nonzero_rows(normals: np.ndarray) -> np.ndarray:
     return np.flatnonzero(np.all(np.isfinite(normals), axis=1) & np.any(normals != 0.0, axis=1))
 
 
-def _check_pose(pose: Any) -> Pose:
+def check_pose(pose: Any) -> Pose:
+    """``pose`` if it is a :class:`Pose`, else a GeometryError naming ``pose``."""
     if not isinstance(pose, Pose):
         raise GeometryError(f"pose: expected a Pose, got {type(pose).__name__}")
     return pose
@@ -265,324 +293,86 @@ def as_direction(direction_world: npt.ArrayLike) -> np.ndarray:
 
 
 def as_normals(normals_world: npt.ArrayLike) -> np.ndarray:
-    """Plane normals as (N, 3) float64 rows (a (3,) normal is N = 1); NaN rows are allowed (points on a baseline
-    have no epipolar plane) and give NaN conics and lines and no arcs; inf is an error."""
-    try:
-        n = np.asarray(normals_world, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise GeometryError(f"normals_world: expected a numeric array, got {type(normals_world).__name__}") from exc
+    """Plane normals, defined up to scale, as (N, 3) float64 rows (a (3,) normal is N = 1), each finite row divided
+    by its largest absolute entry (so any finite magnitude works).
+
+    A row with a NaN entry is allowed and stays all NaN: a point on a baseline has no epipolar plane, and its
+    conic, line and arcs are then NaN or empty. A zero row likewise has no plane. Everything else that is not
+    real numbers (booleans, strings, None, inf, a wrong shape) is a GeometryError naming ``normals_world``.
+    """
+    return normals_with_planes(normals_world)[0]
+
+
+def normals_with_planes(normals_world: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`as_normals`, and the indices of the rows that define a plane (finite and non-zero)."""
+    n = _to_float64(normals_world, "normals_world")
     if n.ndim == 1 and n.shape[0] == 3:
         n = n[None, :]
     if n.ndim != 2 or n.shape[1] != 3:
-        raise GeometryError(f"normals_world: expected shape (N, 3), got {n.shape}")
-    if np.isinf(n).any():
+        raise GeometryError(f"normals_world: expected shape (N, 3) or (3,), got {n.shape}")
+    with np.errstate(invalid="ignore"):
+        top = np.abs(n).max(axis=1) if n.size else np.ones(0)
+    if np.isinf(top).any():
         raise GeometryError("normals_world: contains inf")
-    return n
+    good = top > 0  # False for NaN rows and zero rows
+    if good.all():
+        return n / top[:, None], np.arange(len(n))
+    nan_rows = np.isnan(top)
+    top[~good] = 1.0
+    out = n / top[:, None]
+    out[nan_rows] = np.nan
+    return out, np.flatnonzero(good)
 
 
 
-_IMAGE_SIZE = (
-    ParameterSpec("width", "width", "px", 1, 100_000, 640, integer=True),
-    ParameterSpec("height", "height", "px", 1, 100_000, 480, integer=True),
+IMAGE_SIZE_PARAMETERS = (
+    ParameterSpec("width", "width", "px", 1, 8192, 640, integer=True),
+    ParameterSpec("height", "height", "px", 1, 8192, 480, integer=True),
 )
-_PRINCIPAL_POINT = (
+"""Image width and height, whole pixels, shared by every model."""
+PRINCIPAL_POINT_PARAMETERS = (
     ParameterSpec("u0", "principal point u0", "px", -100_000.0, 100_000.0, 320.0),
     ParameterSpec("v0", "principal point v0", "px", -100_000.0, 100_000.0, 240.0),
 )
-
-
-# ------------------------------------------------------------------------------------------------ pin-hole
-@dataclass(frozen=True, eq=False)
-class PinholeModel:
-    r"""A :class:`~egtviz.geometry.pinhole.PinholeCamera` seen through :class:`CameraModel`.
-
-    A plane through the centre with world normal :math:`n` images to the line :math:`l = K^{-T} R^T n`
-    (its conic is the double line :math:`l l^T`); its arc is the line clipped to the image rectangle,
-    which is the drawn region. The baseline direction :math:`d` has one image :math:`K R^T d`, visible
-    when the other centre is in front (:math:`(R^T d)_z > 0`).
-    """
-
-    camera: PinholeCamera = field(default_factory=PinholeCamera)
-
-    kind: ClassVar[str] = "pinhole"
-    PARAMETERS: ClassVar[tuple[ParameterSpec, ...]] = (
-        ParameterSpec("focal_length", "focal length", "m", 1e-5, 100.0, 0.008),
-        ParameterSpec("ku", "pixels per metre along u", "px/m", 1.0, 1e9, 100_000.0),
-        ParameterSpec("kv", "pixels per metre along v", "px/m", 1.0, 1e9, 100_000.0),
-        *_PRINCIPAL_POINT,
-        ParameterSpec("skew", "skew", "px", -100_000.0, 100_000.0, 0.0),
-        *_IMAGE_SIZE,
-    )
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.camera, PinholeCamera):
-            raise GeometryError(f"camera: expected a PinholeCamera, got {type(self.camera).__name__}")
-
-    @classmethod
-    def from_parameters(cls, pose: Pose, **values: float) -> PinholeModel:
-        p = parameters_from_specs(cls.PARAMETERS, values)
-        intr = Intrinsics(p["focal_length"], (p["ku"], p["kv"]), (p["u0"], p["v0"]), p["skew"], p["width"],
-                          p["height"])
-        return cls(PinholeCamera(_check_pose(pose), intr))
-
-    def parameters(self) -> dict[str, float | int]:
-        i = self.camera.intrinsics
-        (ku, kv), (u0, v0) = i.pixels_per_metre, i.principal_point
-        return {"focal_length": i.focal_length, "ku": ku, "kv": kv, "u0": u0, "v0": v0, "skew": i.skew,
-                "width": i.width, "height": i.height}
-
-    @property
-    def pose(self) -> Pose:
-        return self.camera.pose
-
-    @property
-    def width(self) -> int:
-        return self.camera.intrinsics.width
-
-    @property
-    def height(self) -> int:
-        return self.camera.intrinsics.height
-
-    @property
-    def centre(self) -> np.ndarray:
-        return self.camera.pose.t
-
-    def moved(self, pose: Pose) -> PinholeModel:
-        return PinholeModel(self.camera.moved(_check_pose(pose)))
-
-    def project(self, X_world: npt.ArrayLike) -> CameraProjection:
-        p = self.camera.project(X_world)
-        return CameraProjection(p.pixels, p.in_front, p.in_image)
-
-    def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
-        return self.camera.back_project(pixels)
-
-    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
-        d = as_direction(direction_world)
-        m = self.camera.K @ (self.camera.pose.R.T @ d)
-        return DirectionImages(normalize_homogeneous(m)[None, :], np.array([m[2] > 0]))
-
-    def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray:
-        n = as_normals(normals_world)
-        lines = np.full((len(n), 3), np.nan)
-        good = finite_nonzero_rows(n)
-        if len(good):
-            lines[good] = lines_of_planes(self.camera, n[good])
-        return lines
-
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
-        return double_line_conics(self.plane_image_lines(normals_world))
-
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[list[np.ndarray]]:
-        check_sample_count(n_samples, "n_samples", 2)
-        lines = self.plane_image_lines(normals_world)
-        out: list[list[np.ndarray]] = [[] for _ in range(len(lines))]
-        good = finite_nonzero_rows(lines)
-        if len(good):
-            seg, hit = clip_lines_to_rect(lines[good], self.width, self.height)
-            for k, s, h in zip(good.tolist(), seg, hit.tolist(), strict=True):
-                if h:
-                    out[k] = [s]
-        return out
-
-    def rim(self, n: int = 128) -> np.ndarray:
-        return rectangle_rim(self.width, self.height)
-
-
-# ------------------------------------------------------------------------------------------------ catadioptric
-@dataclass(frozen=True, eq=False)
-class CatadioptricModel:
-    r"""A :class:`~egtviz.geometry.catadioptric.CatadioptricCamera` seen through :class:`CameraModel`.
-
-    A plane through the focus with world normal :math:`n` images to the conic of its mirror-frame normal
-    :math:`R^T n` (``conic_from_plane``), drawn as its arcs that meet the mirror inside the rim
-    (``sample_plane_conics``); the drawn region is the rim's image. The baseline direction :math:`d` has the
-    two images of :math:`\pm R^T d` by the unified model,
-    :math:`K_g (F \hat d + (0, 0, \xi))` with :math:`\hat d = d / |d|`, visible where the mirror shows the ray.
-
-    Its kind is the mirror's (``hyperbolic`` or ``parabolic``); :class:`HyperbolicModel` and
-    :class:`ParabolicModel` carry each one's parameters.
-    """
-
-    camera: CatadioptricCamera = field(default_factory=CatadioptricCamera)
-
-    kind: ClassVar[str] = "catadioptric"
-    PARAMETERS: ClassVar[tuple[ParameterSpec, ...]] = ()
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.camera, CatadioptricCamera):
-            raise GeometryError(f"camera: expected a CatadioptricCamera, got {type(self.camera).__name__}")
-
-    @classmethod
-    def from_parameters(cls, pose: Pose, **values: float) -> CatadioptricModel:
-        raise GeometryError(f"{cls.__name__}: build a HyperbolicModel or a ParabolicModel")
-
-    def parameters(self) -> dict[str, float | int]:
-        K = self.camera.K
-        return {"focal_pixels": float(K[0, 0]), "u0": float(K[0, 2]), "v0": float(K[1, 2]),
-                "width": self.camera.width, "height": self.camera.height}
-
-    @property
-    def pose(self) -> Pose:
-        return self.camera.pose
-
-    @property
-    def width(self) -> int:
-        return self.camera.width
-
-    @property
-    def height(self) -> int:
-        return self.camera.height
-
-    @property
-    def centre(self) -> np.ndarray:
-        return self.camera.pose.t
-
-    def moved(self, pose: Pose) -> CatadioptricModel:
-        return type(self)(self.camera.moved(_check_pose(pose)))
-
-    def project(self, X_world: npt.ArrayLike) -> Projection:
-        return self.camera.project(X_world)
-
-    def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
-        return self.camera.back_project(pixels)
-
-    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
-        d = self.camera.pose.R.T @ as_direction(direction_world)
-        dirs = np.stack([d, -d])
-        s = (dirs / np.linalg.norm(d)) @ UNIFIED_FLIP.T
-        s[:, 2] += self.camera.mirror.xi
-        m = s @ self.camera.unified_calibration.T
-        return DirectionImages(normalize_homogeneous(m), self.camera.project_directions(dirs).visible)
-
-    def plane_image_lines(self, normals_world: npt.ArrayLike) -> None:
-        return None
-
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
-        n = as_normals(normals_world)
-        C = np.full((len(n), 3, 3), np.nan)
-        good = finite_nonzero_rows(n)
-        if len(good):
-            C[good] = conic_from_plane(self.camera, n[good] @ self.camera.pose.R)
-        return C
-
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[list[np.ndarray]]:
-        n_samples = check_sample_count(n_samples, "n_samples", 3)
-        n = as_normals(normals_world)
-        out: list[list[np.ndarray]] = [[] for _ in range(len(n))]
-        good = finite_nonzero_rows(n)
-        if len(good):
-            for k, arcs in zip(good.tolist(), sample_plane_conics(self.camera, n[good] @ self.camera.pose.R,
-                                                                   n_samples), strict=True):
-                out[k] = arcs
-        return out
-
-    def rim(self, n: int = 128) -> np.ndarray:
-        r = self.camera.rim_image(check_sample_count(n, "n", 3))
-        return np.vstack([r, r[:1]])
-
-
-_CCD = (ParameterSpec("focal_pixels", "CCD focal length", "px", 1.0, 1e7, 1000.0), *_PRINCIPAL_POINT, *_IMAGE_SIZE)
-
-
-def _ccd(p: dict[str, float | int]) -> dict[str, Any]:
-    u0, v0, f = p["u0"], p["v0"], p["focal_pixels"]
-    return {"K": np.array([[f, 0.0, u0], [0.0, f, v0], [0.0, 0.0, 1.0]]), "width": p["width"],
-            "height": p["height"]}
-
-
-@dataclass(frozen=True, eq=False)
-class HyperbolicModel(CatadioptricModel):
-    """A catadioptric camera with a hyperbolic mirror (parameters ``a``, ``b`` and the CCD's)."""
-
-    kind: ClassVar[str] = "hyperbolic"
-    PARAMETERS: ClassVar[tuple[ParameterSpec, ...]] = (
-        ParameterSpec("a", "mirror a", "m", 1e-3, 1e3, 3.0),
-        ParameterSpec("b", "mirror b", "m", 1e-3, 1e3, 1.0),
-        *_CCD,
-    )
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if not isinstance(self.camera.mirror, HyperbolicMirror):
-            raise GeometryError("camera: expected a camera with a HyperbolicMirror")
-
-    @classmethod
-    def from_parameters(cls, pose: Pose, **values: float) -> HyperbolicModel:
-        p = parameters_from_specs(cls.PARAMETERS, values)
-        return cls(CatadioptricCamera(_check_pose(pose), HyperbolicMirror(p["a"], p["b"]), **_ccd(p)))
-
-    def parameters(self) -> dict[str, float | int]:
-        m = self.camera.mirror
-        return {"a": m.a, "b": m.b, **super().parameters()}
-
-
-@dataclass(frozen=True, eq=False)
-class ParabolicModel(CatadioptricModel):
-    """A catadioptric camera with a parabolic mirror (parameter ``h`` and the CCD's)."""
-
-    kind: ClassVar[str] = "parabolic"
-    PARAMETERS: ClassVar[tuple[ParameterSpec, ...]] = (
-        ParameterSpec("h", "mirror h", "m", 1e-3, 1e3, 1.0),
-        *_CCD,
-    )
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if not isinstance(self.camera.mirror, ParabolicMirror):
-            raise GeometryError("camera: expected a camera with a ParabolicMirror")
-
-    @classmethod
-    def from_parameters(cls, pose: Pose, **values: float) -> ParabolicModel:
-        p = parameters_from_specs(cls.PARAMETERS, values)
-        return cls(CatadioptricCamera(_check_pose(pose), ParabolicMirror(p["h"]), **_ccd(p)))
-
-    def parameters(self) -> dict[str, float | int]:
-        return {"h": self.camera.mirror.h, **super().parameters()}
-
-
-def as_camera_model(camera: Any, name: str = "camera") -> CameraModel:
-    """``camera`` as a :class:`CameraModel`: a model is returned as it is, a ``PinholeCamera`` or ``CatadioptricCamera``
-    wrapped in its adapter (:class:`PinholeModel`, :class:`HyperbolicModel`, :class:`ParabolicModel`).
-
-    Raises:
-        GeometryError: naming ``name``, for anything else.
-    """
-    if isinstance(camera, PinholeCamera):
-        return PinholeModel(camera)
-    if isinstance(camera, CatadioptricCamera):
-        return HyperbolicModel(camera) if isinstance(camera.mirror, HyperbolicMirror) else ParabolicModel(camera)
-    if isinstance(camera, CameraModel):
-        return camera
-    raise GeometryError(f"{name}: expected a camera model or a pin-hole or catadioptric camera, "
-                        f"got {type(camera).__name__}")
+"""The principal point (u0, v0), shared by every model."""
 
 
 # ------------------------------------------------------------------------------------------------ registry
 @dataclass(frozen=True)
 class CameraModelInfo:
-    """One registered camera model: its kind, label and class (imported on first use)."""
+    """One registered camera model: its kind, label and model type (imported on first use)."""
 
     kind: str
-    """Registry key, the class's ``kind``."""
+    """Registry key, the model's ``kind``."""
     label: str
     """Name shown to people."""
     target: str
-    """``"package.module:ClassName"`` of the class implementing :class:`CameraModel`."""
+    """``"package.module:name"`` of the model type: a class implementing :class:`CameraModel`, or an object with its
+    ``kind``, ``PARAMETERS`` and ``from_parameters`` (the catadioptric kinds, one per mirror shape)."""
 
     @property
-    def cls(self) -> type:
-        """The model's class (imported lazily, so that model modules may import this one)."""
-        module, _, name = self.target.partition(":")
-        cls = getattr(importlib.import_module(module), name)
-        if getattr(cls, "kind", None) != self.kind:
-            raise GeometryError(f"{self.target}: its kind {getattr(cls, 'kind', None)!r} is not {self.kind!r}")
-        return cls
+    def cls(self) -> Any:
+        """The model type (imported on first use, so that model modules may import this one; then remembered)."""
+        found = _TYPES.get(self)
+        if found is None:
+            module, _, name = self.target.partition(":")
+            found = getattr(importlib.import_module(module), name)
+            if getattr(found, "kind", None) != self.kind:
+                raise GeometryError(f"{self.target}: its kind {getattr(found, 'kind', None)!r} is not {self.kind!r}")
+            _TYPES[self] = found
+        return found
 
     @property
     def parameters(self) -> tuple[ParameterSpec, ...]:
         """The model's parameter specs (``cls.PARAMETERS``)."""
         return self.cls.PARAMETERS
+
+    def parameter(self, name: str) -> ParameterSpec:
+        """The spec of parameter ``name``, or a GeometryError naming it."""
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise GeometryError(f"{name}: not a parameter of the {self.kind} model")
 
     def build(self, pose: Pose, **values: float) -> CameraModel:
         """``cls.from_parameters(pose, **values)``."""
@@ -591,6 +381,16 @@ class CameraModelInfo:
 
 CAMERA_MODELS: dict[str, CameraModelInfo] = {}
 """Every camera model by kind name; one :func:`_register` line per model below."""
+_TYPES: dict[CameraModelInfo, Any] = {}
+"""The imported model type of each registry entry."""
+
+
+def camera_model_info(camera: CameraModel) -> CameraModelInfo:
+    """The registry entry of ``camera`` (by its ``kind``), or a GeometryError."""
+    info = CAMERA_MODELS.get(getattr(camera, "kind", None))  # type: ignore[arg-type]
+    if info is None:
+        raise GeometryError(f"camera: expected a registered camera model, got {type(camera).__name__}")
+    return info
 
 
 def _register(kind: str, label: str, target: str) -> None:
@@ -599,7 +399,7 @@ def _register(kind: str, label: str, target: str) -> None:
     CAMERA_MODELS[kind] = CameraModelInfo(kind, label, target)
 
 
-_register("pinhole", "Pin-hole camera", "egtviz.geometry.camera_model:PinholeModel")
-_register("hyperbolic", "Hyperbolic mirror (catadioptric)", "egtviz.geometry.camera_model:HyperbolicModel")
-_register("parabolic", "Parabolic mirror (catadioptric)", "egtviz.geometry.camera_model:ParabolicModel")
+_register("pinhole", "Pin-hole camera", "egtviz.geometry.pinhole:PinholeCamera")
+_register("hyperbolic", "Hyperbolic mirror (catadioptric)", "egtviz.geometry.catadioptric:HYPERBOLIC")
+_register("parabolic", "Parabolic mirror (catadioptric)", "egtviz.geometry.catadioptric:PARABOLIC")
 _register("unified", "Unified sphere camera", "egtviz.geometry.unified:UnifiedCamera")

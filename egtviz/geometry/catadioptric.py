@@ -28,17 +28,47 @@ with :math:`\xi`, :math:`\gamma` from the mirror (:attr:`HyperbolicMirror.xi`,
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import InitVar, dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import MAX_IMAGE_SIZE, GeometryError, as_calibration, as_count, as_points, as_up_to_scale_rows
+from ._validate import (
+    MAX_IMAGE_SIZE,
+    GeometryError,
+    as_calibration,
+    as_count,
+    as_points,
+    as_up_to_scale_rows,
+    short_repr,
+)
+from .camera_model import (
+    IMAGE_SIZE_PARAMETERS,
+    PRINCIPAL_POINT_PARAMETERS,
+    DirectionImages,
+    ParameterSpec,
+    as_direction,
+    as_normals,
+    check_pose,
+    check_sample_count,
+    finite_nonzero_rows,
+    parameters_from_specs,
+)
+from .homogeneous import normalize_homogeneous
 from .mirrors import HyperbolicMirror, Mirror, ParabolicMirror
 from .poses import Pose
 
-__all__ = ["CatadioptricCamera", "PanoramicProjection", "UNIFIED_FLIP"]
+__all__ = [
+    "B_OVER_A_RANGE",
+    "HYPERBOLIC",
+    "PARABOLIC",
+    "UNIFIED_FLIP",
+    "CatadioptricCamera",
+    "CatadioptricKind",
+    "PanoramicProjection",
+]
 
 #: Rotation from the mirror frame to the unified-model frame (a half turn about x).
 UNIFIED_FLIP = np.diag([1.0, -1.0, -1.0])
@@ -74,6 +104,9 @@ class CatadioptricCamera:
             are pixels per scene unit.
         width: image width in pixels.
         height: image height in pixels.
+        check: check ``mirror``, ``K``, ``width`` and ``height`` (the pose is always checked). ``False`` is the fast
+            path for values taken from a camera that was checked (what :meth:`moved` does); the caller vouches for
+            them, as with pytransform3d's ``check=False``.
 
     Raises:
         GeometryError: on a bad pose, mirror, calibration or image size.
@@ -89,10 +122,18 @@ class CatadioptricCamera:
     """Image width in pixels."""
     height: int = 480
     """Image height in pixels."""
+    check: InitVar[bool] = True
 
-    def __post_init__(self) -> None:
+    no_image = "in the blind cone"
+    """Where points without an image lie (the camera-model interface)."""
+
+    def __post_init__(self, check: bool) -> None:
         if not isinstance(self.pose, Pose):
             raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
+        if check is not False:
+            self._check_fields()
+
+    def _check_fields(self) -> None:
         if not isinstance(self.mirror, (HyperbolicMirror, ParabolicMirror)):
             raise GeometryError(
                 f"mirror: expected a HyperbolicMirror or ParabolicMirror, got {type(self.mirror).__name__}"
@@ -103,10 +144,97 @@ class CatadioptricCamera:
         for name in ("width", "height"):
             object.__setattr__(self, name, as_count(getattr(self, name), name, minimum=1, maximum=MAX_IMAGE_SIZE))
 
+    # ------------------------------------------------------------------ the camera-model interface
+    @property
+    def kind(self) -> str:
+        """The registry kind: the mirror's shape, ``"hyperbolic"`` or ``"parabolic"``."""
+        return self.mirror.kind
+
+    @property
+    def PARAMETERS(self) -> tuple[ParameterSpec, ...]:
+        """The parameters of this camera's kind (:data:`HYPERBOLIC` or :data:`PARABOLIC`)."""
+        return _KINDS[self.mirror.kind].PARAMETERS
+
+    def from_parameters(self, pose: Pose, **values: float) -> CatadioptricCamera:
+        """A camera of this one's kind at ``pose`` (:meth:`CatadioptricKind.from_parameters`)."""
+        return _KINDS[self.mirror.kind].from_parameters(pose, **values)
+
+    def parameters(self) -> dict[str, float | int]:
+        """The mirror's parameters (``a``, ``b`` or ``h``), then ``focal_pixels``, ``u0``, ``v0``, ``width``,
+        ``height`` of the CCD (its ``K[0, 0]`` and ``K[0, 2]``, ``K[1, 2]``)."""
+        m = self.mirror
+        shape = {"a": m.a, "b": m.b} if isinstance(m, HyperbolicMirror) else {"h": m.h}
+        K = self.K
+        return {**shape, "focal_pixels": float(K[0, 0]), "u0": float(K[0, 2]), "v0": float(K[1, 2]),
+                "width": self.width, "height": self.height}
+
+    @property
+    def centre(self) -> np.ndarray:
+        """(3,) the mirror focus (single viewpoint) in the world, ``pose.t`` (read-only)."""
+        return self.pose.t
+
+    @property
+    def projective_calibration(self) -> None:
+        """None: a mirror images lines to conics, not linearly."""
+        return None
+
+    def light_paths(self, X_world: npt.ArrayLike) -> np.ndarray:
+        """(N, 3, 3) polylines point -> mirror point -> CCD (:attr:`ccd_center_world`); NaN rows where not visible."""
+        X = as_points(X_world, "X_world", 3)
+        proj = self._project_world(X)
+        out = np.empty((len(X), 3, 3))
+        out[:, 0] = X
+        np.matmul(proj.mirror_points, self.pose.R.T, out=out[:, 1])  # NaN rows where not visible
+        out[:, 1] += self.pose.t
+        out[:, 2] = self.ccd_center_world
+        out[~proj.visible] = np.nan
+        return out
+
+    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
+        r"""The images of :math:`\pm R^T d` by the unified model, :math:`K_g (F \hat d + (0, 0, \xi))`, visible where
+        the mirror shows the ray (both are on every image conic of a plane containing the line)."""
+        d = self.pose.R.T @ as_direction(direction_world)
+        dirs = np.stack([d, -d])
+        s = (dirs / np.linalg.norm(d)) @ UNIFIED_FLIP.T
+        s[:, 2] += self.mirror.xi
+        m = s @ self.unified_calibration.T
+        return DirectionImages(normalize_homogeneous(m), self._project_mirror_frame(dirs).visible)
+
+    def plane_image_lines(self, normals_world: npt.ArrayLike) -> None:
+        """None (once the normals are checked): a mirror images planes to conics."""
+        as_normals(normals_world)
+
+    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
+        """Image conics (N, 3, 3) of planes through the focus with world normals (N, 3) (of their mirror-frame normals
+        :math:`R^T n`, ``panoramic_epipolar.conic_from_plane``); NaN rows for zero or NaN normals."""
+        from .panoramic_epipolar import conic_from_plane
+
+        n = as_normals(normals_world)
+        C = np.full((len(n), 3, 3), np.nan)
+        good = finite_nonzero_rows(n)
+        if len(good):
+            C[good] = conic_from_plane(self, n[good] @ self.pose.R)
+        return C
+
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[tuple[np.ndarray, ...]]:
+        """Per world normal, the arcs of its plane's image that the mirror shows (ends on the rim's image)."""
+        from .panoramic_epipolar import _circle_arcs
+
+        n_samples = check_sample_count(n_samples, "n_samples", 3)
+        n = as_normals(normals_world)
+        # Each normal's arcs as a tuple (a sequence, as the interface asks): no copy of hundreds of small lists.
+        return _circle_arcs(self, np.ascontiguousarray((n @ self.pose.R).T), n_samples)
+
+    def rim(self, n: int = 128) -> np.ndarray:
+        """Closed polyline (n + 1, 2) of the rim's image, the boundary of the drawn region."""
+        r = self.rim_image(check_sample_count(n, "n", 3))
+        return np.vstack([r, r[:1]])
+
     # ------------------------------------------------------------------ frames
     def moved(self, pose: Pose) -> CatadioptricCamera:
-        """The same camera at a new pose."""
-        return replace(self, pose=pose)
+        """The same camera at a new pose: mirror and calibration, checked when this camera was made, are shared and
+        not checked again (the fast path of a drag)."""
+        return CatadioptricCamera(check_pose(pose), self.mirror, self.K, self.width, self.height, check=False)
 
     @property
     def focus_world(self) -> np.ndarray:
@@ -329,3 +457,65 @@ class CatadioptricCamera:
         else:
             P = np.column_stack([P[:, 0], P[:, 1], np.ones(len(P))])
         return self._pixels(P)
+
+
+B_OVER_A_RANGE = (0.01, 100.0)
+"""Accepted ``b / a`` of a hyperbolic mirror: flatter or sharper mirrors are not drawn reliably."""
+
+_CCD_PARAMETERS = (
+    ParameterSpec("focal_pixels", "CCD focal length", "px", 1.0, 1e6, 1000.0),
+    *PRINCIPAL_POINT_PARAMETERS,
+    *IMAGE_SIZE_PARAMETERS,
+)
+
+
+@dataclass(frozen=True)
+class CatadioptricKind:
+    """One registered kind of catadioptric camera, by the shape of its mirror: its parameters and how to build one.
+
+    The registry names :data:`HYPERBOLIC` and :data:`PARABOLIC`; a :class:`CatadioptricCamera` reports its kind from
+    its mirror.
+    """
+
+    kind: str
+    """``"hyperbolic"`` or ``"parabolic"``."""
+    PARAMETERS: tuple[ParameterSpec, ...]
+    """The mirror's parameters, then the CCD's."""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.kind, str) or self.kind not in (HyperbolicMirror.kind, ParabolicMirror.kind):
+            raise GeometryError(f"kind: expected 'hyperbolic' or 'parabolic', got {short_repr(self.kind)}")
+        if not isinstance(self.PARAMETERS, tuple) or not all(isinstance(p, ParameterSpec) for p in self.PARAMETERS):
+            raise GeometryError("PARAMETERS: expected a tuple of ParameterSpec")
+
+    def from_parameters(self, pose: Pose, **values: Any) -> CatadioptricCamera:
+        """A camera of this kind at ``pose``; defaults for the parameters not given.
+
+        Raises:
+            GeometryError: naming a parameter outside its range (or ``b/a`` outside :data:`B_OVER_A_RANGE`).
+        """
+        p = parameters_from_specs(self.PARAMETERS, values)
+        if self.kind == HyperbolicMirror.kind:
+            ratio = p["b"] / p["a"]
+            if not B_OVER_A_RANGE[0] <= ratio <= B_OVER_A_RANGE[1]:
+                raise GeometryError(f"b/a: expected {B_OVER_A_RANGE[0]:g}..{B_OVER_A_RANGE[1]:g}, got {ratio:g}")
+            mirror: Mirror = HyperbolicMirror(p["a"], p["b"])
+        else:
+            mirror = ParabolicMirror(p["h"])
+        f, u0, v0 = p["focal_pixels"], p["u0"], p["v0"]
+        K = np.array([[f, 0.0, u0], [0.0, f, v0], [0.0, 0.0, 1.0]])
+        return CatadioptricCamera(check_pose(pose), mirror, K, p["width"], p["height"])
+
+
+HYPERBOLIC = CatadioptricKind("hyperbolic", (
+    ParameterSpec("a", "a", "m", 1e-3, 100.0, 3.0),
+    ParameterSpec("b", "b", "m", 1e-3, 100.0, 1.0),
+    *_CCD_PARAMETERS,
+))
+"""A hyperbolic mirror (``a``, ``b``) over a pin-hole CCD at its second focus (EGT's default, ``a = 3``, ``b = 1``)."""
+PARABOLIC = CatadioptricKind("parabolic", (
+    ParameterSpec("h", "h", "m", 1e-3, 100.0, 1.0),
+    *_CCD_PARAMETERS,
+))
+"""A parabolic mirror (``h``) over an orthographic CCD."""
+_KINDS = {k.kind: k for k in (HYPERBOLIC, PARABOLIC)}

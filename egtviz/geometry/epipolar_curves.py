@@ -17,6 +17,7 @@ Daniilidis; ``docs/conventions.md``).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,11 +36,12 @@ class EpipolarCurves:
 
     conics: np.ndarray | None
     """(N, 3, 3) exact conics :math:`m^T C m = 0`, unit Frobenius norm (a double line :math:`l l^T` for a pin-hole);
-    NaN rows for points on the baseline; None if the model has no conics."""
+    NaN rows for points on the baseline; None if not asked for."""
     lines: np.ndarray | None
     """(N, 3) exact lines :math:`l \\cdot m = 0` where the model images planes to lines (pin-hole), else None."""
-    arcs: list[list[np.ndarray]]
-    """Per point, the visible arcs (k, 2) of its curve inside the camera's drawn region (empty: none)."""
+    arcs: list[Sequence[np.ndarray]]
+    """Per point, the visible arcs (k, 2) of its curve inside the camera's drawn region (empty: none); an empty
+    list when not asked for."""
     epipoles: np.ndarray
     """(k, 3) homogeneous epipoles (``baseline_images`` of the direction to the other centre; row 0 towards it)."""
     epipoles_visible: np.ndarray
@@ -58,9 +60,16 @@ class EpipolarCurvePair:
     """In camera 2."""
 
 
+_MODEL_TYPES: set[type] = set()
+"""Classes whose instances passed the (structural, slow) ``isinstance(camera, CameraModel)`` check."""
+
+
 def _check_model(camera: object, name: str) -> CameraModel:
+    if type(camera) in _MODEL_TYPES:  # every instance of a model class has the interface's members
+        return camera  # type: ignore[return-value]
     if not isinstance(camera, CameraModel):
         raise GeometryError(f"{name}: expected a camera model (CameraModel), got {type(camera).__name__}")
+    _MODEL_TYPES.add(type(camera))
     return camera
 
 
@@ -77,7 +86,8 @@ def epipolar_plane_normals(cam1: CameraModel, cam2: CameraModel, X_world: npt.Ar
 
 
 def epipolar_curves(
-    cam1: CameraModel, cam2: CameraModel, X_world: npt.ArrayLike, *, n_samples: int = 96
+    cam1: CameraModel, cam2: CameraModel, X_world: npt.ArrayLike, *, n_samples: int = 96, conics: bool = True,
+    arcs: bool = True,
 ) -> EpipolarCurvePair:
     """Epipolar curves of scene points in both cameras, and the epipoles, for any two camera models.
 
@@ -86,6 +96,8 @@ def epipolar_curves(
         cam2: second camera.
         X_world: (N, 3) scene points.
         n_samples: samples per curve for the arcs (>= 3).
+        conics: compute the exact conics (False: ``conics`` is None; a viewer that draws the arcs needs none).
+        arcs: sample the arcs (False: ``arcs`` is empty; a viewer that draws a pin-hole's lines clips them itself).
 
     Returns:
         An :class:`EpipolarCurvePair`. A point on the baseline (the centres included) has no unique epipolar
@@ -99,16 +111,18 @@ def epipolar_curves(
     normals = epipolar_plane_normals(cam1, cam2, X_world)
     baseline = cam2.centre - cam1.centre
     return EpipolarCurvePair(
-        normals, _curves(cam1, normals, baseline, n_samples), _curves(cam2, normals, -baseline, n_samples)
+        normals, _curves(cam1, normals, baseline, n_samples, conics, arcs),
+        _curves(cam2, normals, -baseline, n_samples, conics, arcs),
     )
 
 
-def _curves(camera: CameraModel, normals: np.ndarray, towards_other: np.ndarray, n_samples: int) -> EpipolarCurves:
+def _curves(camera: CameraModel, normals: np.ndarray, towards_other: np.ndarray, n_samples: int,
+            conics: bool, arcs: bool) -> EpipolarCurves:
     epipoles = camera.baseline_images(towards_other)
     return EpipolarCurves(
-        conics=camera.plane_image_conics(normals),
+        conics=camera.plane_image_conics(normals) if conics else None,
         lines=camera.plane_image_lines(normals),
-        arcs=camera.plane_image_arcs(normals, n_samples),
+        arcs=camera.plane_image_arcs(normals, n_samples) if arcs else [],
         epipoles=epipoles.points,
         epipoles_visible=epipoles.visible,
     )

@@ -11,12 +11,43 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import MAX_IMAGE_SIZE, GeometryError, as_calibration, as_count, as_points, as_positive, as_scalar, as_vector
+from ._validate import (
+    MAX_IMAGE_SIZE,
+    GeometryError,
+    as_calibration,
+    as_count,
+    as_points,
+    as_positive,
+    as_scalar,
+    as_vector,
+)
+from .camera_model import (
+    IMAGE_SIZE_PARAMETERS,
+    PRINCIPAL_POINT_PARAMETERS,
+    DirectionImages,
+    ParameterSpec,
+    as_direction,
+    check_pose,
+    check_sample_count,
+    double_line_conics,
+    finite_nonzero_rows,
+    normals_with_planes,
+    parameters_from_specs,
+    rectangle_rim,
+)
+from .homogeneous import _normalize_homogeneous3, clip_lines_to_rect
 from .poses import Pose
+
+FOCAL_PIXELS_RANGE = (1.0, 1e6)
+"""Accepted ``ku f`` and ``kv f`` (pixels) of :meth:`PinholeCamera.from_parameters`: with the principal point's and
+the skew's ranges this keeps :math:`K` well conditioned."""
+SKEW_OVER_FOCAL_RANGE = (-1.0, 1.0)
+r"""Accepted :math:`\gamma / (k_u f)` (the cotangent of the angle between the pixel axes: 45 to 135 degrees)."""
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
@@ -108,13 +139,35 @@ class PinholeProjection:
     in_image: np.ndarray
     """(N,) bool, in front and inside ``[0, width] x [0, height]``."""
 
+    @property
+    def visible(self) -> np.ndarray:
+        """(N,) bool: the point has an image (``in_front``; the camera-model interface's name)."""
+        return self.in_front
+
 
 @dataclass(frozen=True)
 class PinholeCamera:
-    """A pin-hole camera: a pose in the world and intrinsics."""
+    r"""A pin-hole camera: a pose in the world and intrinsics; the ``pinhole`` camera model
+    (:class:`~egtviz.geometry.camera_model.CameraModel`).
+
+    A plane through the centre with world normal :math:`n` images to the line :math:`l = K^{-T} R^T n` (its conic is
+    the double line :math:`l l^T`); its drawn arc is the line clipped to the image rectangle. The line through the
+    centre along :math:`d` images to the one point :math:`K R^T d`, shown when :math:`(R^T d)_z > 0`.
+    """
 
     pose: Pose = dataclasses.field(default_factory=Pose)
     intrinsics: Intrinsics = dataclasses.field(default_factory=Intrinsics)
+
+    kind: ClassVar[str] = "pinhole"
+    PARAMETERS: ClassVar[tuple[ParameterSpec, ...]] = (
+        ParameterSpec("focal_length", "focal length", "m", 1e-4, 10.0, 0.008),
+        ParameterSpec("ku", "pixels per metre along u", "px/m", 1.0, 1e7, 100_000.0),
+        ParameterSpec("kv", "pixels per metre along v", "px/m", 1.0, 1e7, 100_000.0),
+        *PRINCIPAL_POINT_PARAMETERS,
+        ParameterSpec("skew", "skew", "px", -100_000.0, 100_000.0, 0.0),
+        *IMAGE_SIZE_PARAMETERS,
+    )
+    no_image: ClassVar[str] = "behind the camera"
 
     def __post_init__(self) -> None:
         if not isinstance(self.pose, Pose):
@@ -125,6 +178,101 @@ class PinholeCamera:
     @property
     def K(self) -> np.ndarray:
         return self.intrinsics.K
+
+    # ------------------------------------------------------------------ the camera-model interface
+    @classmethod
+    def from_parameters(cls, pose: Pose, **values: float) -> PinholeCamera:
+        """The camera at ``pose`` with ``focal_length``, ``ku``, ``kv``, ``u0``, ``v0``, ``skew``, ``width``, ``height``
+        (:attr:`PARAMETERS`; defaults for the others).
+
+        Raises:
+            GeometryError: naming a parameter outside its range.
+        """
+        p = parameters_from_specs(cls.PARAMETERS, values)
+        lo, hi = FOCAL_PIXELS_RANGE
+        for name in ("ku", "kv"):
+            fp = p["focal_length"] * p[name]
+            if not lo <= fp <= hi:
+                raise GeometryError(f"focal_length * {name}: expected {lo:g}..{hi:g} px, got {fp:g}")
+        ratio = p["skew"] / (p["focal_length"] * p["ku"])
+        if not SKEW_OVER_FOCAL_RANGE[0] <= ratio <= SKEW_OVER_FOCAL_RANGE[1]:
+            raise GeometryError(f"skew / (focal_length * ku): expected -1..1, got {ratio:g}")
+        intr = Intrinsics(p["focal_length"], (p["ku"], p["kv"]), (p["u0"], p["v0"]), p["skew"], p["width"],
+                          p["height"])
+        return cls(check_pose(pose), intr)
+
+    def parameters(self) -> dict[str, float | int]:
+        i = self.intrinsics
+        (ku, kv), (u0, v0) = i.pixels_per_metre, i.principal_point
+        return {"focal_length": i.focal_length, "ku": ku, "kv": kv, "u0": u0, "v0": v0, "skew": i.skew,
+                "width": i.width, "height": i.height}
+
+    @property
+    def width(self) -> int:
+        return self.intrinsics.width
+
+    @property
+    def height(self) -> int:
+        return self.intrinsics.height
+
+    @property
+    def centre(self) -> np.ndarray:
+        """(3,) the camera centre in world coordinates (``pose.t``)."""
+        return self.pose.t
+
+    @property
+    def projective_calibration(self) -> np.ndarray:
+        """:math:`K`: a pin-hole camera images every point linearly."""
+        return self.K
+
+    def light_paths(self, X_world: npt.ArrayLike) -> np.ndarray:
+        """(N, 2, 3) segments point -> centre; NaN rows for points behind the camera."""
+        X = as_points(X_world, "X_world", 3)
+        out = np.empty((len(X), 2, 3))
+        out[:, 0] = X
+        out[:, 1] = self.pose.t
+        out[~self._project(X).in_front] = np.nan
+        return out
+
+    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
+        """The one image :math:`K R^T d` of the line through the centre along ``d`` (both directions image to it),
+        normalised (``normalize_homogeneous``); shown when :math:`(R^T d)_z > 0` (the direction is in front)."""
+        m = self._K_Rt @ as_direction(direction_world)
+        x, y, z = m.tolist()
+        return DirectionImages(_normalize_homogeneous3(x, y, z)[None, :], np.array([z > 0]))
+
+    def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray:
+        r"""Image lines :math:`l = K^{-T} R^T n` (N, 3) of planes through the centre; NaN rows for zero or NaN
+        normals."""
+        n, good = normals_with_planes(normals_world)
+        if len(good) == len(n):
+            return n @ self._plane_to_line.T
+        lines = np.full((len(n), 3), np.nan)
+        if len(good):
+            lines[good] = n[good] @ self._plane_to_line.T
+        return lines
+
+    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
+        """The double lines :math:`l l^T / |l|^2` of :meth:`plane_image_lines`."""
+        return double_line_conics(self.plane_image_lines(normals_world))
+
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[list[np.ndarray]]:
+        """Per normal, its image line clipped to the image rectangle as one (2, 2) segment (or none)."""
+        check_sample_count(n_samples, "n_samples", 2)
+        lines = self.plane_image_lines(normals_world)
+        out: list[list[np.ndarray]] = [[] for _ in range(len(lines))]
+        good = finite_nonzero_rows(lines)
+        if len(good):
+            seg, hit = clip_lines_to_rect(lines[good], self.width, self.height)
+            for k, s, h in zip(good.tolist(), seg, hit.tolist(), strict=True):
+                if h:
+                    out[k] = [s]
+        return out
+
+    def rim(self, n: int = 128) -> np.ndarray:
+        """The image rectangle as a closed polyline (5, 2) (``n``, checked, is not needed)."""
+        check_sample_count(n, "n", 3)
+        return rectangle_rim(self.width, self.height)
 
     # Read-only matrices of this (immutable) camera, built once: the epipolar geometry of a pair
     # uses them on every drag of the other camera.
@@ -170,8 +318,8 @@ class PinholeCamera:
         return self.K @ np.hstack([R.T, (-R.T @ t)[:, None]])
 
     def moved(self, pose: Pose) -> PinholeCamera:
-        """The same camera at another pose."""
-        return dataclasses.replace(self, pose=pose)
+        """The same camera at another pose (the intrinsics, checked once, are shared)."""
+        return PinholeCamera(check_pose(pose), self.intrinsics)
 
     def with_intrinsics(self, intrinsics: Intrinsics) -> PinholeCamera:
         return dataclasses.replace(self, intrinsics=intrinsics)

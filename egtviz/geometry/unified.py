@@ -55,7 +55,7 @@ Forward rays image inside it, backward rays that are still seen (:math:`-\xi < s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from functools import cached_property
 from typing import ClassVar
 
@@ -64,6 +64,8 @@ import numpy.typing as npt
 
 from ._validate import GeometryError, as_points, as_positive, as_vector
 from .camera_model import (
+    IMAGE_SIZE_PARAMETERS,
+    PRINCIPAL_POINT_PARAMETERS,
     CameraProjection,
     DirectionImages,
     ParameterSpec,
@@ -90,6 +92,8 @@ class UnifiedCamera:
         principal_point: :math:`(u_0, v_0)` in pixels.
         width: image width in pixels.
         height: image height in pixels.
+        check: check the parameters against :attr:`PARAMETERS` (the pose is always checked). ``False`` is the fast
+            path for values taken from a camera that was checked (what :meth:`moved` does).
 
     Raises:
         GeometryError: naming the field, when one is outside its range (:attr:`PARAMETERS`).
@@ -107,20 +111,22 @@ class UnifiedCamera:
     """Image width in pixels."""
     height: int = 480
     """Image height in pixels."""
+    check: InitVar[bool] = True
 
     kind: ClassVar[str] = "unified"
     PARAMETERS: ClassVar[tuple[ParameterSpec, ...]] = (
         ParameterSpec("xi", "xi", "", 0.0, 1.0, 0.8),
-        ParameterSpec("focal_pixels", "focal length", "px", 1.0, 1e7, 300.0),
-        ParameterSpec("u0", "principal point u0", "px", -100_000.0, 100_000.0, 320.0),
-        ParameterSpec("v0", "principal point v0", "px", -100_000.0, 100_000.0, 240.0),
-        ParameterSpec("width", "width", "px", 1, 100_000, 640, integer=True),
-        ParameterSpec("height", "height", "px", 1, 100_000, 480, integer=True),
+        ParameterSpec("focal_pixels", "focal length", "px", 1.0, 1e6, 300.0),
+        *PRINCIPAL_POINT_PARAMETERS,
+        *IMAGE_SIZE_PARAMETERS,
     )
+    no_image: ClassVar[str] = "behind the projection centre"
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, check: bool) -> None:
         if not isinstance(self.pose, Pose):
             raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
+        if check is False:
+            return
         specs = {s.name: s for s in self.PARAMETERS}
         for name in ("xi", "focal_pixels", "width", "height"):
             object.__setattr__(self, name, specs[name].check(getattr(self, name)))
@@ -143,15 +149,32 @@ class UnifiedCamera:
                 "height": self.height}
 
     def moved(self, pose: Pose) -> UnifiedCamera:
-        """The same camera at another pose."""
+        """The same camera at another pose (the fast path of a drag: the parameters, checked once, are not checked again)."""
         if not isinstance(pose, Pose):
             raise GeometryError(f"pose: expected a Pose, got {type(pose).__name__}")
-        return UnifiedCamera(pose, self.xi, self.focal_pixels, self.principal_point, self.width, self.height)
+        return UnifiedCamera(pose, self.xi, self.focal_pixels, self.principal_point, self.width, self.height,
+                             check=False)
 
     @property
     def centre(self) -> np.ndarray:
         """(3,) the sphere's centre (the single viewpoint) in the world, ``pose.t``."""
         return self.pose.t
+
+    @property
+    def projective_calibration(self) -> np.ndarray | None:
+        r""":math:`K` for :math:`\xi = 0` (the model is then a pin-hole camera), else None."""
+        return self.K if self.xi == 0.0 else None
+
+    def light_paths(self, X_world: npt.ArrayLike, radius: float = 0.5) -> np.ndarray:
+        """(N, 3, 3) polylines point -> its point on the sphere of ``radius`` -> the projection centre; NaN rows for
+        points without an image."""
+        X = as_points(X_world, "X_world", 3)
+        out = np.empty((len(X), 3, 3))
+        out[:, 0] = X
+        out[:, 1] = self.sphere_points(X, radius)
+        out[:, 2] = self.projection_centre(radius)
+        out[~self._project_local(self.pose.to_local(X)).visible] = np.nan
+        return out
 
     @cached_property
     def K(self) -> np.ndarray:

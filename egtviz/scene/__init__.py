@@ -27,4 +27,5 @@ from .specs import PanoramicSpec as PanoramicSpec
 from .specs import PinholeSpec as PinholeSpec
 from .specs import SceneError as SceneError
 from .specs import SurfaceSpec as SurfaceSpec
+from .specs import UnifiedSpec as UnifiedSpec
 from .surfaces import mesh_names as mesh_names

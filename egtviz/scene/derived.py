@@ -1,30 +1,44 @@
 """What the viewer draws, derived from a :class:`Scene` by the numeric core.
 
-The viewer never computes geometry: it turns these arrays into viser nodes and
-SVG. Everything here is recomputed from the immutable scene on each change;
-pixel arrays are rows, NaN where nothing is drawn.
+The viewer never computes geometry: it turns these arrays into viser nodes and SVG. Everything here is
+recomputed from the immutable scene on each change (a camera's own content is cached per camera spec, so a
+drag recomputes only the moved camera and the pair); pixel arrays are rows, NaN where nothing is drawn.
+
+Every camera is handled through the camera-model interface (``egtviz.geometry.camera_model``): projection,
+light paths, the drawn region, and the epipolar curves of the drawn pair by one route for any two models
+(``egtviz.geometry.epipolar_curves``). No camera kind is tested here.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
 
-from ..geometry import GeometryError, PinholeCamera
-from ..geometry.epipolar import _epipolar_normals, _epipole_of_centre, _matrix_rank3, epipolar_pair
-from ..geometry.homogeneous import _clip_lines
-from ..geometry.panoramic_epipolar import _circle_arcs
+from ..geometry import GeometryError, Pose
+from ..geometry.camera_model import (
+    CAMERA_MODELS,
+    CameraModel,
+    finite_nonzero_rows,
+    rectangle_rim,
+)
+from ..geometry.epipolar import essential_from_poses, fundamental_from_essential
+from ..geometry.epipolar_curves import EpipolarCurves, epipolar_curves
+from ..geometry.homogeneous import clip_lines_to_rect
 from .scene import Scene
-from .specs import PanoramicSpec, SceneError
+from .specs import SceneError
 
 COINCIDENT_MESSAGE = "no epipolar geometry: the centres coincide"
-#: Samples on each epipolar great circle (conic polylines): fewer per conic when there are many,
-#: so that a panel holds about ``CONIC_VERTEX_BUDGET`` vertices.
+#: Samples on each epipolar curve (polylines): fewer per curve when there are many, so that a panel holds about
+#: ``CONIC_VERTEX_BUDGET`` vertices.
 CONIC_SAMPLES = (24, 96)
 CONIC_VERTEX_BUDGET = 4800
+#: Samples of a rim and of a horizon.
+RIM_SAMPLES = 128
+#: A matrix entry below this fraction of the matrix's norm is rounding (shown as 0).
+ZERO_FRACTION = 1e-12
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,40 +58,53 @@ class Epipole:
 
 @dataclass(frozen=True, eq=False)
 class ImagePlane:
-    """The content of one camera's image-plane panel."""
+    """The content of one camera's image-plane panel: what to draw, whatever the camera model."""
 
     camera: str
-    kind: str
     width: int
     height: int
     points: np.ndarray
     """(N, 2) pixels; NaN where the point has no image."""
     visible: np.ndarray
-    """(N,) the point has an image (in front / seen by the mirror)."""
+    """(N,) the point has an image."""
     in_image: np.ndarray
     """(N,) visible and inside the image rectangle."""
     n_hidden: int
-    """Points with no image (behind the camera, in the blind cone)."""
+    """Points with no image."""
+    no_image: str = "behind the camera"
+    """Where the points without an image are, in a few words (the model's ``no_image``)."""
     epipoles: tuple[Epipole, ...] = ()
     lines: np.ndarray | None = None
-    """(N, 2, 2) epipolar line segments clipped to the image (pin-hole in the drawn pair)."""
+    """(N, 2, 2) epipolar line segments clipped to the image, for a camera that images planes to lines inside the
+    image rectangle (a pin-hole in the drawn pair); NaN rows where a line misses the image."""
     conics: tuple[tuple[np.ndarray, ...], ...] | None = None
-    """Per point, the visible arcs (k, 2) of its epipolar conic (panoramic in the drawn pair)."""
+    """Per point, the visible arcs (k, 2) of its epipolar curve, for any other camera in the drawn pair."""
     rim: np.ndarray | None = None
-    """(k, 2) image of the mirror rim (panoramic)."""
+    """(k, 2) closed boundary of the region curves are drawn in, when it is not the image rectangle (the image of a
+    mirror's rim)."""
+    horizon: tuple[np.ndarray, ...] = ()
+    """The visible arcs (k, 2) of the camera's horizon: the image of the plane through its centre perpendicular to
+    its axis (none for a pin-hole: that plane images to the line at infinity)."""
     message: str | None = None
     in_pair: bool = False
 
 
 @dataclass(frozen=True, eq=False)
 class PairReadout:
-    """F, E and epipoles of the drawn pair (pin-hole pair), or a message."""
+    """The epipolar relation of the drawn pair, or a message.
+
+    ``E`` relates the viewing rays of any two central cameras, :math:`d_2^T E d_1 = 0` (each ray in its camera's
+    model frame). ``F`` relates pixels, :math:`m_2^T F m_1 = 0`, and exists only when both cameras image linearly
+    (``projective_calibration``: two pin-hole cameras); otherwise it is None.
+    """
 
     names: tuple[str, str] | None
     F: np.ndarray | None = None
     E: np.ndarray | None = None
     rank: int | None = None
+    """Rank of F (2 for a valid pair), or None without F."""
     e1: np.ndarray | None = None
+    """Homogeneous epipole of image 1 (the image of the other centre; normalised, last coordinate 1 or 0)."""
     e2: np.ndarray | None = None
     message: str | None = None
 
@@ -89,31 +116,21 @@ class Derived:
     image_planes: dict[str, ImagePlane]
     pair: PairReadout
     poses: dict[str, tuple[np.ndarray, np.ndarray]]
-    """Camera (mirror) frame per name: ``(wxyz, position)``."""
+    """Model frame per camera name: ``(wxyz, position)``."""
     rays: dict[str, np.ndarray]
-    """(N, k, 3) polylines point -> (mirror point ->) centre or CCD; NaN rows where not visible."""
-    frustums: dict[str, dict[str, float]] = field(default_factory=dict)
-    """Pin-hole frustum shape: ``fov`` (vertical, radians), ``aspect``."""
-    image_in_3d: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
-    """Pin-hole image content on the frustum's image plane: ``points`` (N, 3), ``lines`` (N, 2, 3)."""
-    mirror_meshes: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    """Mirror surface per panoramic camera: ``(vertices (V, 3) in the world, faces (F, 3))``."""
-    ccd_centres: dict[str, np.ndarray] = field(default_factory=dict)
+    """(N, k, 3) light paths point -> ... -> sensor (``light_paths``); NaN rows where not visible."""
+    cameras: dict[str, CameraModel] = field(default_factory=dict)
+    """The camera model of each camera (the same object while its spec is unchanged): the viewer's drawing
+    modules ask it for the body they draw (frustum, mirror, sphere)."""
     epipolar_plane: np.ndarray | None = None
     """(3, 3) triangle (centre 1, centre 2, selected point) grown by ``PLANE_MARGIN``, or None."""
+    selected_normal: np.ndarray | None = None
+    """(3,) unit world normal of the selected point's epipolar plane in the drawn pair, or None."""
     baseline: np.ndarray | None = None
     """(2, 3) the drawn pair's centres, or None."""
 
 
-#: Depth of the drawn image plane in front of a pin-hole centre, scene units.
-IMAGE_PLANE_DEPTH = 0.6
 PLANE_MARGIN = 1.25
-
-
-@lru_cache(maxsize=32)
-def _mirror_mesh_local(mirror_kind: str, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
-    spec = PanoramicSpec("m", mirror=mirror_kind, a=a, b=b)  # type: ignore[arg-type]
-    return spec.mirror_model().surface(16, 48)
 
 
 def _epipole(label: str, e: np.ndarray, width: int, height: int) -> Epipole:
@@ -122,10 +139,7 @@ def _epipole(label: str, e: np.ndarray, width: int, height: int) -> Epipole:
     if z == 0.0:
         n = max(math.sqrt(x * x + y * y), 1e-300)
         return Epipole(label, None, np.array([x / n, y / n]), True, False)
-    return _finite_epipole(label, x / z, y / z, width, height)
-
-
-def _finite_epipole(label: str, u: float, v: float, width: int, height: int) -> Epipole:
+    u, v = x / z, y / z
     return Epipole(label, np.array([u, v]), None, False, bool(0 <= u <= width and 0 <= v <= height))
 
 
@@ -134,96 +148,51 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
-class _PointArrays:
-    """The scene's points, read-only, in both layouts: ``X`` (N, 3) and ``XT`` (3, N) contiguous (the
-    coordinate-major layout of the pair computations). Hashed by identity (a cheap cache key)."""
-
-    __slots__ = ("X", "XT")
-
-    def __init__(self, X: np.ndarray) -> None:
-        self.X = X
-        self.XT = _frozen(np.ascontiguousarray(X.T))
-
-
-@lru_cache(maxsize=8)
-def _points(points: tuple) -> _PointArrays:
-    """The :class:`_PointArrays` of a scene's points (``Scene.points``: it carries its checked read-only array,
-    remembers its hash and stays the same object across camera drags, so the lookup is cheap)."""
-    return _PointArrays(points.array)  # type: ignore[attr-defined]
-
-
 @lru_cache(maxsize=64)
-def _camera_block(spec, pts: _PointArrays) -> dict:
+def _camera_block(spec, points: tuple) -> dict:
     """Everything about one camera that depends only on its spec and the points (cached: a drag changes one
-    camera, so the others' projections, rays, meshes and image content are reused). Arrays are read-only.
-
-    Built on every drag of this camera: the points and the camera come checked from the core, so its
-    internal (unchecked) projections are used."""
-    X = pts.X
-    n = len(X)
+    camera, so the others' projections, light paths and image content are reused). Arrays are read-only."""
+    X = points.array  # type: ignore[attr-defined]
     cam = spec.camera()
     pose = cam.pose
-    out: dict = {"cam": cam, "pose": (_frozen(np.array(pose.quat_wxyz)), _frozen(pose.t.copy()))}
-    if isinstance(cam, PinholeCamera):
-        proj = cam._project(X)
-        visible = proj.in_front
-        ray = np.empty((n, 2, 3))
-        ray[:, 1] = pose.t
-        out["frustum"] = {"fov": cam.intrinsics.fov_y, "aspect": cam.intrinsics.aspect}
-        rim = None
-        # Pixel (u, v) on the drawn image plane, image_to_world(., IMAGE_PLANE_DEPTH):
-        # IMAGE_PLANE_DEPTH R K^-1 (u, v, 1) + t = (u, v) @ A + b.
-        G = IMAGE_PLANE_DEPTH * cam._R_K_inv
-        to_plane = (_frozen(G[:, :2].T.copy()), _frozen(G[:, 2] + pose.t))
-        out["to_plane"] = to_plane
-        pts3 = proj.pixels @ to_plane[0]
-        pts3 += to_plane[1]
-        pts3[~visible] = np.nan
-        out["pts3"] = _frozen(pts3)
-    else:
-        proj = cam._project_world(X)
-        visible = proj.visible
-        ray = np.empty((n, 3, 3))
-        ccd = _frozen(pose.to_world([0.0, 0.0, -cam.mirror.ccd_offset])[0])  # cam.ccd_center_world
-        np.matmul(proj.mirror_points, pose.R.T, out=ray[:, 1])  # mirror points in the world (NaN rows: invisible)
-        ray[:, 1] += pose.t
-        ray[:, 2] = ccd
-        v, f = _mirror_mesh_local(spec.mirror, float(spec.a), float(spec.b))
-        mesh = v @ pose.R.T
-        mesh += pose.t
-        out["mesh"] = (_frozen(mesh), f)
-        out["ccd"] = ccd
-        rim = _rim_image(cam.mirror, cam.K.tobytes())  # independent of the pose
-    ray[:, 0] = X
-    ray[~visible] = np.nan
-    out["ray"] = _frozen(ray)
-    out["plane"] = ImagePlane(
+    proj = cam.project(X)
+    visible = proj.visible
+    rim, horizon = _rim_and_horizon(spec.model_kind, tuple(spec.model_values().items()))
+    plane = ImagePlane(
         camera=spec.name,
-        kind=spec.kind,
-        width=spec.width,
-        height=spec.height,
+        width=cam.width,
+        height=cam.height,
         points=_frozen(proj.pixels),
         visible=_frozen(visible),
         in_image=_frozen(proj.in_image),
-        n_hidden=int(n - np.count_nonzero(visible)),
+        n_hidden=int(len(X) - np.count_nonzero(visible)),
+        no_image=cam.no_image,
         rim=rim,
+        horizon=horizon,
     )
-    return out
+    return {
+        "cam": cam,
+        "pose": (_frozen(np.array(pose.quat_wxyz)), _frozen(pose.t.copy())),
+        "ray": _frozen(cam.light_paths(X)),
+        "plane": plane,
+    }
 
 
-@lru_cache(maxsize=16)
-def _rim_image(mirror, K_bytes: bytes) -> np.ndarray:
-    """``rim_image(128)`` of a camera with this mirror and calibration: the rim's pixels do not depend on the pose."""
-    from ..geometry.catadioptric import CatadioptricCamera
-
-    return _frozen(np.array(CatadioptricCamera(mirror=mirror, K=np.frombuffer(K_bytes).reshape(3, 3)).rim_image(128)))
+@lru_cache(maxsize=64)
+def _rim_and_horizon(kind: str, values: tuple[tuple[str, float], ...]) -> tuple[np.ndarray | None, tuple]:
+    """A camera's drawn-region boundary (None: the image rectangle, which the panel's frame draws) and its horizon's
+    arcs. Neither depends on the pose (the horizon is the image of the plane through the centre perpendicular to the
+    camera's axis, fixed in the camera's frame), so they are computed once per set of parameters, at the origin."""
+    cam = CAMERA_MODELS[kind].build(Pose(), **dict(values))
+    rim = cam.rim(RIM_SAMPLES)
+    if rim.shape == (5, 2) and np.array_equal(rim, rectangle_rim(cam.width, cam.height)):
+        rim = None
+    horizon = tuple(_frozen(a) for a in cam.plane_image_arcs([0.0, 0.0, 1.0], RIM_SAMPLES)[0])
+    return (None if rim is None else _frozen(rim)), horizon
 
 
 def compute_derived(scene: Scene) -> Derived:
     """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``.
-
-    On a drag only the pair-dependent part is new work (the per-camera blocks are cached); it calls the
-    geometry core's unchecked internal functions, since every array here was built and checked by the core.
 
     Raises:
         SceneError: the scene cannot be drawn (the core refused it, or a drawn value is infinite). A scene
@@ -243,137 +212,108 @@ def compute_derived(scene: Scene) -> Derived:
 
 
 def _compute_derived(scene: Scene) -> Derived:
-    pts = _points(scene.points)
-    X = pts.X
-    n_points = len(X)
-    blocks = {spec.name: _camera_block(spec, pts) for spec in scene.cameras}
+    X = scene.points_array()
+    blocks = {spec.name: _camera_block(spec, scene.points) for spec in scene.cameras}
     cams = {name: b["cam"] for name, b in blocks.items()}
     planes: dict[str, ImagePlane] = {name: b["plane"] for name, b in blocks.items()}
-    rays: dict[str, np.ndarray] = {name: b["ray"] for name, b in blocks.items()}
-    poses = {name: b["pose"] for name, b in blocks.items()}
-    frustums: dict[str, dict[str, float]] = {name: dict(b["frustum"]) for name, b in blocks.items() if "frustum" in b}
-    meshes: dict[str, tuple[np.ndarray, np.ndarray]] = {name: b["mesh"] for name, b in blocks.items() if "mesh" in b}
-    ccd: dict[str, np.ndarray] = {name: b["ccd"] for name, b in blocks.items() if "ccd" in b}
-    # Pin-hole cameras of the drawn pair: clipped epipolar segments and which rows hit the image.
-    segments: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
     pair_names = scene.drawn_pair
     readout = PairReadout(pair_names)
-    epi_plane = baseline = None
+    epi_plane = baseline = selected_normal = None
     if pair_names is not None:
         n1, n2 = pair_names
         c1, c2 = cams[n1], cams[n2]
-        o1, o2 = c1.pose.t, c2.pose.t
+        lo, hi = CONIC_SAMPLES
+        n_samples = min(max(CONIC_VERTEX_BUDGET // max(len(X), 1), lo), hi)
         try:
-            # (3, N) unit world normals of the epipolar planes, NaN columns for points on the baseline.
-            normals_T = _epipolar_normals(o1, o2, pts.XT)
-        except GeometryError:
+            curves = epipolar_curves(c1, c2, X, n_samples=n_samples, conics=False, arcs=False)
+        except GeometryError:  # DegenerateConfigurationError: the centres coincide
             for n in pair_names:
-                planes[n] = _with(planes[n], message=COINCIDENT_MESSAGE, in_pair=True)
+                planes[n] = replace(planes[n], message=COINCIDENT_MESSAGE, in_pair=True)
             readout = PairReadout(pair_names, message=COINCIDENT_MESSAGE)
         else:
-            baseline = np.array([o1, o2])
-            content = {n1: {}, n2: {}}
-            pinholes = [(n, c) for n, c in ((n1, c1), (n2, c2)) if isinstance(c, PinholeCamera)]
-            if len(pinholes) == 2:
-                ep = epipolar_pair(c1, c2)
-                rank = _matrix_rank3(ep.F, 1e-9)
-                readout = PairReadout(pair_names, ep.F, ep.E, rank, ep.e1, ep.e2)
-                # The pair's epipoles are the images of the other centre (epipole_of_centre): reuse them.
-                epipoles = {n1: ep.e1, n2: ep.e2}
-            else:
-                epipoles = {n: _epipole_of_centre(c, o2 if n == n1 else o1)[0] for n, c in pinholes}
-            segments = _pinhole_segments(pinholes, normals_T, planes)
-            for name, seg_hit in segments.items():
-                idx = "1" if name == n1 else "2"
-                ip = planes[name]
-                content[name] = {"epipoles": (_epipole(f"e{idx}", epipoles[name], ip.width, ip.height),),
-                                 "lines": seg_hit[0]}
-            for name, cam, other in ((n1, c1, o2), (n2, c2, o1)):
-                if not isinstance(cam, PinholeCamera):
-                    content[name] = _panoramic_content(cam, other, normals_T, planes[name], name == n1)
-            for name in (n1, n2):
-                planes[name] = _with(planes[name], in_pair=True, **content[name])
+            baseline = np.array([c1.centre, c2.centre])
+            sides = ((n1, "1", c1, curves.first), (n2, "2", c2, curves.second))
+            segments = _clipped_lines([(side, planes[name]) for name, _, _, side in sides])
+            for (name, idx, cam, side), seg in zip(sides, segments, strict=True):
+                planes[name] = replace(planes[name], in_pair=True,
+                                       **_pair_content(cam, side, seg, curves.normals, n_samples, idx, planes[name]))
+            readout = _readout(pair_names, c1, c2, curves.first, curves.second)
             sel = scene.selected_point
-            if sel is not None and not math.isnan(normals_T[0, sel]):  # a normal is all NaN or all finite
-                tri = np.array([o1, o2, X[sel]])
-                centroid = (tri[0] + tri[1] + tri[2]) / 3.0  # tri.mean(axis=0)
+            if sel is not None and not math.isnan(curves.normals[sel, 0]):  # a normal is all NaN or all finite
+                tri = np.array([c1.centre, c2.centre, X[sel]])
+                centroid = (tri[0] + tri[1] + tri[2]) / 3.0
                 epi_plane = centroid + PLANE_MARGIN * (tri - centroid)
-
-    image_in_3d: dict[str, dict[str, np.ndarray]] = {}
-    for name, b in blocks.items():
-        if "pts3" in b:
-            if name in segments:
-                seg, hit = segments[name]
-                A, t = b["to_plane"]
-                lines3 = seg.reshape(-1, 2) @ A
-                lines3 += t
-                lines3 = lines3.reshape(n_points, 2, 3)
-                lines3[~hit] = np.nan  # (seg is NaN there; set anyway rather than rely on BLAS propagating NaN)
-            else:
-                lines3 = np.full((n_points, 2, 3), np.nan)
-            image_in_3d[name] = {"points": b["pts3"], "lines": lines3}
+                selected_normal = _frozen(curves.normals[sel].copy())
 
     return Derived(
         image_planes=planes,
         pair=readout,
-        poses=poses,
-        rays=rays,
-        frustums=frustums,
-        image_in_3d=image_in_3d,
-        mirror_meshes=meshes,
-        ccd_centres=ccd,
+        poses={name: b["pose"] for name, b in blocks.items()},
+        rays={name: b["ray"] for name, b in blocks.items()},
+        cameras=cams,
         epipolar_plane=epi_plane,
+        selected_normal=selected_normal,
         baseline=baseline,
     )
 
 
-def _with(plane: ImagePlane, **changes) -> ImagePlane:
-    """``dataclasses.replace`` for these plain frozen records (no ``__post_init__``), without its overhead."""
-    new = object.__new__(ImagePlane)
-    new.__dict__.update(plane.__dict__)
-    new.__dict__.update(changes)
-    return new
+def _clipped_lines(sides: list[tuple[EpipolarCurves, ImagePlane]]) -> list[np.ndarray | None]:
+    """Per camera of the pair, its epipolar lines clipped to its image, (N, 2, 2) with NaN rows where a line misses
+    it, or None for a camera that does not draw lines (no exact lines, or a drawn region other than the image
+    rectangle). Images of one size are clipped in one call (the lines are independent)."""
+    drawn = [k for k, (curves, plane) in enumerate(sides) if curves.lines is not None and plane.rim is None]
+    out: list[np.ndarray | None] = [None] * len(sides)
+    groups: dict[tuple[int, int], list[int]] = {}
+    for k in drawn:
+        groups.setdefault((sides[k][1].width, sides[k][1].height), []).append(k)
+    for (w, h), members in groups.items():
+        lines = np.concatenate([sides[k][0].lines for k in members])
+        seg = np.full((len(lines), 2, 2), np.nan)
+        good = finite_nonzero_rows(lines)
+        if len(good):
+            seg[good] = clip_lines_to_rect(lines[good], w, h)[0]  # NaN rows where a line misses the image
+        for k, part in zip(members, np.split(seg, len(members)), strict=True):
+            out[k] = _frozen(part)
+    return out
 
 
-def _pinhole_segments(pinholes: list, normals_T: np.ndarray, planes: dict[str, ImagePlane]
-                      ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    r"""Epipolar lines :math:`l = K^{-T} R^T n` of the planes with world normals ``normals_T`` (3, N) in each
-    pin-hole camera of the pair, clipped to its image: ``{name: (segments (N, 2, 2), hit (N,))}``.
+def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | None, normals: np.ndarray,
+                  n_samples: int, idx: str, plane: ImagePlane) -> dict:
+    """Epipoles and epipolar curves of one camera of the drawn pair, as its panel draws them.
 
-    Images of the same size are clipped in one call (the lines are independent).
+    A model with one image of the baseline (a pin-hole: both directions image to one point, where every epipolar
+    line meets) always shows it; a sphere model's two images (towards the other centre, ``e``, and away, ``e'``)
+    are drawn where the camera really sees them. A camera that draws lines gets them clipped to its image
+    (``lines``, from :func:`_clipped_lines`); every other camera the arcs it really shows (``conics``,
+    ``plane_image_arcs``).
     """
-    n = normals_T.shape[1]
-    sizes = {(planes[name].width, planes[name].height) for name, _ in pinholes}
-    if len(pinholes) == 2 and len(sizes) == 1:
-        (w, h), = sizes
-        (na, ca), (nb, cb) = pinholes
-        lines_T = np.empty((3, 2 * n))
-        np.matmul(ca._plane_to_line, normals_T, out=lines_T[:, :n])
-        np.matmul(cb._plane_to_line, normals_T, out=lines_T[:, n:])
-        seg, hit = _clip_lines(lines_T, float(w), float(h))
-        return {na: (seg[:n], hit[:n]), nb: (seg[n:], hit[n:])}
-    return {name: _clip_lines(cam._plane_to_line @ normals_T, float(planes[name].width), float(planes[name].height))
-            for name, cam in pinholes}
+    labels = (f"e{idx}", f"e{idx}'")
+    single = len(curves.epipoles) == 1
+    epipoles = tuple(
+        _epipole(labels[k], e, plane.width, plane.height)
+        for k, (e, seen) in enumerate(zip(curves.epipoles, curves.epipoles_visible.tolist(), strict=True))
+        if seen or single
+    )
+    if lines is not None:
+        return {"epipoles": epipoles, "lines": lines}
+    arcs = cam.plane_image_arcs(normals, n_samples)
+    return {"epipoles": epipoles, "conics": tuple(a if type(a) is tuple else tuple(a) for a in arcs)}
 
 
-def _panoramic_content(cam, other_centre: np.ndarray, normals_T: np.ndarray, plane: ImagePlane, first: bool) -> dict:
-    """Epipoles and epipolar conics of a panoramic member of the drawn pair.
+def _readout(names: tuple[str, str], c1: CameraModel, c2: CameraModel, first: EpipolarCurves,
+             second: EpipolarCurves) -> PairReadout:
+    r"""E between the rays of any pair, :math:`d_2^T E d_1 = 0`; F between pixels when both cameras image
+    linearly, :math:`F = K_2^{-T} E K_1^{-1}`; the epipoles towards the other centre."""
+    E = essential_from_poses(c1.pose, c2.pose)
+    K1, K2 = c1.projective_calibration, c2.projective_calibration
+    F = rank = None
+    if K1 is not None and K2 is not None:
+        F = fundamental_from_essential(E, K1, K2)
+        rank = int(np.linalg.matrix_rank(F, tol=1e-9 * np.linalg.norm(F)))
+    return PairReadout(names, F, E, rank, first.epipoles[0], second.epipoles[0])
 
-    The baseline meets the mirror twice: ``e`` is the image of the direction :math:`d = R^T (o' - o)` towards
-    the other centre, ``e'`` of :math:`-d`; each is drawn when the mirror shows it. The conics are the visible
-    arcs of the epipolar planes' great circles (normals :math:`R^T n` in the mirror frame).
-    """
-    idx = "1" if first else "2"
-    R = cam.pose.R
-    dx, dy, dz = (R.T @ (other_centre - cam.pose.t)).tolist()
-    epis = []
-    for label, sign in ((f"e{idx}", 1.0), (f"e{idx}'", -1.0)):
-        px = cam._direction_pixel(sign * dx, sign * dy, sign * dz)
-        if px is not None:
-            epis.append(_finite_epipole(label, *px, plane.width, plane.height))
-    n_normals = normals_T.shape[1]
-    lo, hi = CONIC_SAMPLES
-    n_samples = min(max(CONIC_VERTEX_BUDGET // max(n_normals, 1), lo), hi)
-    arcs = _circle_arcs(cam, R.T @ normals_T, n_samples) if n_normals else ()
-    return {"epipoles": tuple(epis), "conics": tuple(arcs)}
+
+def shown_value(value: float, matrix_norm: float) -> float:
+    """``value``, or 0.0 when its magnitude is below ``ZERO_FRACTION`` of the matrix's norm (rounding, shown as 0)."""
+    return 0.0 if abs(value) < ZERO_FRACTION * matrix_norm else value

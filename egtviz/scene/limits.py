@@ -5,11 +5,20 @@ that names the entry and the range. The names are stable: the GUI reads them for
 converting units for display. ``docs/limits.md`` lists them with what each bad input gets.
 
 Ranges are inclusive. Lengths are in metres (scene units), image quantities in pixels.
+
+A camera parameter's range is the camera model's own (``ParameterSpec`` in ``egtviz.geometry``, read through the
+registry ``CAMERA_MODELS``): the names below restate those ranges for the GUI and the docs, they do not set them.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
+
+from ..geometry.camera_model import CAMERA_MODELS
+from ..geometry.catadioptric import B_OVER_A_RANGE, HYPERBOLIC
+from ..geometry.pinhole import FOCAL_PIXELS_RANGE, SKEW_OVER_FOCAL_RANGE, PinholeCamera
+from ..geometry.unified import UnifiedCamera
 
 __all__ = [
     "ANGLE_DEG",
@@ -33,11 +42,14 @@ __all__ = [
     "PIXELS_PER_METRE",
     "PIXEL_SIZE",
     "PRINCIPAL_POINT",
-    "Range",
     "SKEW",
     "SKEW_OVER_FOCAL",
     "SURFACE_SAMPLES",
     "SURFACE_SIZE",
+    "UNIFIED_FOCAL_PIXELS",
+    "XI",
+    "Range",
+    "parameter_range",
 ]
 
 
@@ -59,6 +71,13 @@ class Range:
         """``"low..high unit"``, the bounds multiplied by ``scale`` (e.g. ``1e3`` and ``"mm"`` for metres)."""
         u = self.unit if unit is None else unit
         return f"{self.low * scale:g}..{self.high * scale:g}" + (f" {u}" if u else "")
+
+
+@cache
+def parameter_range(kind: str, name: str) -> Range:
+    """The range of parameter ``name`` of the registered camera model ``kind``, as a :class:`Range`."""
+    p = CAMERA_MODELS[kind].parameter(name)
+    return Range(p.min, p.max, p.unit, p.integer)
 
 
 # -- files ---------------------------------------------------------------------------------------------
@@ -96,34 +115,41 @@ COORDINATE = Range(-1e4, 1e4, "m")
 ANGLE_DEG = Range(-3600.0, 3600.0, "deg")
 """Each of yaw, pitch, roll."""
 
-# -- pin-hole camera -----------------------------------------------------------------------------------
+# -- pin-hole camera (the ``pinhole`` model's ranges) ------------------------------------------------
 
-FOCAL_LENGTH = Range(1e-4, 10.0, "m")
+FOCAL_LENGTH = parameter_range(PinholeCamera.kind, "focal_length")
 """Focal length f (0.1 mm to 10 m; the tutorial's ``K = I`` scenes use 1 m)."""
-PIXEL_SIZE = Range(1e-7, 1.0, "m")
-"""Side of a pixel (0.1 um to 1 m), the inverse of :data:`PIXELS_PER_METRE`."""
-PIXELS_PER_METRE = Range(1.0 / PIXEL_SIZE.high, 1.0 / PIXEL_SIZE.low, "px/m")
+PIXELS_PER_METRE = parameter_range(PinholeCamera.kind, "ku")
 """ku, kv as a spec stores them: 1 / :data:`PIXEL_SIZE`."""
-FOCAL_PIXELS = Range(1.0, 1e6, "px")
+PIXEL_SIZE = Range(1.0 / PIXELS_PER_METRE.high, 1.0 / PIXELS_PER_METRE.low, "m")
+"""Side of a pixel (0.1 um to 1 m), the inverse of :data:`PIXELS_PER_METRE`."""
+FOCAL_PIXELS = Range(*FOCAL_PIXELS_RANGE, "px")
 """ku f and kv f, the focal length in pixels (what K holds): with :data:`PRINCIPAL_POINT` and
 :data:`SKEW_OVER_FOCAL` this keeps K well conditioned (condition number below about 1e10)."""
-PRINCIPAL_POINT = Range(-1e5, 1e5, "px")
-"""Each of u0, v0."""
-SKEW = Range(-1e5, 1e5, "px")
+PRINCIPAL_POINT = parameter_range(PinholeCamera.kind, "u0")
+"""Each of u0, v0 (every model)."""
+SKEW = parameter_range(PinholeCamera.kind, "skew")
 """gamma, the skew entry of K; also ``|gamma| <= ku f`` (:data:`SKEW_OVER_FOCAL`)."""
-SKEW_OVER_FOCAL = Range(-1.0, 1.0, "")
+SKEW_OVER_FOCAL = Range(*SKEW_OVER_FOCAL_RANGE, "")
 """gamma / (ku f) = cot(theta), theta the angle between the pixel axes: 45 to 135 degrees."""
-IMAGE_SIZE = Range(1, 8192, "px", integer=True)
-"""Image width and height, whole pixels (pin-hole and panoramic)."""
+IMAGE_SIZE = parameter_range(PinholeCamera.kind, "width")
+"""Image width and height, whole pixels (every model)."""
 
-# -- panoramic camera ----------------------------------------------------------------------------------
+# -- panoramic camera (the ``hyperbolic`` and ``parabolic`` models' ranges) ------------------------------
 
-PANORAMIC_FOCAL_PIXELS = Range(1.0, 1e6, "px")
+PANORAMIC_FOCAL_PIXELS = parameter_range(HYPERBOLIC.kind, "focal_pixels")
 """The CCD's focal length in pixels."""
-MIRROR_PARAMETER = Range(1e-3, 100.0, "m")
+MIRROR_PARAMETER = parameter_range(HYPERBOLIC.kind, "a")
 """Hyperbola a and b; parabola h (stored as ``a``)."""
-MIRROR_B_OVER_A = Range(1e-2, 1e2, "")
+MIRROR_B_OVER_A = Range(*B_OVER_A_RANGE, "")
 """b / a of a hyperbolic mirror: flatter or sharper mirrors are not drawn reliably."""
+
+# -- unified sphere camera (the ``unified`` model's ranges) -----------------------------------------------
+
+XI = parameter_range(UnifiedCamera.kind, "xi")
+"""xi: 0 a pin-hole, 1 a parabolic mirror, between them a hyperbolic one."""
+UNIFIED_FOCAL_PIXELS = parameter_range(UnifiedCamera.kind, "focal_pixels")
+"""The unified camera's focal length in pixels."""
 
 # -- surfaces ------------------------------------------------------------------------------------------
 

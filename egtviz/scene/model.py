@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry import GeometryError
+from ..geometry import GeometryError, PinholeCamera
+from ..geometry.camera_model import CAMERA_MODELS
 from .derived import Derived, compute_derived
 from .limits import COORDINATE, MAX_POINTS, Range
 from .scene import Scene, SceneFileError
@@ -34,6 +35,7 @@ from .specs import (
     _ranged,
     _short,
     _triple,
+    spec_for_model,
 )
 
 UNDO_DEPTH = 100
@@ -185,10 +187,10 @@ class SceneModel:
         scene = self._scene
         spec = scene.camera(name)
         try:
-            if fields.keys() <= _POSE_FIELDS:  # a drag: only the new position and angles need checking
+            if fields.keys() <= _POSE_FIELDS:  # a drag
                 new_spec = spec.with_pose(**fields)
             else:
-                new_spec = dataclasses.replace(spec, **fields)
+                new_spec = spec.with_fields(**fields)
         except TypeError as exc:
             raise SceneError(f"camera {name!r}: {exc}") from exc
         except GeometryError as exc:
@@ -223,13 +225,21 @@ class SceneModel:
             name, merge_key=merge, position=_triple(position, "position"), ypr_deg=spec.ypr_from_world_rotation(R)
         )
 
-    def add_camera(self, kind: str = "pinhole", name: str | None = None, **fields: Any) -> str:
-        """Add a camera of ``kind`` (``"pinhole"`` or ``"panoramic"``); returns its name."""
-        if kind not in CAMERA_KINDS:
-            raise SceneError(f"kind: expected one of {sorted(CAMERA_KINDS)}, got {kind!r}")
+    def add_camera(self, kind: str = PinholeCamera.kind, name: str | None = None, **fields: Any) -> str:
+        """Add a camera of a registered model ``kind`` (``egtviz.geometry.CAMERA_MODELS``, e.g. ``"unified"``; a
+        scene file's kind, e.g. ``"panoramic"``, is read too); returns its name.
+
+        Without ``fields`` the newcomer is placed where it sees the points, away from the others.
+        """
+        if type(kind) is str and kind in CAMERA_MODELS:
+            spec_cls, selection = spec_for_model(kind)
+        elif type(kind) is str and kind in CAMERA_KINDS:
+            spec_cls, selection = CAMERA_KINDS[kind], {}
+        else:
+            raise SceneError(f"kind: expected one of {sorted(CAMERA_MODELS)}, got {_short(kind)}")
         scene = self._scene
         if name is None:
-            prefix = "cam" if kind == "pinhole" else "pano"
+            prefix = spec_cls.NAME_PREFIX
             i = 1
             while f"{prefix}{i}" in scene.camera_names:
                 i += 1
@@ -237,16 +247,10 @@ class SceneModel:
         if name in scene.camera_names:
             raise SceneError(f"name: a camera named {name!r} exists already")
         if not fields:
-            # Place the newcomer where it sees the points, away from the others.
             k = len(scene.cameras)
             angle = -np.pi / 2 + 0.6 * (k + 1) * (-1) ** k
-            pos = (8.0 * np.cos(angle), 8.0 * np.sin(angle), 1.5 if kind == "pinhole" else 0.5)
-            if kind == "pinhole":
-                yaw = float(np.degrees(np.arctan2(-pos[0], -pos[1])))
-                fields = {"position": pos, "ypr_deg": (yaw, -3.0, 0.0)}
-            else:
-                fields = {"position": pos}
-        spec = CAMERA_KINDS[kind](name=name, **fields)
+            fields = spec_cls.placement((8.0 * np.cos(angle), 8.0 * np.sin(angle)), (0.0, 0.0))
+        spec = spec_cls(name=name, **{**selection, **fields})
         self._replace(Change("add_camera", (name,)), cameras=scene.cameras + (spec,))
         return name
 

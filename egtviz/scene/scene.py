@@ -10,12 +10,18 @@ from typing import Any
 
 import numpy as np
 
-from .limits import COORDINATE, MAX_CAMERAS, MAX_POINTS, MAX_SURFACES, MAX_TITLE_LENGTH, MAX_TOTAL_SURFACE_SAMPLES
+from .limits import (
+    COORDINATE,
+    MAX_CAMERAS,
+    MAX_POINTS,
+    MAX_SURFACES,
+    MAX_TITLE_LENGTH,
+    MAX_TOTAL_SURFACE_SAMPLES,
+)
 from .specs import (
+    CAMERA_KINDS,
     CameraSpec,
     DisplayOptions,
-    PanoramicSpec,
-    PinholeSpec,
     SceneError,
     SurfaceSpec,
     _short,
@@ -23,7 +29,7 @@ from .specs import (
     has_control_characters,
 )
 
-_CAMERA_TYPES = (PinholeSpec, PanoramicSpec)
+_CAMERA_TYPES = tuple(CAMERA_KINDS.values())
 _POINT_MARK = re.compile(r"point:(0|[1-9][0-9]{0,8})")
 
 

@@ -17,24 +17,23 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from ..geometry import GeometryError, Intrinsics, PinholeCamera, Pose
+from ..geometry.camera_model import CAMERA_MODELS, CameraModel, CameraModelInfo
+from ..geometry.catadioptric import HYPERBOLIC, PARABOLIC
 from ..geometry.poses import EGT_CAMERA_BASE, rotx, roty, rotz, ypr_from_egt_rotation
+from ..geometry.unified import UnifiedCamera
 from .limits import (
     ANGLE_DEG,
     COORDINATE,
-    FOCAL_LENGTH,
     FOCAL_PIXELS,
-    IMAGE_SIZE,
     MAX_NAME_LENGTH,
     MIRROR_B_OVER_A,
     MIRROR_PARAMETER,
     PANORAMIC_FOCAL_PIXELS,
-    PIXELS_PER_METRE,
-    PRINCIPAL_POINT,
-    SKEW,
     SKEW_OVER_FOCAL,
     SURFACE_SAMPLES,
     SURFACE_SIZE,
     Range,
+    parameter_range,
 )
 
 _isfinite = math.isfinite
@@ -145,23 +144,6 @@ def _pair(value: Any, name: str, limit: Range, camera: str | None = None) -> tup
     return _numbers(value, name, 2, limit, camera)  # type: ignore[return-value]
 
 
-def _trusted_pose(R: Any, t: tuple[float, float, float]) -> Pose:
-    """A :class:`Pose` of a rotation this module built from angles (orthonormal to rounding) and a checked position.
-
-    ``Pose(R, t)`` would check both again and re-orthonormalise ``R`` by an SVD, which is most of the cost of a
-    camera drag's new camera; here nothing can be wrong, so the arrays are set as ``Pose.__post_init__`` leaves
-    them (float64, read-only).
-    """
-    R = np.array(R, dtype=np.float64)
-    t = np.array(t, dtype=np.float64)
-    R.setflags(write=False)
-    t.setflags(write=False)
-    pose = object.__new__(Pose)
-    object.__setattr__(pose, "R", R)
-    object.__setattr__(pose, "t", t)
-    return pose
-
-
 def _egt_rotation(yaw: float, pitch: float, roll: float) -> list[list[float]]:
     """``egt_rotation_from_ypr`` (``roty(yaw) rotx(pitch) rotz(roll)``, radians) in plain floats."""
     cy, sy = math.cos(yaw), math.sin(yaw)
@@ -195,20 +177,6 @@ def _is_rotation(m: list[list[float]], tol: float = 1e-6) -> bool:
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
 
 
-@lru_cache(maxsize=64, typed=True)
-def _intrinsics_cached(*args: Any) -> Intrinsics:
-    return Intrinsics(*args)
-
-
-def _intrinsics(*args: Any) -> Intrinsics:
-    """``Intrinsics(*args)``, one shared (immutable) object per distinct set of values: a drag re-validates none."""
-    try:
-        hash(args)
-    except TypeError:
-        return Intrinsics(*args)
-    return _intrinsics_cached(*args)
-
-
 def has_control_characters(text: str) -> bool:
     """True if ``text`` holds a control character (C0, DEL, C1): refused in names and titles."""
     return _CONTROL.search(text) is not None
@@ -229,14 +197,166 @@ def _check_name(name: Any) -> str:
     return name
 
 
-def _whole(value: Any, limit: Range, name: str, camera: str | None) -> int:
-    """A whole number inside ``limit`` (``640`` or ``640.0``; ``640.5`` and ``True`` are refused)."""
-    return int(_ranged(value, limit, name, camera))
+
+def _parameter(value: Any, kind: str, parameter: str, field: str, camera: str) -> float:
+    """``value`` checked against the range of ``parameter`` of the registered model ``kind`` (a SceneError naming
+    ``field``: the spec's own name for it)."""
+    return _ranged(value, parameter_range(kind, parameter), field, camera)
+
+
+def _parameter_pair(value: Any, kind: str, parameters: tuple[str, str], field: str, camera: str) -> tuple[float, float]:
+    limits = {parameter_range(kind, p) for p in parameters}
+    (limit,) = limits  # both components of a pair share one range
+    return _pair(value, field, limit, camera)
+
+
+def _egt_pose(ypr_deg: tuple[float, float, float], position: tuple[float, float, float]) -> Pose:
+    """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``: the camera-axes convention of a
+    pin-hole (and of the unified camera, whose frame is a pin-hole's)."""
+    yaw, pitch, roll = (math.radians(a) for a in ypr_deg)
+    return Pose(EGT_CAMERA_BASE @ np.array(_egt_rotation(yaw, pitch, roll)), position)
+
+
+def _egt_ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+    """Yaw, pitch, roll (degrees) of a camera in the convention of :func:`_egt_pose` whose pose rotation is
+    ``R_world``."""
+    try:
+        R = np.asarray(R_world, dtype=np.float64)
+    except (TypeError, ValueError):
+        R = None  # Pose below raises the error
+    if R is not None and R.shape == (3, 3):
+        w = R.tolist()
+        if _isfinite(sum(w[0]) + sum(w[1]) + sum(w[2])) and _is_rotation(w):
+            # The entries of R_egt = EGT_CAMERA_BASE^T R_world that ypr_from_egt_rotation's closed form
+            # (away from the gimbal lock) reads, in plain floats.
+            def egt(i: int, j: int) -> float:
+                b = _BASE_T[i]
+                return b[0] * w[0][j] + b[1] * w[1][j] + b[2] * w[2][j]
+
+            m02, m12, m22 = egt(0, 2), egt(1, 2), egt(2, 2)
+            if abs(m12) < 0.999:
+                yaw = math.atan2(m02, m22)
+                pitch = math.atan2(-m12, math.hypot(m02, m22))
+                roll = math.atan2(egt(1, 0), egt(1, 1))
+                return math.degrees(yaw), math.degrees(pitch), math.degrees(roll)
+    # Not a clean rotation (Pose raises the error) or near the gimbal lock (scipy).
+    R_egt = Pose(R_world, np.zeros(3)).egt_rotation
+    return tuple(float(np.degrees(a)) for a in ypr_from_egt_rotation(R_egt))  # type: ignore[return-value]
+
+
+def _egt_placement(xy: tuple[float, float], target_xy: tuple[float, float], height: float) -> dict[str, Any]:
+    """``position`` and ``ypr_deg`` (pin-hole convention) of a camera at ``xy``, ``height`` up, looking at
+    ``target_xy`` and 3 degrees down."""
+    x, y = float(xy[0]), float(xy[1])
+    yaw = math.degrees(math.atan2(target_xy[0] - x, target_xy[1] - y))
+    return {"position": (x, y, height), "ypr_deg": (yaw, -3.0, 0.0)}
+
+
+@lru_cache(maxsize=128)
+def _model_at_origin(kind: str, values: tuple[tuple[str, float], ...]) -> CameraModel:
+    """The registered model ``kind`` with these parameters at the identity pose: built (and checked) once per set
+    of values; a spec's camera is this one :meth:`~egtviz.geometry.camera_model.CameraModel.moved` to its pose."""
+    return CAMERA_MODELS[kind].build(Pose(), **dict(values))
+
+
+class _CameraSpecBase:
+    """What every camera spec shares: a name, a place, and the camera model its fields describe.
+
+    A subclass is a frozen dataclass with ``name``, ``position``, ``ypr_deg`` and its model's fields; it says
+    which registered model it builds (:attr:`model_kind`), with which parameter values (:meth:`model_values`),
+    and how its angles make a pose (:attr:`pose`, :meth:`ypr_from_world_rotation`).
+    """
+
+    name: str
+    position: tuple[float, float, float]
+    ypr_deg: tuple[float, float, float]
+
+    def _check_place(self) -> str:
+        name = _check_name(self.name)
+        set_ = object.__setattr__
+        set_(self, "name", name)
+        set_(self, "position", _triple(self.position, "position", COORDINATE, name))
+        set_(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
+        return name
+
+    @property
+    def model_kind(self) -> str:
+        """The registry key of the camera model this spec builds (``egtviz.geometry.CAMERA_MODELS``)."""
+        raise NotImplementedError
+
+    @property
+    def model(self) -> CameraModelInfo:
+        """The registry entry of :attr:`model_kind`."""
+        return CAMERA_MODELS[self.model_kind]
+
+    #: Where each model parameter is stored: ``parameter -> (field, index in the field's pair or None)``.
+    PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {}
+
+    def model_values(self) -> dict[str, float]:
+        """The model's parameters (``from_parameters`` keywords, in the model's order) from this spec's fields."""
+        out = {}
+        for p in self.model.parameters:
+            field, index = self.PARAMETER_FIELDS[p.name]
+            value = getattr(self, field)
+            out[p.name] = value if index is None else value[index]
+        return out
+
+    def fields_for_parameters(self, **values: float) -> dict[str, Any]:
+        """The spec fields (``update_camera`` keywords) that store these model parameter values."""
+        fields: dict[str, Any] = {}
+        for name, value in values.items():
+            where = self.PARAMETER_FIELDS.get(name)
+            if where is None or name not in {p.name for p in self.model.parameters}:
+                raise SceneError(f"camera {self.name!r}: {name}: not a parameter of the {self.model_kind} model")
+            field, index = where
+            if index is None:
+                fields[field] = value
+            else:
+                pair = list(fields.get(field, getattr(self, field)))
+                pair[index] = value
+                fields[field] = tuple(pair)
+        return fields
+
+    def with_parameters(self, **values: float) -> Any:
+        """This spec with some model parameters changed (:meth:`fields_for_parameters`; checked as any change)."""
+        return self.with_fields(**self.fields_for_parameters(**values))
+
+    @property
+    def pose(self) -> Pose:
+        raise NotImplementedError
+
+    def camera(self) -> CameraModel:
+        """The camera model of this spec (built once per spec: specs are immutable)."""
+        return self._camera
+
+    @cached_property
+    def _camera(self) -> CameraModel:
+        return _model_at_origin(self.model_kind, tuple(self.model_values().items())).moved(self.pose)
+
+    def _check_model(self) -> None:
+        """Build the model once at the origin: a value the model refuses is a SceneError naming this camera."""
+        try:
+            _model_at_origin(self.model_kind, tuple(self.model_values().items()))
+        except GeometryError as exc:
+            raise SceneError(f"camera {self.name!r}: {exc}") from exc
+
+    def with_pose(self, position: Any = None, ypr_deg: Any = None) -> Any:
+        """This spec at another place (a drag): ``dataclasses.replace`` with the new position and angles."""
+        changes = {}
+        if position is not None:
+            changes["position"] = position
+        if ypr_deg is not None:
+            changes["ypr_deg"] = ypr_deg
+        return dataclasses.replace(self, **changes)  # type: ignore[type-var]
+
+    def with_fields(self, **fields: Any) -> Any:
+        """This spec with other field values (``dataclasses.replace``); a subclass may adapt the rest sensibly."""
+        return dataclasses.replace(self, **fields)  # type: ignore[type-var]
 
 
 @dataclass(frozen=True)
-class PinholeSpec:
-    """A pin-hole camera placed in EGT's convention (``f_Rt2H``)."""
+class PinholeSpec(_CameraSpecBase):
+    """A pin-hole camera placed in EGT's convention (``f_Rt2H``); the ``pinhole`` model."""
 
     name: str
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -252,86 +372,64 @@ class PinholeSpec:
     width: int = 640
     height: int = 480
 
-    kind: ClassVar[Literal["pinhole"]] = "pinhole"
+    kind: ClassVar[str] = "pinhole"
+    """The entry's ``kind`` in a scene file."""
+    NAME_PREFIX: ClassVar[str] = "cam"
+    ANGLE_CONVENTION: ClassVar[str] = (
+        "EGT convention (f_Rt2H): yaw, pitch, roll turn the camera about its own axes "
+        "(x right, y down, z = optical axis): R = roty(yaw) rotx(pitch) rotz(roll), then H = [rotx(-90) R, t]. "
+        "All zero: looking along world +y."
+    )
+    PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
+        "focal_length": ("focal_length", None), "ku": ("pixels_per_metre", 0), "kv": ("pixels_per_metre", 1),
+        "skew": ("skew", None), "u0": ("principal_point", 0), "v0": ("principal_point", 1),
+        "width": ("width", None), "height": ("height", None),
+    }
+    """A new camera's name: this and a number."""
+
+    @staticmethod
+    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
+        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
+        return _egt_placement(xy, target_xy, 1.5)
 
     def __post_init__(self) -> None:
-        name = _check_name(self.name)
+        name = self._check_place()
         set_ = object.__setattr__
-        set_(self, "name", name)
-        set_(self, "position", _triple(self.position, "position", COORDINATE, name))
-        set_(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
-        set_(self, "focal_length", _ranged(self.focal_length, FOCAL_LENGTH, "focal_length", name))
-        set_(self, "pixels_per_metre", _pair(self.pixels_per_metre, "pixels_per_metre", PIXELS_PER_METRE, name))
-        set_(self, "principal_point", _pair(self.principal_point, "principal_point", PRINCIPAL_POINT, name))
-        set_(self, "skew", _ranged(self.skew, SKEW, "skew", name))
-        set_(self, "width", _whole(self.width, IMAGE_SIZE, "width", name))
-        set_(self, "height", _whole(self.height, IMAGE_SIZE, "height", name))
-        for k in self.pixels_per_metre:
-            if self.focal_length * k not in FOCAL_PIXELS:
-                raise OutOfRangeError(name, "focal_length * pixels_per_metre", self.focal_length * k, FOCAL_PIXELS)
+        k = self.model_kind
+        set_(self, "focal_length", _parameter(self.focal_length, k, "focal_length", "focal_length", name))
+        set_(self, "pixels_per_metre", _parameter_pair(self.pixels_per_metre, k, ("ku", "kv"), "pixels_per_metre", name))
+        set_(self, "principal_point", _parameter_pair(self.principal_point, k, ("u0", "v0"), "principal_point", name))
+        set_(self, "skew", _parameter(self.skew, k, "skew", "skew", name))
+        set_(self, "width", int(_parameter(self.width, k, "width", "width", name)))
+        set_(self, "height", int(_parameter(self.height, k, "height", "height", name)))
+        for ku in self.pixels_per_metre:
+            if self.focal_length * ku not in FOCAL_PIXELS:
+                raise OutOfRangeError(name, "focal_length * pixels_per_metre", self.focal_length * ku, FOCAL_PIXELS)
         if self.skew / (self.focal_length * self.pixels_per_metre[0]) not in SKEW_OVER_FOCAL:
             raise OutOfRangeError(
                 name, "skew / (focal_length * pixels_per_metre[0])",
                 self.skew / (self.focal_length * self.pixels_per_metre[0]), SKEW_OVER_FOCAL,
             )
-        try:
-            self.intrinsics  # noqa: B018 - validates focal length, pixel size, image size
-        except GeometryError as exc:
-            raise SceneError(f"camera {self.name!r}: {exc}") from exc
+        self._check_model()
+
+    @property
+    def model_kind(self) -> str:
+        return PinholeCamera.kind
+
 
     @property
     def intrinsics(self) -> Intrinsics:
-        return _intrinsics(
-            self.focal_length, self.pixels_per_metre, self.principal_point, self.skew, self.width, self.height
-        )
+        return self.camera().intrinsics  # type: ignore[attr-defined]
 
     @property
     def pose(self) -> Pose:
         """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
-        yaw, pitch, roll = (math.radians(a) for a in self.ypr_deg)
-        return _trusted_pose(EGT_CAMERA_BASE @ np.array(_egt_rotation(yaw, pitch, roll)), self.position)
-
-    def with_pose(self, position: Any = None, ypr_deg: Any = None) -> PinholeSpec:
-        """This spec at another place (``dataclasses.replace(spec, position=..., ypr_deg=...)``, for a drag).
-
-        Only the new values are checked (the rest was checked when this spec was made); the intrinsics
-        are shared.
-        """
-        return _with_pose(self, position, ypr_deg)
-
-    def camera(self) -> PinholeCamera:
-        return self._camera
-
-    @cached_property
-    def _camera(self) -> PinholeCamera:
-        # Specs are immutable, so the core camera is built once per spec.
-        return PinholeCamera(self.pose, self.intrinsics)
+        return _egt_pose(self.ypr_deg, self.position)
 
     @staticmethod
     def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
         """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
-        try:
-            R = np.asarray(R_world, dtype=np.float64)
-        except (TypeError, ValueError):
-            R = None  # Pose below raises the error
-        if R is not None and R.shape == (3, 3):
-            w = R.tolist()
-            if _isfinite(sum(w[0]) + sum(w[1]) + sum(w[2])) and _is_rotation(w):
-                # The entries of R_egt = EGT_CAMERA_BASE^T R_world that ypr_from_egt_rotation's closed form
-                # (away from the gimbal lock) reads, in plain floats.
-                def egt(i: int, j: int) -> float:
-                    b = _BASE_T[i]
-                    return b[0] * w[0][j] + b[1] * w[1][j] + b[2] * w[2][j]
-
-                m02, m12, m22 = egt(0, 2), egt(1, 2), egt(2, 2)
-                if abs(m12) < 0.999:
-                    yaw = math.atan2(m02, m22)
-                    pitch = math.atan2(-m12, math.hypot(m02, m22))
-                    roll = math.atan2(egt(1, 0), egt(1, 1))
-                    return math.degrees(yaw), math.degrees(pitch), math.degrees(roll)
-        # Not a clean rotation (Pose raises the error) or near the gimbal lock (scipy).
-        R_egt = Pose(R_world, np.zeros(3)).egt_rotation
-        return tuple(float(np.degrees(a)) for a in ypr_from_egt_rotation(R_egt))  # type: ignore[return-value]
+        return _egt_ypr_from_world_rotation(R_world)
 
 
 def panoramic_rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
@@ -340,14 +438,16 @@ def panoramic_rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.nda
 
 
 @dataclass(frozen=True)
-class PanoramicSpec:
-    """A central catadioptric camera: mirror focus at ``position``, mirror axis the frame's z."""
+class PanoramicSpec(_CameraSpecBase):
+    """A central catadioptric camera: mirror focus at ``position``, mirror axis the frame's z; the ``hyperbolic``
+    or ``parabolic`` model, as ``mirror`` says."""
 
     name: str
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     ypr_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Degrees: ``R = rotz(yaw) roty(pitch) rotx(roll)``; zero is an upright mirror."""
     mirror: Literal["hyperbolic", "parabolic"] = "hyperbolic"
+    """The model's registry kind: the mirror's shape."""
     a: float = 3.0
     """Hyperbola ``a``; for a parabolic mirror, its parameter ``h``."""
     b: float = 1.0
@@ -357,28 +457,46 @@ class PanoramicSpec:
     width: int = 640
     height: int = 480
 
-    kind: ClassVar[Literal["panoramic"]] = "panoramic"
+    kind: ClassVar[str] = "panoramic"
+    """The entry's ``kind`` in a scene file (the mirror's shape is ``mirror``)."""
+    NAME_PREFIX: ClassVar[str] = "pano"
+    ANGLE_CONVENTION: ClassVar[str] = (
+        "Mirror frame: z = mirror axis. R = rotz(yaw) roty(pitch) rotx(roll); all zero: an upright mirror."
+    )
+    PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
+        "a": ("a", None), "b": ("b", None), "h": ("a", None), "focal_pixels": ("focal_pixels", None),
+        "u0": ("principal_point", 0), "v0": ("principal_point", 1),
+        "width": ("width", None), "height": ("height", None),
+    }
+    """A new camera's name: this and a number."""
+
+    @staticmethod
+    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
+        """Fields of an upright mirror at ``xy``, 0.5 m up (it sees all around)."""
+        return {"position": (float(xy[0]), float(xy[1]), 0.5)}
 
     def __post_init__(self) -> None:
-        name = _check_name(self.name)
+        name = self._check_place()
         set_ = object.__setattr__
-        set_(self, "name", name)
-        set_(self, "position", _triple(self.position, "position", COORDINATE, name))
-        set_(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
-        if not isinstance(self.mirror, str) or self.mirror not in ("hyperbolic", "parabolic"):
+        if not isinstance(self.mirror, str) or self.mirror not in _MIRROR_KINDS:
             raise SceneError(f"camera {name!r}: mirror: expected 'hyperbolic' or 'parabolic', got {_short(self.mirror)}")
-        set_(self, "a", _ranged(self.a, MIRROR_PARAMETER, "a", name))
-        set_(self, "b", _ranged(self.b, MIRROR_PARAMETER, "b", name))
-        if self.mirror == "hyperbolic" and self.b / self.a not in MIRROR_B_OVER_A:
+        k = self.mirror
+        shape = _MIRROR_KINDS[k]
+        set_(self, "a", _parameter(self.a, k, shape[0], "a", name))
+        # b is stored for a parabolic mirror too (switching back restores it): it takes the hyperbola's range.
+        set_(self, "b", _parameter(self.b, _HYPERBOLIC, "b", "b", name))
+        if len(shape) == 2 and self.b / self.a not in MIRROR_B_OVER_A:
             raise OutOfRangeError(name, "b/a", self.b / self.a, MIRROR_B_OVER_A)
-        set_(self, "focal_pixels", _ranged(self.focal_pixels, PANORAMIC_FOCAL_PIXELS, "focal_pixels", name))
-        set_(self, "principal_point", _pair(self.principal_point, "principal_point", PRINCIPAL_POINT, name))
-        set_(self, "width", _whole(self.width, IMAGE_SIZE, "width", name))
-        set_(self, "height", _whole(self.height, IMAGE_SIZE, "height", name))
-        try:
-            self.camera()
-        except GeometryError as exc:
-            raise SceneError(f"camera {self.name!r}: {exc}") from exc
+        set_(self, "focal_pixels", _parameter(self.focal_pixels, k, "focal_pixels", "focal_pixels", name))
+        set_(self, "principal_point", _parameter_pair(self.principal_point, k, ("u0", "v0"), "principal_point", name))
+        set_(self, "width", int(_parameter(self.width, k, "width", "width", name)))
+        set_(self, "height", int(_parameter(self.height, k, "height", "height", name)))
+        self._check_model()
+
+    @property
+    def model_kind(self) -> str:
+        return self.mirror
+
 
     @property
     def K(self) -> np.ndarray:
@@ -386,39 +504,37 @@ class PanoramicSpec:
         f = self.focal_pixels
         return np.array([[f, 0.0, u0], [0.0, f, v0], [0.0, 0.0, 1.0]])
 
+    def mirror_model(self) -> Any:
+        """The core mirror (``HyperbolicMirror`` or ``ParabolicMirror``)."""
+        return self.camera().mirror  # type: ignore[attr-defined]
+
     @property
     def pose(self) -> Pose:
         """``Pose(panoramic_rotation_from_ypr(*radians(ypr_deg)), position)``."""
         yaw, pitch, roll = (math.radians(a) for a in self.ypr_deg)
-        return _trusted_pose(_panoramic_rotation(yaw, pitch, roll), self.position)
+        return Pose(_panoramic_rotation(yaw, pitch, roll), self.position)
 
-    def with_pose(self, position: Any = None, ypr_deg: Any = None) -> PanoramicSpec:
-        """This spec at another place (``dataclasses.replace(spec, position=..., ypr_deg=...)``, for a drag).
+    def with_fields(self, **fields: Any) -> PanoramicSpec:
+        """``dataclasses.replace``; a new ``mirror`` shape alone keeps the image as it was.
 
-        Only the new values are checked (the rest was checked when this spec was made), and the new spec's
-        camera is this camera moved: mirror and calibration are shared, not built and checked again.
+        The new mirror's horizon (the image of the horizontal rays, where a panoramic scene's points mostly are)
+        stays at the radius it had about the principal point: a parabola's ``h`` is set for the CCD's focal
+        length, or for a hyperbola (EGT's ``a = 3``, ``b = 1``) the CCD's focal length. Without this, a hyperbolic
+        camera's ``a = 3`` read as a parabola's ``h`` would image the rim 6000 px out and every point outside the
+        image.
         """
-        return _with_pose(self, position, ypr_deg)
-
-    def mirror_model(self):
-        from ..geometry.mirrors import HyperbolicMirror, ParabolicMirror
-
-        if self.mirror == "hyperbolic":
-            return HyperbolicMirror(self.a, self.b)
-        return ParabolicMirror(self.a)
-
-    def camera(self):
-        return self._camera
-
-    @cached_property
-    def _camera(self):
-        from ..geometry.catadioptric import CatadioptricCamera
-
-        elsewhere = self.__dict__.pop("_camera_elsewhere", None)
-        if elsewhere is not None:  # made by with_pose: the same mirror and CCD, moved
-            return _moved_camera(elsewhere, self.pose)
-
-        return CatadioptricCamera(self.pose, self.mirror_model(), self.K, self.width, self.height)
+        mirror = fields.get("mirror", self.mirror)
+        if mirror == self.mirror or not {"a", "b", "focal_pixels"}.isdisjoint(fields) or mirror not in _MIRROR_KINDS:
+            return dataclasses.replace(self, **fields)
+        radius = _horizon_radius(self.camera())
+        if len(_MIRROR_KINDS[mirror]) == 1:
+            # Orthographic CCD: a horizontal ray meets the parabola at radius h, imaged at radius h f.
+            h = min(max(radius / self.focal_pixels, MIRROR_PARAMETER.low), MIRROR_PARAMETER.high)
+            return dataclasses.replace(self, **fields, a=h)
+        a, b = 3.0, 1.0
+        unit = CAMERA_MODELS[mirror].build(Pose(), a=a, b=b, focal_pixels=1.0, u0=0.0, v0=0.0)
+        f = min(max(radius / _horizon_radius(unit), PANORAMIC_FOCAL_PIXELS.low), PANORAMIC_FOCAL_PIXELS.high)
+        return dataclasses.replace(self, **fields, a=a, b=b, focal_pixels=f)
 
     @staticmethod
     def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
@@ -434,41 +550,117 @@ class PanoramicSpec:
         return float(np.degrees(yaw)), float(np.degrees(pitch)), float(np.degrees(roll))
 
 
-CameraSpec = PinholeSpec | PanoramicSpec
-CAMERA_KINDS: dict[str, type] = {"pinhole": PinholeSpec, "panoramic": PanoramicSpec}
+def _horizon_radius(camera: CameraModel) -> float:
+    """Largest distance (pixels) from the principal point of the camera's horizon, the image of the plane through its
+    centre perpendicular to its axis (of its drawn region's boundary when the horizon is not seen)."""
+    p = camera.parameters()
+    arcs = camera.plane_image_arcs(camera.pose.R[:, 2], 64)[0]
+    curve = np.vstack(arcs) if arcs else camera.rim(64)
+    return float(np.hypot(curve[:, 0] - p["u0"], curve[:, 1] - p["v0"]).max())
 
 
-@lru_cache(maxsize=None)
-def _field_names(cls: type) -> tuple[str, ...]:
-    return tuple(f.name for f in dataclasses.fields(cls))
+_HYPERBOLIC = HYPERBOLIC.kind
+#: The catadioptric models a ``PanoramicSpec`` builds (file format: its ``mirror``), and the parameters its fields
+#: ``a``, ``b`` hold (a parabolic mirror's ``h`` is stored as ``a``).
+_MIRROR_KINDS = {HYPERBOLIC.kind: ("a", "b"), PARABOLIC.kind: ("h",)}
 
 
-def _with_pose(spec: Any, position: Any, ypr_deg: Any) -> Any:
-    """``spec.with_pose``: a new spec object made without ``__post_init__`` (nothing else changed)."""
-    cls = type(spec)
-    new = object.__new__(cls)
-    state = new.__dict__
-    old = spec.__dict__
-    for name in _field_names(cls):  # the fields only: cached values (the camera) belong to the old pose
-        state[name] = old[name]
-    if position is not None:
-        state["position"] = _triple(position, "position", COORDINATE, old["name"])
-    if ypr_deg is not None:
-        state["ypr_deg"] = _triple(ypr_deg, "ypr_deg", ANGLE_DEG, old["name"])
-    if cls is PanoramicSpec:
-        built = old.get("_camera", old.get("_camera_elsewhere"))
-        if built is not None:
-            state["_camera_elsewhere"] = built  # moved to the new pose on first use
-    return new
+@dataclass(frozen=True)
+class UnifiedSpec(_CameraSpecBase):
+    """A unified sphere camera, placed like a pin-hole (its frame is a pin-hole's); the ``unified`` model."""
+
+    name: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """The sphere's centre (the viewpoint) in world coordinates."""
+    ypr_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Yaw, pitch, roll in degrees, as a pin-hole's (all zero: looking along world +y)."""
+    xi: float = 0.8
+    """0: a pin-hole, 1: a parabolic mirror, between: a hyperbolic one."""
+    focal_pixels: float = 300.0
+    principal_point: tuple[float, float] = (320.0, 240.0)
+    width: int = 640
+    height: int = 480
+
+    kind: ClassVar[str] = "unified"
+    """The entry's ``kind`` in a scene file."""
+    NAME_PREFIX: ClassVar[str] = "uni"
+    ANGLE_CONVENTION: ClassVar[str] = (
+        "As a pin-hole (EGT's f_Rt2H): yaw, pitch, roll about the camera's own axes (z = optical axis, the sphere's "
+        "axis); all zero: looking along world +y. The projection centre is xi behind the sphere's centre."
+    )
+    PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
+        "xi": ("xi", None), "focal_pixels": ("focal_pixels", None), "u0": ("principal_point", 0), "v0": ("principal_point", 1),
+        "width": ("width", None), "height": ("height", None),
+    }
+    """A new camera's name: this and a number."""
+
+    @staticmethod
+    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
+        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
+        return _egt_placement(xy, target_xy, 1.5)
+
+    def __post_init__(self) -> None:
+        name = self._check_place()
+        set_ = object.__setattr__
+        k = self.model_kind
+        set_(self, "xi", _parameter(self.xi, k, "xi", "xi", name))
+        set_(self, "focal_pixels", _parameter(self.focal_pixels, k, "focal_pixels", "focal_pixels", name))
+        set_(self, "principal_point", _parameter_pair(self.principal_point, k, ("u0", "v0"), "principal_point", name))
+        set_(self, "width", int(_parameter(self.width, k, "width", "width", name)))
+        set_(self, "height", int(_parameter(self.height, k, "height", "height", name)))
+        self._check_model()
+
+    @property
+    def model_kind(self) -> str:
+        return UnifiedCamera.kind
 
 
-def _moved_camera(cam: Any, pose: Pose) -> Any:
-    """``cam`` at ``pose``: its other (checked, immutable) fields are shared, its ``__post_init__`` not run again."""
-    new = object.__new__(type(cam))
-    for f in dataclasses.fields(cam):
-        object.__setattr__(new, f.name, getattr(cam, f.name))
-    object.__setattr__(new, "pose", pose)
-    return new
+    @property
+    def pose(self) -> Pose:
+        """As a pin-hole's: ``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
+        return _egt_pose(self.ypr_deg, self.position)
+
+    @staticmethod
+    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
+        return _egt_ypr_from_world_rotation(R_world)
+
+
+CameraSpec = PinholeSpec | PanoramicSpec | UnifiedSpec
+#: The scene file's camera entries: ``kind`` -> spec class. Every spec builds a registered camera model
+#: (``spec.model_kind``); a ``panoramic`` entry is a hyperbolic or parabolic one as its ``mirror`` says.
+CAMERA_KINDS: dict[str, type] = {cls.kind: cls for cls in (PinholeSpec, PanoramicSpec, UnifiedSpec)}
+
+
+def spec_for_model(model_kind: str) -> tuple[type, dict[str, Any]]:
+    """The spec class that builds the registered model ``model_kind``, and the fields that select it.
+
+    Raises:
+        SceneError: for a kind no spec builds.
+    """
+    found = _SPEC_FOR_MODEL.get(model_kind) if type(model_kind) is str else None
+    if found is None:
+        raise SceneError(f"kind: expected one of {sorted(CAMERA_MODELS)}, got {_short(model_kind)}")
+    cls, selection = found
+    return cls, dict(selection)
+
+
+def model_choices(spec_cls: type) -> dict[str, tuple[str, ...]]:
+    """The fields of ``spec_cls`` that choose among the models it builds, and their values (``{"mirror":
+    ("hyperbolic", "parabolic")}`` for :class:`PanoramicSpec`; empty for a spec of one model)."""
+    out: dict[str, list[str]] = {}
+    for cls, selection in _SPEC_FOR_MODEL.values():
+        if cls is spec_cls:
+            for field, value in selection.items():
+                out.setdefault(field, []).append(value)
+    return {field: tuple(values) for field, values in out.items()}
+
+
+_SPEC_FOR_MODEL: dict[str, tuple[type, dict[str, Any]]] = {
+    PinholeCamera.kind: (PinholeSpec, {}),
+    UnifiedCamera.kind: (UnifiedSpec, {}),
+    **{mirror: (PanoramicSpec, {"mirror": mirror}) for mirror in _MIRROR_KINDS},
+}
 
 
 @dataclass(frozen=True)

@@ -31,14 +31,17 @@ import itertools
 import threading
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import lru_cache
 from html import escape
 from typing import Any
 
 import numpy as np
 import viser
 
-from ..geometry import GeometryError
+from ..geometry import GeometryError, PinholeCamera
+from ..geometry.camera_model import CAMERA_MODELS
+from ..geometry.catadioptric import HYPERBOLIC
 from ..geometry.poses import matrix_from_quat_wxyz
 from ..scene import (
     SCENES,
@@ -53,7 +56,9 @@ from ..scene import (
     scene_from_bytes,
     scene_to_bytes,
 )
-from ..scene.specs import OutOfRangeError
+from ..scene.derived import shown_value
+from ..scene.specs import OutOfRangeError, model_choices
+from .camera_fields import CameraField, camera_fields
 from .fields import (
     Debouncer,
     FieldError,
@@ -64,26 +69,43 @@ from .fields import (
     on_event,
     parse_numbers,
 )
-from .svg import empty_svg, image_plane_svg
+from .figure_export import panel_svg_of, svg_to_png
+from .panels import (
+    CONTROL_PX,
+    DEFAULT_WINDOW,
+    DIVIDER_PX,
+    VIEW_ACTIONS,
+    PanelGrid,
+    PanelView,
+    WindowSize,
+    dock_plan,
+    framed_camera,
+    initial_view,
+    plan_grid,
+    window_from_canvas,
+)
+from .models import SHORT_LABELS
+from .svg import NORMAL, PRESENT, empty_svg, image_plane_svg
 from .svg import warm_up as svg_warm_up
 
 __all__ = ["EgtvizApp", "ClientView"]
 
-PANEL_WIDTH = 430
-CONTROL_WIDTH = 330
-
-EGT_PINHOLE_HINT = (
-    "EGT convention (f_Rt2H): yaw, pitch, roll turn the camera about its own axes "
-    "(x right, y down, z = optical axis): R = roty(yaw) rotx(pitch) rotz(roll), then H = [rotx(-90) R, t]. "
-    "All zero: looking along world +y."
-)
-EGT_PANORAMIC_HINT = (
-    "Mirror frame: z = mirror axis. R = rotz(yaw) roty(pitch) rotx(roll); all zero: an upright mirror."
-)
-
+#: The per-panel buttons in each camera's folder: label -> (button text -> view action of :class:`PanelView`).
+VIEW_BUTTONS = {
+    "panel view": {"fit": "fit", "image": "image", "+": "+", "\u2212": "-"},
+    "panel pan": {"\u2190": "left", "\u2192": "right", "\u2191": "up", "\u2193": "down"},
+}
+DOWNLOAD_FORMATS = ("SVG", "PNG")
+#: The width viser's dock gives a new docked column (CSS pixels).
+DOCK_DEFAULT_PX = 300.0
+#: Presentation mode's GUI type: Mantine (viser's GUI toolkit) scales its rem-based sizes by this variable.
+PRESENT_GUI_CSS = "<style>:root:root{--mantine-scale:1.25}</style>"
 
 def _fmt_matrix(M: np.ndarray) -> str:
-    rows = ["  ".join(f"{v: .4e}" for v in row) for row in np.asarray(M)]
+    """A matrix's rows; an entry below ``ZERO_FRACTION`` of the matrix's norm is rounding and shown as 0."""
+    M = np.asarray(M, float)
+    norm = float(np.linalg.norm(M))
+    rows = ["  ".join(" 0" if shown_value(v, norm) == 0.0 else f"{v: .4e}" for v in row) for row in M.tolist()]
     return "\n".join(rows)
 
 
@@ -97,22 +119,32 @@ def _fmt_vec(v: np.ndarray | None) -> str:
 
 
 def pair_html(derived: Any) -> str:
-    """The F / E read-out of the drawn pair (HTML: cheaper for the browser than re-parsing markdown per drag step)."""
+    """The epipolar read-out of the drawn pair (HTML: cheaper for the browser than re-parsing markdown per drag step).
+
+    Two pin-hole cameras: F (pixels, ``m2^T F m1 = 0``), its rank, E and the epipoles. Any pair with another
+    camera: E between the viewing rays (``d2^T E d1 = 0``) and a note that no F relates the pixels.
+    """
     p = derived.pair
     style = "font-size:0.82em;line-height:1.35"
     if p.names is None:
         return f'<div style="{style}"><b>Epipolar geometry</b>: add a second camera to see it.</div>'
-    law = "<code>m2&#7488; F m1 = 0</code>" if p.F is not None else ""
+    law = "<code>m2&#7488; F m1 = 0</code>" if p.F is not None else "<code>d2&#7488; E d1 = 0</code>"
     head = (f'<div style="{style}" data-egtviz="readout"><b>Drawn pair {escape(p.names[0])} &rarr; '
             f"{escape(p.names[1])}</b>&nbsp; {law}<br>")
     if p.message:
         return f'{head}<b style="color:#a00">{escape(p.message)}</b></div>'
-    if p.F is None:
-        return (f"{head}Panoramic pair (no F between pixels): <code>X_h2&#7488; E X_h1 = 0</code> holds between "
-                "the viewing rays (mirror points); the epipolar conics are drawn in the panels.</div>")
     pre = 'style="margin:2px 0;font-size:0.95em;background:#f3f3f3;padding:2px 4px"'
+    if p.F is None:
+        cams = derived.cameras
+        curved = [n for n in p.names if cams[n].projective_calibration is None]
+        who = " and ".join(f"{escape(n)} ({escape(SHORT_LABELS[cams[n].kind])})" for n in curved)
+        return (f'{head}<span data-relation="essential">No F between pixels: {who} images lines as curves. '
+                f"What holds is the epipolar constraint between the viewing rays, <code>d2&#7488; E d1 = 0</code> "
+                f"(d1, d2 unit rays in each camera's frame); the epipolar curves are drawn in the panels.</span>"
+                f"<br>E = [t]&#8339; R:<pre {pre}>{_fmt_matrix(p.E)}</pre></div>")
     return (
-        f"{head}F (unit Frobenius norm), rank {p.rank}:<pre {pre}>{_fmt_matrix(p.F)}</pre>"
+        f'{head}<span data-relation="fundamental">F (unit Frobenius norm), rank {p.rank}:</span>'
+        f"<pre {pre}>{_fmt_matrix(p.F)}</pre>"
         f"E = [t]&#8339; R:<pre {pre}>{_fmt_matrix(p.E)}</pre>"
         f"e1 = {escape(_fmt_vec(p.e1))}<br>e2 = {escape(_fmt_vec(p.e2))}</div>"
     )
@@ -129,19 +161,13 @@ def _rules(label: str, unit: str, rng: limits.Range, *, scale: float = 1.0,
 FIELD_RULES: dict[str, tuple[NumberRule, ...]] = {
     "position": _rules("position", "m", limits.COORDINATE, axes="xyz"),
     "ypr": _rules("angle", "deg", limits.ANGLE_DEG, axes=("yaw", "pitch", "roll")),
-    "focal": _rules("focal length", "mm", limits.FOCAL_LENGTH, scale=1e3),
-    "pixel": _rules("pixel size", "µm", limits.PIXEL_SIZE, scale=1e6, axes="xy"),
-    "pp": _rules("principal point", "px", limits.PRINCIPAL_POINT, axes="uv"),
-    "size": _rules("image size", "px", limits.IMAGE_SIZE, axes=("width", "height")),
-    "a": _rules("a", "m", limits.MIRROR_PARAMETER),
-    "b": _rules("b", "m", limits.MIRROR_PARAMETER),
-    "focal_px": _rules("focal length", "px", limits.PANORAMIC_FOCAL_PIXELS),
 }
+"""The pose fields every camera has; a model's own fields take their rules from its parameters
+(:mod:`egtviz.viewer.camera_fields`)."""
 #: The "how many points" field: what the page offers is what the server accepts.
 POINTS_RULE = (NumberRule("how many points", "", 0, limits.MAX_POINTS, integer=True),)
 #: Seconds a text field must stay unchanged before its value is judged (see :class:`Debouncer`).
 FIELD_DELAY = 0.6
-MIRRORS = ("hyperbolic", "parabolic")
 SURFACE_KINDS = ("plane", "sphere")
 
 
@@ -167,43 +193,42 @@ def _restated(exc: OutOfRangeError, name: str) -> FieldError:
     return FieldError(f"{name}: {exc}")
 
 
+@lru_cache(maxsize=16)
+def _model_fields(model_kind: str) -> tuple[dict[str, CameraField], dict[str, Any]]:
+    """A model's GUI fields by key, and its parameter specs by name (from the registry)."""
+    params = CAMERA_MODELS[model_kind].parameters
+    return {f.key: f for f in camera_fields(params)}, {p.name: p for p in params}
+
+
 def _spec_values(spec: Any) -> dict[str, tuple[float, ...]]:
-    """A camera spec's values as its fields show them (spec units -> UI units)."""
-    values: dict[str, tuple[float, ...]] = {
-        "position": tuple(spec.position),
-        "ypr": tuple(spec.ypr_deg),
-        "pp": tuple(spec.principal_point),
-        "size": (float(spec.width), float(spec.height)),
-    }
-    if spec.kind == "pinhole":
-        values["focal"] = (spec.focal_length * 1e3,)
-        values["pixel"] = tuple(1e6 / k for k in spec.pixels_per_metre)
-    else:
-        values["a"] = (float(spec.a),)
-        values["b"] = (float(spec.b),)
-        values["focal_px"] = (float(spec.focal_pixels),)
+    """A camera spec's values as its fields show them (model parameters -> the fields' units)."""
+    values: dict[str, tuple[float, ...]] = {"position": tuple(spec.position), "ypr": tuple(spec.ypr_deg)}
+    params = spec.model_values()
+    for key, field in _model_fields(spec.model_kind)[0].items():
+        values[key] = field.shown(params)
     return values
 
 
-def _spec_fields(key: str, v: tuple[float, ...]) -> dict[str, Any]:
-    """Parsed field values as spec fields (UI units -> spec units)."""
+def _field_rules(spec: Any, key: str) -> tuple[NumberRule, ...]:
+    """What field ``key`` of this camera accepts (its parameters' ranges in the field's units)."""
+    if key in FIELD_RULES:
+        return FIELD_RULES[key]
+    fields, specs = _model_fields(spec.model_kind)
+    if key not in fields:
+        raise FieldError(f"{spec.name}: no field {key!r} on a {spec.model.label.lower()}")
+    return fields[key].rules(specs)
+
+
+def _spec_fields(spec: Any, key: str, v: tuple[float, ...]) -> dict[str, Any]:
+    """Parsed field values as spec fields (the fields' units -> model parameters -> spec fields)."""
     if key == "position":
         return {"position": v}
     if key == "ypr":
         return {"ypr_deg": v}
-    if key == "focal":
-        return {"focal_length": v[0] * 1e-3}
-    if key == "pixel":
-        return {"pixels_per_metre": tuple(1e6 / x for x in v)}
-    if key == "pp":
-        return {"principal_point": v}
-    if key == "size":
-        return {"width": int(v[0]), "height": int(v[1])}
-    if key in ("a", "b"):
-        return {key: v[0]}
-    if key == "focal_px":
-        return {"focal_pixels": v[0]}
-    raise FieldError(f"unknown field {key!r}")
+    field = _model_fields(spec.model_kind)[0].get(key)
+    if field is None:
+        raise FieldError(f"unknown field {key!r}")
+    return spec.fields_for_parameters(**field.parameters_of(v))
 
 
 def _plain(text: str, limit: int = 80) -> str:
@@ -231,10 +256,11 @@ class ClientView:
         model: the tab's own :class:`SceneModel`.
         open_demo: ``open_demo(kind)`` opens a visual-servoing demo in this tab; None: no such folder.
         field_delay: seconds a text field must stay unchanged before it is judged (0: at once).
+        present: start in presentation mode (large type, thick lines: see :data:`egtviz.viewer.svg.PRESENT`).
     """
 
     def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None,
-                 field_delay: float = FIELD_DELAY) -> None:
+                 field_delay: float = FIELD_DELAY, present: bool = False) -> None:
         from .scene3d import Scene3D
 
         self.client = client
@@ -258,23 +284,40 @@ class ClientView:
         self.readout = ""
         self._cam_fields: dict[str, dict[str, Any]] = {}
         self._cam_folders: dict[str, Any] = {}
-        self._panels: dict[str, Any] = {}
         self._html: dict[str, Any] = {}
         self._panel_sig: tuple = ()
         self._pair_options: dict[str, tuple[str, str]] = {}
-        self._panel_share: dict[str, float] = {}
+        #: Presentation mode (larger type and lines in the panels and the GUI).
+        self.present = bool(present)
+        self._window, self._pixel_ratio = self._client_window()
+        #: Where the panels are (see :func:`egtviz.viewer.panels.plan_grid`); None before the first layout.
+        self.grid: PanelGrid | None = None
+        self._grid_key: tuple | None = None
+        self._width_pending: PanelGrid | None = None
+        self._panel_handles: list[Any] = []
+        #: What each panel shows, with the image size it was chosen for: ``name -> ((width, height), PanelView)``.
+        self._views: dict[str, tuple[tuple[int, int], PanelView]] = {}
+        #: Each camera's panel buttons (button groups by label: ``panel view``, ``panel pan``, ``download panel``).
+        self.panel_buttons: dict[str, dict[str, Any]] = {}
         self._synced_specs: dict[str, Any] = {}
         self._synced_fields: dict[str, Any] = {}
         self._point_options_n = -1
         self._synced_rest: tuple | None = None
         self._surface_options: dict[str, tuple[str, str]] = {}
         self._n_points_text = "8"
+        #: What the image-plane panels draw instead of the model's derived quantities (a lesson's convention lens
+        #: or estimation lab): ``panel_filter(scene, derived) -> (derived for the panels, point indices to ring)``.
+        #: None: the model's. The 3D view and the read-out always show the model's.
+        self.panel_filter: Callable[[Scene, Any], tuple[Any, frozenset[int]]] | None = None
 
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event,
                                    report=self.report)
             self._build_controls()
+            self._build_panel_controls()
             self._render(self.model.scene, None)
+            self._frame_camera()
+        self._on(client.camera.on_update, self._on_canvas)
         self._unsubscribe = model.subscribe(self._on_change)
 
     # -- GUI construction -------------------------------------------------------
@@ -288,7 +331,7 @@ class ClientView:
         gui.configure_theme(dark_mode=False, show_logo=False)
         try:
             gui.main_panel.dock_left()
-            gui.main_panel.set_width(CONTROL_WIDTH)
+            gui.main_panel.set_width(CONTROL_PX["present" if self.present else "normal"])
         except Exception:  # noqa: BLE001 - placement is cosmetic
             pass
         # HTML, not markdown: the title comes from a file and is escaped as text.
@@ -318,10 +361,14 @@ class ClientView:
             self.btn_surface = gui.add_button("Add surface")
             self._on(self.btn_surface.on_click, lambda _: self._user_event(self._add_surface))
         with gui.add_folder("Cameras", expand_by_default=True):
-            self.btn_add_pinhole = gui.add_button("Add pin-hole camera")
-            self._on(self.btn_add_pinhole.on_click, lambda _: self._user_event(lambda: self.model.add_camera("pinhole")))
-            self.btn_add_pano = gui.add_button("Add panoramic camera")
-            self._on(self.btn_add_pano.on_click, lambda _: self._user_event(lambda: self.model.add_camera("panoramic")))
+            # One button per registered camera model.
+            self.add_buttons = {}
+            for kind, info in CAMERA_MODELS.items():
+                button = gui.add_button(f"Add {info.label[0].lower()}{info.label[1:]}")
+                self._on(button.on_click, lambda _, k=kind: self._user_event(lambda: self.model.add_camera(k)))
+                self.add_buttons[kind] = button
+            self.btn_add_pinhole = self.add_buttons[PinholeCamera.kind]
+            self.btn_add_pano = self.add_buttons[HYPERBOLIC.kind]
             self.cameras_folder = gui.add_folder("Camera settings", expand_by_default=True)
         with gui.add_folder("Show", expand_by_default=False):
             self.toggles = {}
@@ -359,38 +406,41 @@ class ClientView:
                 "the image planes are in the panels on the right. Point numbers match in 3D and in the images.</div>")
 
     def _build_camera_fields(self, spec: Any) -> None:
+        """A camera's folder: its pose, the choice among the models its spec builds, and one field per model
+        parameter (or pair), built from the model's parameter specs, with the units in the labels."""
         gui = self.client.gui
         name = spec.name
         with self.cameras_folder:
-            folder = gui.add_folder(f"{name} ({'pin-hole' if spec.kind == 'pinhole' else 'panoramic'})",
-                                    expand_by_default=False)
+            folder = gui.add_folder(f"{name} ({SHORT_LABELS[spec.model_kind]})", expand_by_default=False)
         values = _spec_values(spec)
+        fields, _ = _model_fields(spec.model_kind)
         f: dict[str, Any] = {}
         with folder:
             f["position"] = gui.add_text("position (m)", format_numbers(values["position"]),
-                                         hint="Camera centre (mirror focus) in world coordinates: x, y, z.")
-            hint = EGT_PINHOLE_HINT if spec.kind == "pinhole" else EGT_PANORAMIC_HINT
+                                         hint="Camera centre (single viewpoint) in world coordinates: x, y, z.")
+            hint = spec.ANGLE_CONVENTION
             f["ypr"] = gui.add_text("yaw, pitch, roll (deg)", format_numbers(values["ypr"]), hint=hint)
             gui.add_markdown(f"<small>{hint}</small>")
-            if spec.kind == "pinhole":
-                f["focal"] = gui.add_text("focal length (mm)", format_numbers(values["focal"]))
-                f["pixel"] = gui.add_text("pixel size (µm)", format_numbers(values["pixel"]), hint="x, y")
-                f["pp"] = gui.add_text("principal point (px)", format_numbers(values["pp"]), hint="u0, v0")
-                f["size"] = gui.add_text("image size (px)", format_numbers(values["size"]),
-                                         hint="width, height: whole pixels")
-            else:
-                f["mirror"] = gui.add_dropdown("mirror", MIRRORS, initial_value=spec.mirror)
-                f["a"] = gui.add_text("a (h if parabolic) (m)", format_numbers(values["a"]))
-                f["b"] = gui.add_text("b (m)", format_numbers(values["b"]))
-                f["focal_px"] = gui.add_text("focal length (px)", format_numbers(values["focal_px"]))
-                f["pp"] = gui.add_text("principal point (px)", format_numbers(values["pp"]), hint="u0, v0")
-                f["size"] = gui.add_text("image size (px)", format_numbers(values["size"]),
-                                         hint="width, height: whole pixels")
+            for key, options in model_choices(type(spec)).items():
+                f[key] = gui.add_dropdown(key, options, initial_value=getattr(spec, key))
+            for key, field in fields.items():
+                if field.slider:
+                    (p,) = field.rules(_model_fields(spec.model_kind)[1])
+                    f[key] = gui.add_slider(field.title, min=p.lo, max=p.hi, step=0.01, initial_value=values[key][0],
+                                            hint=field.hint or None)
+                else:
+                    f[key] = gui.add_text(field.title, format_numbers(values[key]), hint=field.hint or None)
             remove = gui.add_button(f"Remove {name}", color="red")
             self._on(remove.on_click, lambda _, n=name: self._user_event(lambda: self.model.remove_camera(n)))
+        choices = model_choices(type(spec))
         for key, handle in f.items():
-            if key == "mirror":
-                self._on(handle.on_update, lambda e, n=name: self._user_event(lambda: self._set_mirror(n, e.target.value)))
+            if key in choices:
+                self._on(handle.on_update, lambda e, n=name, k=key: self._user_event(
+                    lambda: self._set_choice(n, k, e.target.value)))
+            elif key in fields and fields[key].slider:
+                # A slider acts at once (the image morphs as it moves); one slide is one undo step.
+                self._on(handle.on_update, lambda e, n=name, k=key: self._user_event(
+                    lambda: self._apply_slider(n, k, e.target.value)))
             else:
                 self._on(handle.on_update, lambda e, n=name, k=key: self._text_event(
                     (n, k), lambda text, n=n, k=k: self._apply_field(n, k, text), e.target.value))
@@ -453,20 +503,35 @@ class ClientView:
     def _apply_field(self, name: str, key: str, text: Any) -> None:
         if name not in self.model.scene.camera_names:
             return  # the camera was removed while the user typed
-        values = parse_numbers(text, FIELD_RULES[key], owner=name)
         spec = self.model.scene.camera(name)
+        values = parse_numbers(text, _field_rules(spec, key), owner=name)
         current = _spec_values(spec).get(key)
         if current is None:
-            raise FieldError(f"{name}: no field {key!r} on a {spec.kind} camera")
+            raise FieldError(f"{name}: no field {key!r} on a {spec.model.label.lower()}")
         # A number the user left as shown keeps the model's full precision (the field shows six digits).
         values = tuple(c if format_number(v) == format_number(c) else v for v, c in zip(values, current))
         if values == current:
             return  # nothing edited (e.g. our own write-back, or the same text again)
-        fields = _spec_fields(key, values)
+        self._update_camera(spec, _spec_fields(spec, key, values))
+
+    def _apply_slider(self, name: str, key: str, value: Any) -> None:
+        if name not in self.model.scene.camera_names:
+            return
+        spec = self.model.scene.camera(name)
+        (rule,) = _field_rules(spec, key)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):  # a raw client can send anything
+            raise FieldError(f"{name}: {rule.label} must be a number, got {_plain(repr(value), 40)}")
+        x = (rule.check(float(value), owner=name),)
+        if x == _spec_values(spec).get(key):
+            return
+        self._update_camera(spec, _spec_fields(spec, key, x), merge_key=("slider", name, key))
+
+    def _update_camera(self, spec: Any, fields: dict[str, Any], merge_key: Any = None) -> None:
+        name = spec.name
         if all(getattr(spec, k) == v for k, v in fields.items()):
             return
         try:
-            self.model.update_camera(name, **fields)
+            self.model.update_camera(name, merge_key=merge_key, **fields)
         except OutOfRangeError as exc:  # a limit across fields (e.g. focal length in pixels): say it in UI terms
             raise _restated(exc, name) from exc
         except SceneError as exc:
@@ -474,11 +539,16 @@ class ClientView:
                 raise
             raise SceneError(f"{name}: {exc}") from exc
 
-    def _set_mirror(self, name: str, value: Any) -> None:
-        if value not in MIRRORS:  # a raw client can send any string
-            raise FieldError(f"{name}: mirror must be one of {', '.join(MIRRORS)}, got {_plain(repr(value), 40)}")
-        if name in self.model.scene.camera_names and self.model.scene.camera(name).mirror != value:
-            self.model.update_camera(name, mirror=value)
+    def _set_choice(self, name: str, key: str, value: Any) -> None:
+        """Switch a camera among the models its spec builds (a mirror's shape); the spec adapts its parameters."""
+        if name not in self.model.scene.camera_names:
+            return
+        spec = self.model.scene.camera(name)
+        options = model_choices(type(spec)).get(key, ())
+        if value not in options:  # a raw client can send any string
+            raise FieldError(f"{name}: {key} must be one of {', '.join(options)}, got {_plain(repr(value), 40)}")
+        if getattr(spec, key) != value:
+            self.model.update_camera(name, **{key: value})
 
     def _check_n_points(self, text: Any) -> None:
         parse_numbers(text, POINTS_RULE)
@@ -502,6 +572,10 @@ class ClientView:
             self._moving = name if phase == "update" else None
             try:
                 if name not in self.model.scene.camera_names:
+                    return
+                if name in self.model.scene.locked:  # a lesson's lock: the drag is undone when it ends
+                    if phase == "end":
+                        raise SceneError(f"{name} is locked: its gizmo cannot move it now")
                     return
                 try:
                     R = matrix_from_quat_wxyz(target.wxyz)
@@ -644,19 +718,13 @@ class ClientView:
             self._sync_panels(scene)
             # Panels first: within the atomic batch the browser then updates the SVGs before the 3D view.
             highlighted = {int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")}
+            panel_derived, ringed = self._filtered(scene, derived)
+            highlighted |= ringed
             for spec in scene.cameras:
-                plane = derived.image_planes.get(spec.name)
+                plane = panel_derived.image_planes.get(spec.name)
                 if plane is None:
                     continue
-                svg = image_plane_svg(
-                    plane,
-                    selected_point=scene.selected_point,
-                    highlighted=highlighted,
-                    show_labels=scene.options.show_labels,
-                    revision=self.revision,
-                    # Each SVG shrinks to its panel's share of the window height: no scrolling.
-                    max_height=f"calc({100.0 * self._panel_share.get(spec.name, 1.0):.3f}vh - 75px)",
-                )
+                svg = self._panel_svg(spec.name, plane, scene, highlighted)
                 self.svgs[spec.name] = svg
                 self._html[spec.name].content = svg
             t2 = time.perf_counter()
@@ -675,6 +743,26 @@ class ClientView:
         if t_event is not None:
             self.timings.append(t5 - t_event)
             self._t_event = None
+
+    def _filtered(self, scene: Scene, derived: Any) -> tuple[Any, frozenset[int]]:
+        """What the panels draw: ``derived``, or what :attr:`panel_filter` makes of it (its failure is reported)."""
+        if self.panel_filter is None:
+            return derived, frozenset()
+        try:
+            return self.panel_filter(scene, derived)
+        except Exception as exc:  # noqa: BLE001 - the panels then show the model's geometry, and the tab says why
+            import traceback
+
+            traceback.print_exception(exc)
+            title, body = describe_error(exc)
+            self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
+            return derived, frozenset()
+
+    def redraw(self) -> None:
+        """Draw the model's scene again (after something the panels depend on changed outside the model)."""
+        with self.lock:
+            if not self.closed:
+                self._render(self.model.scene, None)
 
     def _render_failure(self, scene: Scene, exc: BaseException) -> None:
         """Show what failed in every panel and as a notification; fields still follow the model."""
@@ -699,51 +787,225 @@ class ClientView:
             pass
 
     def _sync_panels(self, scene: Scene) -> None:
-        """(Re)build camera folders and image panels when the set of cameras changes."""
-        sig = tuple((c.name, c.kind) for c in scene.cameras)
-        if sig == self._panel_sig:
-            return
-        gui = self.client.gui
-        for name in list(self._panels):
-            self._panels.pop(name).remove()
-            self._html.pop(name, None)
-        for name in list(self._cam_folders):
-            self._cam_folders.pop(name).remove()
-            self._cam_fields.pop(name, None)
-        # One column docked on the right, panels stacked top to bottom: none hides another or the 3D view.
-        # viser splits a docked slot into two halves and applies the dock commands in the order the panels
-        # were created, so plan a balanced docking order first (equal heights for 2, 4, 8 ... cameras).
-        specs = {c.name: c for c in scene.cameras}
-        plan: list[tuple[str, str | None]] = []
-        self._panel_share = {}
-        names = list(specs)
-        if names:
-            plan.append((names[0], None))
-            self._plan_split(names, 1.0, plan)
-        for name, anchor in plan:
-            spec = specs[name]
-            panel = gui.add_panel()
-            with panel.add_tab(f"{spec.name}: image plane"):
-                self._html[spec.name] = gui.add_html(empty_svg(spec.name, spec.width, spec.height))
-            if anchor is None:
-                panel.dock_right()
-                panel.set_width(PANEL_WIDTH)
-            else:
-                panel.dock_below(self._panels[anchor])
-            self._panels[name] = panel
-        for spec in scene.cameras:
-            self._build_camera_fields(spec)
-        self._panel_sig = sig
+        """(Re)build the camera folders when the set of cameras changes, and the panels when their grid does."""
+        sig = tuple((c.name, c.model_kind) for c in scene.cameras)
+        if sig != self._panel_sig:
+            for name in list(self._cam_folders):
+                self._cam_folders.pop(name).remove()
+                self._cam_fields.pop(name, None)
+                self.panel_buttons.pop(name, None)
+            for spec in scene.cameras:
+                self._build_camera_fields(spec)
+                self._build_view_buttons(spec.name)
+            self._panel_sig = sig
+        cameras = tuple((c.name, float(c.width), float(c.height)) for c in scene.cameras)
+        key = (cameras, self._window, self.present)
+        if key == self._grid_key:
+            return  # a drag: nothing the layout depends on has changed
+        grid = plan_grid(cameras, self._window, style=self._style)
+        if grid != self.grid:
+            self._apply_grid(grid, {c.name: c for c in scene.cameras})
+        self._grid_key = key
 
-    def _plan_split(self, names: list[str], share: float, plan: list) -> None:
-        """``names[0]`` holds a slot of height ``share``: stack all ``names`` in it by halving it recursively."""
-        if len(names) == 1:
-            self._panel_share[names[0]] = share
+    @property
+    def _style(self) -> Any:
+        return PRESENT if self.present else NORMAL
+
+    def _apply_grid(self, grid: PanelGrid, specs: dict[str, Any]) -> None:
+        """Dock the panels as ``grid`` says: rebuilt if its cells changed, else only resized."""
+        gui = self.client.gui
+        if self.grid is None or grid.columns != self.grid.columns or set(self._html) != set(specs):
+            for panel in self._panel_handles:
+                panel.remove()
+            self._panel_handles = []
+            self._html = {}
+            # viser puts each new right-hand column outside the ones docked before: the first is nearest the 3D view.
+            for col in grid.columns:
+                steps, _ = dock_plan(len(col))
+                handles: dict[int, Any] = {}
+                for cell, anchor in steps:
+                    panel = gui.add_panel()
+                    for name in col[cell]:
+                        spec = specs[name]
+                        with panel.add_tab(f"{name}: image plane"):
+                            self._html[name] = gui.add_html(empty_svg(name, spec.width, spec.height))
+                    if anchor is None:
+                        panel.dock_right()
+                    else:
+                        panel.dock_below(handles[anchor])
+                    handles[cell] = panel
+                    self._panel_handles.append(panel)
+        self.grid = grid
+        self._set_widths(grid)
+        # viser applies a new column's dock and a width sent with it in one step, which gives the new column
+        # its default width: the widths are sent again once the tab reports its canvas shrunk by the docks.
+        self._width_pending = grid if len(grid.columns) > 1 else None
+
+    def _set_widths(self, grid: PanelGrid) -> None:
+        """Send the controls' and the panels' widths (a docked panel's width is its region's: the columns,
+        docked at one default width, share it equally)."""
+        try:
+            if self._panel_handles:
+                # One column: to its top panel, docked in the first pass. More: to the panel docked last, which
+                # waits for its anchor when it is docked below one, so it comes after every column is in place.
+                target = self._panel_handles[0] if len(grid.columns) == 1 else self._panel_handles[-1]
+                target.set_width(grid.right_px)
+            self.client.gui.main_panel.set_width(grid.control_px)
+        except Exception:  # noqa: BLE001 - placement is cosmetic
+            pass
+
+    def _on_canvas(self, camera: Any) -> None:
+        """The tab reported its camera and canvas: once the docks took their room, send the panel widths again."""
+        with self.lock:
+            grid = self._width_pending
+            if self.closed or grid is None or grid is not self.grid:
+                return
+            try:
+                width = float(camera.image_width)
+            except (AssertionError, AttributeError, TypeError, ValueError):
+                return
+            # New columns come at the dock's default width (300 px): wait until the canvas gave up at least most
+            # of that room beside the controls, i.e. the docks are in place.
+            docked = grid.control_px + 0.9 * DOCK_DEFAULT_PX * len(grid.columns)
+            if width > (self._window.width - docked) * self._pixel_ratio:
+                return
+            self._width_pending = None
+            self._set_widths(grid)
+
+    def _panel_view(self, name: str, plane: Any) -> PanelView:
+        """What panel ``name`` shows; a new panel, or a new image size, starts from :func:`initial_view`."""
+        size = (int(plane.width), int(plane.height))
+        kept = self._views.get(name)
+        if kept is None or kept[0] != size:
+            kept = (size, PanelView(initial_view(plane)))
+            self._views[name] = kept
+        return kept[1]
+
+    def _panel_svg(self, name: str, plane: Any, scene: Scene, highlighted: set[int]) -> str:
+        """Panel ``name``'s SVG: its view, the tab's style, drawn for the width its column has on screen."""
+        grid = self.grid
+        panel_px = grid.column_px if grid is not None and grid.columns else None
+        max_height = f"{grid.svg_max_height_px(name):.0f}px" if panel_px is not None else None
+        return image_plane_svg(
+            plane,
+            selected_point=scene.selected_point,
+            highlighted=highlighted,
+            show_labels=scene.options.show_labels,
+            revision=self.revision,
+            view=self._panel_view(name, plane).resolve(plane),
+            style=self._style,
+            panel_px=panel_px,
+            # The grid leaves room for the SVG in its cell; the cap only keeps a longer status text from scrolling.
+            max_height=max_height,
+        )
+
+    # -- panel view, downloads, presentation mode ------------------------------------------
+
+    def _build_panel_controls(self) -> None:
+        """The "Panels" folder (presentation mode, re-layout) and the style that scales the GUI's type."""
+        gui = self.client.gui
+        # At the top level: a style inside a closed folder would not be in the page.
+        self._gui_style = gui.add_html(PRESENT_GUI_CSS if self.present else "")
+        with gui.add_folder("Panels", expand_by_default=False):
+            self.present_checkbox = gui.add_checkbox(
+                "presentation mode", self.present,
+                hint="Large type, thick lines, high contrast: for a projector.")
+            self._on(self.present_checkbox.on_update,
+                     lambda e: self._user_event(lambda: self._set_present(e.target.value)))
+            self.btn_relayout = gui.add_button(
+                "Fit panels to the window", hint="Lay the panels out again for this window's present size.")
+            self._on(self.btn_relayout.on_click, lambda _: self._user_event(self._relayout))
+
+    def _build_view_buttons(self, name: str) -> None:
+        """Zoom, pan, fit and download buttons for camera ``name``'s panel, in the camera's folder."""
+        gui = self.client.gui
+        groups: dict[str, Any] = {}
+        with self._cam_folders[name]:
+            for label, actions in VIEW_BUTTONS.items():
+                groups[label] = gui.add_button_group(label, tuple(actions))
+                self._on(groups[label].on_click, lambda e, n=name, a=actions: self._user_event(
+                    lambda: self._view_action(n, a.get(e.target.value, e.target.value))))
+            groups["download panel"] = gui.add_button_group("download panel", DOWNLOAD_FORMATS)
+            self._on(groups["download panel"].on_click,
+                     lambda e, n=name: self._user_event(lambda: self._download(n, e.target.value)))
+        self.panel_buttons[name] = groups
+
+    def _view_action(self, name: str, action: Any) -> None:
+        """Apply a view button (one of :data:`~egtviz.viewer.panels.VIEW_ACTIONS`) to panel ``name`` and redraw it."""
+        if action not in VIEW_ACTIONS:  # a raw client can send any string
+            raise FieldError(f"{name}: no view button {_plain(repr(action), 40)}")
+        plane = self.model.derived.image_planes.get(name)
+        if plane is None:
+            return  # the camera was removed meanwhile
+        view = self._panel_view(name, plane).after(action, plane)
+        self._views[name] = ((int(plane.width), int(plane.height)), view)
+        self._render(self.model.scene, None)
+
+    def _download(self, name: str, fmt: Any) -> None:
+        """Send panel ``name`` as it is shown (its view, the tab's style) as an SVG or PNG file."""
+        if fmt not in DOWNLOAD_FORMATS:
+            raise FieldError(f"{name}: no download format {_plain(repr(fmt), 40)}")
+        scene = self.model.scene
+        plane = self.model.derived.image_planes.get(name)
+        if plane is None:
+            raise SceneError(f"{name}: no such camera")
+        svg = panel_svg_of(plane, present=self.present, view=self._panel_view(name, plane).resolve(plane),
+                           selected_point=scene.selected_point, show_labels=scene.options.show_labels)
+        data = svg.encode("utf-8") if fmt == "SVG" else svg_to_png(svg)
+        stem = "".join(c if c.isascii() and (c.isalnum() or c in "-_") else "_" for c in name)[:40] or "camera"
+        self.client.send_file_download(f"{stem}-image-plane.{fmt.lower()}", data, save_immediately=True)
+
+    def _set_present(self, value: Any) -> None:
+        """Presentation mode on or off: the panels' style, the GUI's type and the layout follow."""
+        if not isinstance(value, bool):
+            raise FieldError(f"presentation mode: expected true or false, got {_plain(repr(value), 40)}")
+        if value == self.present:
             return
-        k = (len(names) + 1) // 2
-        plan.append((names[k], names[0]))
-        self._plan_split(names[:k], share / 2, plan)
-        self._plan_split(names[k:], share / 2, plan)
+        self.present = value
+        self._gui_style.content = PRESENT_GUI_CSS if value else ""
+        self._render(self.model.scene, None)
+
+    def _client_window(self) -> tuple[WindowSize, float]:
+        """The tab's window in CSS pixels and the device pixels per CSS pixel, from the canvas size it reported."""
+        try:
+            w, h = self.client.camera.image_width, self.client.camera.image_height
+        except (AssertionError, AttributeError):  # no camera message yet (viser asserts one arrived)
+            return DEFAULT_WINDOW, 1.0
+        window = window_from_canvas(w, h)
+        ratio = float(w) / window.width if window is not DEFAULT_WINDOW else 1.0
+        return window, ratio
+
+    def _relayout(self) -> None:
+        """Plan the panels again for the window as it is now (the canvas plus what is docked beside it)."""
+        grid = self.grid
+        try:
+            w, h = self.client.camera.image_width, self.client.camera.image_height
+        except (AssertionError, AttributeError):
+            return
+        if grid is None or not (w > 0 and h > 0):
+            return
+        docked = grid.control_px + grid.right_px + DIVIDER_PX * (len(grid.columns) + 1)
+        self._window = WindowSize(w / self._pixel_ratio + docked, h / self._pixel_ratio)
+        self._render(self.model.scene, None)
+
+    def _frame_camera(self) -> None:
+        """Start this tab's 3D view on the whole scene, inside the canvas the docked panels leave free."""
+        grid = self.grid
+        if grid is None:
+            return
+        scene = self.model.scene
+        pts = [np.asarray(c.position, float) for c in scene.cameras]
+        if scene.points:
+            pts.extend(scene.points_array())
+        aspect = max(grid.canvas_px, 120.0) / grid.window.height
+        framed = framed_camera(np.array(pts).reshape(-1, 3), aspect)
+        cam = self.client.camera
+        try:
+            cam.up_direction = (0.0, 0.0, 1.0)
+            cam.position = framed.position  # viser moves look_at with the position: set it after
+            cam.look_at = framed.look_at
+        except (AssertionError, ValueError):  # no camera reported yet: the server's initial camera stays
+            pass
 
     def _sync_fields(self, scene: Scene, *, force: bool = True) -> None:
         """Write the model's values into the GUI (guarded: these writes are not user edits).
@@ -760,10 +1022,11 @@ class ClientView:
                     continue
                 self._synced_specs[spec.name] = spec
                 self._synced_fields[spec.name] = f
+                sliders = {k for k, fld in _model_fields(spec.model_kind)[0].items() if fld.slider}
                 for key, values in _spec_values(spec).items():
-                    _set(f[key], format_numbers(values))
-                if spec.kind == "panoramic":
-                    _set(f["mirror"], spec.mirror)
+                    _set(f[key], values[0] if key in sliders else format_numbers(values))
+                for key in model_choices(type(spec)):
+                    _set(f[key], getattr(spec, key))
             title = self._title_html()
             # A drag changes one camera's pose and nothing below: skip the rest when its inputs are unchanged.
             rest_key = (scene.camera_names, scene.drawn_pair, len(scene.points), scene.selected_point, scene.options,
@@ -837,13 +1100,20 @@ class EgtvizApp:
         scene: the scene every new tab starts from (default: :func:`default_scene`).
         demo: open this servo demo (``"pinhole"`` or ``"panoramic"``) in every new tab instead of the workbench.
         field_delay: seconds a text field must stay unchanged before it is judged (tests use 0: at once).
+        present: every new tab starts in presentation mode (``egtviz --present``).
+        course: every new tab starts on the course's start page (:mod:`egtviz.viewer.start_page`): the lessons,
+            the learner's name, and the workbench one click away.
+        lesson: every new tab opens this lesson (``egtviz lesson NAME``), with the course one click away.
+        progress: where learners' progress is kept (a :class:`~egtviz.lessons.ProgressStore`; default: the
+            user's data folder).
 
     A tab whose workbench cannot be built on ``scene`` (it cannot be drawn) gets
     the default scene and a notification saying why; a tab is never left half-built.
     """
 
     def __init__(self, server: viser.ViserServer, scene: Scene | None = None, *, demo: str | None = None,
-                 field_delay: float = FIELD_DELAY) -> None:
+                 field_delay: float = FIELD_DELAY, present: bool = False, course: bool = False,
+                 lesson: str | None = None, progress: Any = None) -> None:
         if demo not in (None, "pinhole", "panoramic"):
             raise ValueError(f"demo: expected None, 'pinhole' or 'panoramic', got {demo!r}")
         Debouncer(field_delay)  # checks the value now rather than in every tab
@@ -852,12 +1122,20 @@ class EgtvizApp:
         self.initial_scene = scene if scene is not None else default_scene()
         #: Open this servo demo in every new tab instead of the workbench.
         self.demo = demo
+        #: New tabs start in presentation mode.
+        self.present = bool(present)
         self.views: dict[int, ClientView] = {}
         #: The servo demo shown in a tab (``egtviz.viewer.servo_demo.ServoDemo``), by client id.
         self.demos: dict[int, Any] = {}
         self._models: dict[int, SceneModel] = {}
         self._lock = threading.Lock()
         self._gone: set[int] = set()
+        #: The course (start page, lessons) that new tabs open in; None: the workbench or ``demo``.
+        self.course: Any = None
+        if course or lesson is not None:
+            from .start_page import Course
+
+            self.course = Course(self, lesson=lesson, progress=progress)  # LessonError: no such lesson
         self._frame_view(self.initial_scene)
         svg_warm_up()
         # The long-lived objects (numpy, scipy, trimesh, viser, the scene) are never garbage: a full
@@ -869,19 +1147,26 @@ class EgtvizApp:
         server.on_client_disconnect(self._disconnect)
 
     def _frame_view(self, scene: Scene) -> None:
-        """Start the browser's view camera where it sees every camera and point (view layout only)."""
+        """Start the browser's view camera on every camera and point, in the canvas a common window leaves free.
+
+        Each tab then frames its own view for its window (:meth:`ClientView._frame_camera`).
+        """
         pts = [np.asarray(c.position, float) for c in scene.cameras]
         if scene.points:
-            pts.append(scene.points_array().mean(axis=0))
-        centre = np.mean(pts, axis=0) if pts else np.zeros(3)
-        extent = max(6.0, max((float(np.linalg.norm(p - centre)) for p in pts), default=6.0))
+            pts.extend(scene.points_array())
+        grid = plan_grid([(c.name, float(c.width), float(c.height)) for c in scene.cameras], DEFAULT_WINDOW,
+                         style=PRESENT if self.present else NORMAL)
+        framed = framed_camera(np.array(pts).reshape(-1, 3), max(grid.canvas_px, 120.0) / DEFAULT_WINDOW.height)
         cam = self.server.initial_camera
-        cam.look_at = tuple(centre)
-        cam.position = tuple(centre + extent * np.array([0.3, -1.45, 0.9]))
+        cam.look_at = framed.look_at
+        cam.position = framed.position
         cam.up = (0.0, 0.0, 1.0)
-        cam.fov = float(np.radians(60.0))
+        cam.fov = framed.fov
 
     def _connect(self, client: viser.ClientHandle) -> None:
+        if self.course is not None:
+            self.course.open(client)
+            return
         if self.demo is not None:
             self.open_demo(client, self.demo)
             return
@@ -902,7 +1187,7 @@ class EgtvizApp:
         open_demo = lambda kind, c=client: self.open_demo(c, kind)  # noqa: E731
         try:
             return ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
-                              field_delay=self.field_delay)
+                              field_delay=self.field_delay, present=self.present)
         except Exception as exc:  # noqa: BLE001 - the tab must come up whatever the scene holds
             title, body = describe_error(exc)
             if title == "Something went wrong":
@@ -911,7 +1196,8 @@ class EgtvizApp:
                 traceback.print_exception(exc)
             client.gui.reset()
             client.scene.reset()
-            view = ClientView(client, SceneModel(default_scene()), open_demo=open_demo, field_delay=self.field_delay)
+            view = ClientView(client, SceneModel(default_scene()), open_demo=open_demo, field_delay=self.field_delay,
+                              present=self.present)
             client.add_notification("Showing the default scene instead",
                                     f"The scene could not be drawn: {body}", color="red", auto_close_seconds=None)
             return view
@@ -927,12 +1213,14 @@ class EgtvizApp:
             view.close()
         if demo is not None:
             demo.close(client_gone=True)
+        if self.course is not None:
+            self.course.forget(client.client_id)
 
     # -- visual-servoing demos (egtviz.viewer.servo_demo) ---------------------------------
 
     def open_demo(self, client: viser.ClientHandle, kind: str) -> Any:
         """Replace the tab's workbench by a servo demo (its scene is kept for the way back)."""
-        from .servo_demo import ServoDemo
+        from .servo_demo import make_servo_demo
 
         cid = client.client_id
         with self._lock:
@@ -946,8 +1234,8 @@ class EgtvizApp:
         client.gui.reset()
         client.scene.reset()
         try:
-            demo = ServoDemo(client, kind, on_back=lambda: self.close_demo(client),  # type: ignore[arg-type]
-                             field_delay=self.field_delay)
+            demo = make_servo_demo(client, kind, on_back=lambda: self.close_demo(client),
+                                   field_delay=self.field_delay)
         except Exception as exc:  # noqa: BLE001 - back to a working workbench, with the reason
             import traceback
 
@@ -981,7 +1269,37 @@ class EgtvizApp:
                 view.close()
                 return None
             self.views[cid] = view
+        if self.course is not None:  # the lesson (or the way back to the course) the tab had before the demo
+            self.course.restore(client, view)
         return view
+
+    def show_workbench(self, client: viser.ClientHandle, model: SceneModel | None = None) -> ClientView | None:
+        """Replace what the tab shows by a workbench on ``model`` (None: a new model of the initial scene).
+
+        Returns the tab's view, or None if the tab left meanwhile.
+        """
+        self.clear_tab(client)
+        view = self._build_view(client, model)
+        with self._lock:
+            if client.client_id in self._gone:
+                self._gone.discard(client.client_id)
+                view.close()
+                return None
+            self.views[client.client_id] = view
+        return view
+
+    def clear_tab(self, client: viser.ClientHandle) -> None:
+        """Close the tab's workbench or servo demo and empty its GUI and 3D scene."""
+        cid = client.client_id
+        with self._lock:
+            view = self.views.pop(cid, None)
+            demo = self.demos.pop(cid, None)
+        if view is not None:
+            view.close()
+        if demo is not None:
+            demo.close()
+        client.gui.reset()
+        client.scene.reset()
 
     def wait_for_view(self, timeout: float = 10.0, count: int = 1) -> list[ClientView]:
         """Block until at least ``count`` tabs are connected (tests, benchmark)."""

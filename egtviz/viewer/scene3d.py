@@ -20,13 +20,20 @@ What is drawn, and what is skipped, to keep a frame cheap:
   runs only after a cast that costs tens of microseconds per property);
 * the camera being dragged keeps its gizmo pose (the browser moves it).
 
+* above :data:`MAX_LABELLED_POINTS` points only the selected and highlighted points keep their 3D numbers, as
+  the panels do.
+
+Each camera's body is drawn by its model's drawing module (``egtviz.viewer.models``: a frustum, a mirror over its
+CCD, a sphere); this module knows no camera kind. Writes to viser's private handle internals are all in
+``viser_adapter``.
+
 Scene tree (per client)::
 
     /egt/grid, /egt/world            ground grid (1 m cells) and world axes
     /egt/cam_<k>                     a camera's gizmo; children move with it:
-        /frustum | /ccd, /axes, /label
-    /egt/mirror_<k>                  a panoramic camera's mirror (world coordinates)
+        /axes, /label, and its drawing's body (/frustum; /ccd, /mirror; /sphere, /projection_centre)
     /egt/img3d_<k>_pts, _lines       pin-hole image content on the frustum's image plane
+    /egt/sphere_point_<k>, /egt/great_circle_<k>   the unified camera's selected ray and epipolar great circle
     /egt/rays_<k>                    projection rays of camera k
     /egt/points, /egt/plabel_<i>     scene points and their numbers (1-based, like f_3Dwfenum)
     /egt/pgizmo_<i>                  point gizmos
@@ -43,124 +50,29 @@ from typing import Any
 import numpy as np
 import viser
 
-try:  # what a handle's assignment runs (see _put_array); without it, assignments go the ordinary way
-    from viser._assignable_props_api import props_setattr as _props_setattr
-except ImportError:  # pragma: no cover - another viser
-    _props_setattr = None
-
-from ..scene.derived import IMAGE_PLANE_DEPTH
 from .fields import on_event
-from .palette import BASELINE_COLOUR, CAMERA_COLOURS, POINT_COLOURS, hex_to_rgb, point_rgb
+from .models import CameraDrawing, DrawContext, drawing_class
+from .models.common import EMPTY_PTS as _EMPTY_PTS
+from .models.common import EMPTY_SEG as _EMPTY_SEG
+from .models.common import colours as _colours
+from .models.common import pair_colours as _pair_colours
+from .models.common import segments as _segments
+from .palette import BASELINE_COLOUR, CAMERA_COLOURS, hex_to_rgb, point_rgb
+from .svg import MAX_NUMBERED_POINTS
+from .viser_adapter import assign as _put
+from .viser_adapter import assign_array as _put_array
 
 #: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
 MAX_POINT_GIZMOS = 16
 #: Above this many points only the selected point's projection rays are drawn (see the module docstring).
 MAX_RAY_POINTS = 30
-_POINT_RGB = np.array([hex_to_rgb(c) for c in POINT_COLOURS], dtype=np.uint8)
-_MISSING = object()
-
-
-@lru_cache(maxsize=16)
-def _colours(n: int) -> np.ndarray:
-    out = _POINT_RGB[np.arange(n) % len(_POINT_RGB)]
-    out.setflags(write=False)
-    return out
-
-
-@lru_cache(maxsize=16)
-def _pair_colours(n: int) -> np.ndarray:
-    """(n, 2, 3) uint8: both ends of a segment of point i in its colour (read-only)."""
-    out = np.repeat(_colours(n)[:, None, :], 2, axis=1)
-    out.setflags(write=False)
-    return out
+#: Above this many points only the selected and highlighted points keep their 3D labels (the panels' rule).
+MAX_LABELLED_POINTS = MAX_NUMBERED_POINTS
 
 
 def point_colours(n: int) -> np.ndarray:
     """(n, 3) uint8 colours of points 0..n-1."""
     return _colours(n).copy()
-
-
-def _segments(polylines: np.ndarray, rows: Any = None) -> tuple[np.ndarray, np.ndarray]:
-    """(N, k, 3) polylines (row i: point i) -> float32 (S, 2, 3) segments without NaN and the (S,) point of each.
-
-    ``rows``: only these points (indices); None: all.
-    """
-    P = np.asarray(polylines)
-    if P.ndim != 3 or P.shape[1] < 2 or P.shape[2] != 3:
-        return np.zeros((0, 2, 3), np.float32), np.zeros(0, np.intp)
-    if rows is not None:
-        if not len(rows):
-            return np.zeros((0, 2, 3), np.float32), np.zeros(0, np.intp)
-        idx = np.asarray(rows, np.intp)
-        P = P[idx]
-    else:
-        idx = np.arange(len(P))
-    if P.shape[1] == 2:  # a polyline of two points is one segment
-        ok = np.isfinite(P).all(axis=(1, 2))
-        return P[ok].astype(np.float32), idx[ok]
-    seg = np.stack([P[:, :-1], P[:, 1:]], axis=2)  # (N, k-1, 2, 3)
-    ok = np.isfinite(seg).all(axis=(2, 3))  # (N, k-1)
-    point = np.broadcast_to(idx[:, None], ok.shape)[ok]
-    return seg[ok].astype(np.float32), point
-
-
-def _same(a: Any, b: Any) -> bool:
-    if type(a) is np.ndarray or type(b) is np.ndarray:
-        a, b = np.asarray(a), np.asarray(b)
-        return a.shape == b.shape and bool(np.array_equal(a, b))
-    return bool(a == b)
-
-
-def _put(handle: Any, prop: str, value: Any) -> None:
-    """Assign a node property unless it already holds ``value`` (for small values: flags, colours, poses).
-
-    viser would skip an equal value too, but only after casting it (tens of
-    microseconds per property); this cache makes an unchanged node free.
-    """
-    cache = handle.__dict__.get("_egt_cache")
-    if cache is None:
-        cache = handle.__dict__["_egt_cache"] = {}
-    old = cache.get(prop, _MISSING)
-    if old is not _MISSING and _same(old, value):
-        return
-    setattr(handle, prop, value)
-    cache[prop] = value.copy() if isinstance(value, np.ndarray) else value
-
-
-def _put_array(handle: Any, prop: str, value: np.ndarray) -> bool:
-    """Assign an array property (points, colours, vertices) unless the node holds the same bytes; True: sent.
-
-    The comparison is with what the node holds, so no copy is cached here. When ``value`` already has the
-    node's dtype, this does what viser's ``props_setattr`` does for a changed array (viser 1.1.1: refuse a
-    removed node, store a private copy, queue another copy, run ``_on_prop_assigned``) without its cast, its
-    type-hint checks and its second comparison; otherwise (an unexpected handle or dtype) it assigns the
-    ordinary way.
-    """
-    impl = handle._impl
-    current = getattr(impl.props, prop)
-    if type(current) is np.ndarray and current.dtype != value.dtype and current.dtype.kind == value.dtype.kind == "f":
-        value = value.astype(current.dtype)  # as viser would store it (a point cloud keeps float16 points)
-    if (
-        type(current) is np.ndarray
-        and current.dtype == value.dtype
-        and current.shape == value.shape
-        and current.tobytes() == value.tobytes()
-    ):
-        return False
-    if (
-        _props_setattr is not None
-        and type(handle).__setattr__ is _props_setattr
-        and not impl.removed
-        and type(current) is np.ndarray
-        and current.dtype == value.dtype
-        and prop in handle._prop_hints
-    ):
-        setattr(impl.props, prop, np.array(value, copy=True))
-        handle._queue_update(prop, np.array(value, copy=True))
-        handle._on_prop_assigned(prop)
-    else:
-        setattr(handle, prop, value)
-    return True
 
 
 def _moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
@@ -188,10 +100,6 @@ def _fan(k: int) -> np.ndarray:
     out = np.array([[0, i, i + 1] for i in range(1, k - 1)], np.uint32).reshape(-1, 3)
     out.setflags(write=False)
     return out
-
-
-_EMPTY_SEG = np.zeros((1, 2, 3), np.float32)
-_EMPTY_PTS = np.zeros((1, 3), np.float32)
 
 
 class Scene3D:
@@ -275,20 +183,9 @@ class Scene3D:
         nodes["axes"] = api.add_frame(f"{root}/axes", axes_length=0.5, axes_radius=0.015, origin_radius=0.03)
         nodes["label"] = api.add_label(f"{root}/label", name, position=(0.0, -0.35, 0.0), font_screen_scale=1.1,
                                        anchor="bottom-center")
-        if spec.kind == "pinhole":
-            nodes["frustum"] = api.add_camera_frustum(f"{root}/frustum", fov=0.6, aspect=4 / 3, scale=0.3, color=colour,
-                                                      thickness=0.012)
-            nodes["img_pts"] = api.add_point_cloud(f"/egt/img3d_{k}_pts", _EMPTY_PTS, (0, 0, 0), point_size=0.03,
-                                                   point_shape="circle", visible=False)
-            nodes["img_lines"] = api.add_line_segments(f"/egt/img3d_{k}_lines", _EMPTY_SEG, (0, 0, 0),
-                                                       thickness=0.006, visible=False)
-        else:
-            nodes["ccd"] = api.add_camera_frustum(f"{root}/ccd", fov=0.5, aspect=4 / 3, scale=0.35, color=colour,
-                                                  thickness=0.015)
-            nodes["mirror"] = api.add_mesh_simple(
-                f"/egt/mirror_{k}", np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32),
-                color=(150, 190, 230), opacity=0.3, side="double", cast_shadow=False, receive_shadow=False,
-            )
+        drawing = drawing_class(spec.model_kind)(api, root, k, colour)
+        nodes["drawing"] = drawing
+        nodes.update(drawing.named_nodes())
         self._rays[name] = api.add_line_segments(f"/egt/rays_{k}", _EMPTY_SEG, (0, 0, 0), thickness=0.008,
                                                  visible=False)
         return nodes
@@ -296,7 +193,7 @@ class Scene3D:
     def _sync_cameras(self, scene: Any) -> None:
         wanted = {spec.name: spec for spec in scene.cameras}
         for name in list(self._cams):
-            if name not in wanted or self._cam_sig.get(name) != (wanted[name].kind,):
+            if name not in wanted or self._cam_sig.get(name) != (wanted[name].model_kind,):
                 self._drop_camera(name)
         for i, spec in enumerate(scene.cameras):
             if spec.name not in self._cams:
@@ -304,13 +201,13 @@ class Scene3D:
                 colour = hex_to_rgb(CAMERA_COLOURS[k % len(CAMERA_COLOURS)])
                 self._cams[spec.name] = self._build_camera(spec, k, colour)
                 self._cams[spec.name]["colour"] = colour
-                self._cam_sig[spec.name] = (spec.kind,)
+                self._cam_sig[spec.name] = (spec.model_kind,)
 
     def _drop_camera(self, name: str) -> None:
         nodes = self._cams.pop(name, {})
-        for key in ("img_pts", "img_lines", "mirror"):
-            if key in nodes:
-                nodes[key].remove()
+        drawing: CameraDrawing | None = nodes.get("drawing")
+        if drawing is not None:
+            drawing.remove()
         if "gizmo" in nodes:
             nodes["gizmo"].remove()  # removes its children
         ray = self._rays.pop(name, None)
@@ -326,7 +223,8 @@ class Scene3D:
         n = len(X)
         opts = scene.options
         prev = self._points_prev
-        key = (opts.show_labels, scene.selected_point, frozenset(k for k in scene.locked if k.startswith("point:")))
+        key = (opts.show_labels, scene.selected_point, frozenset(k for k in scene.locked if k.startswith("point:")),
+               frozenset(k for k in scene.highlighted if k.startswith("point:")))
         if key == self._points_key and (X is prev or (X.shape == prev.shape and X.tobytes() == prev.tobytes())):
             return  # a camera moved: nothing about the points changed
         self._points_key, self._points_prev = key, X
@@ -342,10 +240,13 @@ class Scene3D:
                 self.api.add_label(f"/egt/plabel_{i}", str(i + 1), position=tuple(X[i]), font_screen_scale=1.0,
                                    anchor="bottom-left")
             )
+        # Over MAX_LABELLED_POINTS points only the selected and highlighted ones keep their numbers.
+        labelled = None if n <= MAX_LABELLED_POINTS else {scene.selected_point} | {
+            int(k[6:]) for k in scene.highlighted if k.startswith("point:")}
         for i, h in enumerate(self._point_labels):
             if i >= len(prev) or not np.array_equal(prev[i], X[i]):
                 _put(h, "position", X[i] + np.array([0.08, 0.0, 0.08]))
-            _put(h, "visible", opts.show_labels)
+            _put(h, "visible", opts.show_labels and (labelled is None or i in labelled))
         # Gizmos: every point while there are few, else only the selected one.
         sel = scene.selected_point
         want = set(range(n)) if n <= MAX_POINT_GIZMOS else ({sel} if sel is not None else set())
@@ -396,7 +297,8 @@ class Scene3D:
     def _draw(self, scene: Any, derived: Any, moving: str | None) -> None:
         opts = scene.options
         self._sync_cameras(scene)
-        n = len(scene.points)
+        X = scene.points_array()
+        n = len(X)
         sel = scene.selected_point
         # Rays of every point while there are few, else only the selected point's (see the module docstring).
         ray_rows = None if n <= MAX_RAY_POINTS else ((sel,) if sel is not None and sel < n else ())
@@ -411,7 +313,7 @@ class Scene3D:
                     gizmo.position = position
                 if self._force or _quat_moved(gizmo.wxyz, wxyz):
                     gizmo.wxyz = wxyz
-            body = nodes.get("frustum", nodes.get("ccd"))
+            drawing: CameraDrawing = nodes["drawing"]
             look = (name in scene.locked, opts.show_frames, opts.show_labels, name in scene.highlighted)
             if nodes.get("_look") != look:
                 locked, show_frames, show_labels, highlighted = look
@@ -421,38 +323,13 @@ class Scene3D:
                 _put(nodes["axes"], "visible", show_frames)
                 _put(nodes["label"], "visible", show_labels)
                 # A camera a lesson highlights is drawn in orange.
-                _put(body, "color", HIGHLIGHT_RGB if highlighted else nodes["colour"])
+                _put(drawing.body, "color", HIGHLIGHT_RGB if highlighted else nodes["colour"])
                 nodes["_look"] = look
-            if spec.kind == "pinhole":
-                fr = derived.frustums[name]
-                shape = (float(fr["fov"]), float(fr["aspect"]))
-                if nodes.get("_shape") != shape:
-                    fov, aspect = shape
-                    y = np.tan(fov / 2.0)
-                    x = y * aspect
-                    # viser normalises the frustum to unit volume; undo that so the image plane sits at
-                    # IMAGE_PLANE_DEPTH.
-                    scale = IMAGE_PLANE_DEPTH * float(np.cbrt(x * y / 3.0))
-                    fru = nodes["frustum"]
-                    _put(fru, "fov", fov)
-                    _put(fru, "aspect", aspect)
-                    _put(fru, "scale", scale)
-                    nodes["_shape"] = shape
-                content = derived.image_in_3d.get(name)
-                if content is not None:
-                    self._draw_image_content(nodes, content, n, ray_rows)
-            else:
-                v, f = derived.mirror_meshes[name]
-                if nodes.get("_mesh_src") is not v or nodes.get("_faces_src") is not f:
-                    _put_array(nodes["mirror"], "vertices", np.asarray(v, np.float32))
-                    _put_array(nodes["mirror"], "faces", np.asarray(f, np.uint32))
-                    nodes["_mesh_src"], nodes["_faces_src"] = v, f
-                ccd = derived.ccd_centres.get(name)
-                if ccd is not None and nodes.get("_ccd_src") is not ccd:
-                    # The CCD is drawn in the camera's frame: its offset below the focus along the mirror axis.
-                    off = float(np.linalg.norm(np.asarray(ccd) - np.asarray(position)))
-                    _put(nodes["ccd"], "position", (0.0, 0.0, -off))
-                    nodes["_ccd_src"] = ccd
+            plane = derived.image_planes[name]
+            drawing.update(derived.cameras[name], plane, DrawContext(
+                points=X, line_rows=ray_rows, selected_point=sel, selected_normal=derived.selected_normal,
+                in_pair=plane.in_pair,
+            ))
             rays = self._rays[name]
             src = derived.rays.get(name)
             if src is None or nodes.get("_rays_src") is not src or nodes.get("_rays_rows") != ray_rows:
@@ -489,30 +366,6 @@ class Scene3D:
             _put(self.surfaces, "visible", len(self._surf_pts) > 0)
         else:
             _put(self.surfaces, "visible", False)
-
-    def _draw_image_content(self, nodes: dict[str, Any], content: dict[str, Any], n: int,
-                            line_rows: tuple[int, ...] | None) -> None:
-        """A pin-hole camera's image points and epipolar lines on its image plane in 3D.
-
-        ``line_rows``: the points whose epipolar lines are drawn (None: all), the same rule as the rays.
-        """
-        P = content["points"]
-        if nodes.get("_img_pts_src") is not P:  # the scene layer reuses an unchanged camera's arrays
-            P = np.asarray(P)
-            ok = np.isfinite(P).all(axis=1) if P.ndim == 2 and len(P) else np.zeros(0, bool)
-            if ok.any():
-                _put_array(nodes["img_pts"], "points", P[ok].astype(np.float32))
-                _put_array(nodes["img_pts"], "colors", _colours(n)[ok])
-            _put(nodes["img_pts"], "visible", bool(ok.any()))
-            nodes["_img_pts_src"] = content["points"]
-        L = content["lines"]
-        if nodes.get("_img_lines_src") is not L or nodes.get("_img_lines_rows") != line_rows:
-            seg, point = _segments(L, line_rows) if len(L) else _segments(np.zeros((0, 2, 3)))
-            if len(seg):
-                _put_array(nodes["img_lines"], "points", seg)
-                _put_array(nodes["img_lines"], "colors", _pair_colours(n)[point])
-            _put(nodes["img_lines"], "visible", len(seg) > 0)
-            nodes["_img_lines_src"], nodes["_img_lines_rows"] = L, line_rows
 
     def remove_all(self) -> None:
         """Remove every node (client teardown)."""

@@ -35,7 +35,8 @@ Testability contract (the browser tests rely on it):
   frame, pointing to it)), ``epipole-arrow``, ``epipole-label``,
   ``epipolar-line`` (with ``data-index``, one per drawn line),
   ``epipolar-conic`` (with ``data-index``; a conic may have several pieces),
-  ``rim``, ``message``, ``hidden-count``, ``numbering-note``;
+  ``rim``, ``horizon`` (a camera's horizon, one polyline per arc), ``message``,
+  ``hidden-count``, ``numbering-note``;
 * every text that labels a mark (point numbers, epipole labels) is placed by
   :func:`~egtviz.viewer.panel_view.place_labels` clear of the marks, arrows and
   other labels, and carries ``data-box="x0 y0 x1 y1"``: the box it was placed
@@ -590,9 +591,10 @@ def image_plane_svg(
     """Inline SVG of one camera's image plane, in pixel units.
 
     Args:
-        plane: an :class:`egtviz.scene.ImagePlane` (read: ``camera``, ``kind``,
+        plane: an :class:`egtviz.scene.ImagePlane` (read: ``camera``,
             ``width``, ``height``, ``points``, ``visible``, ``in_image``,
-            ``n_hidden``, ``epipoles``, ``lines``, ``conics``, ``rim``, ``message``).
+            ``n_hidden``, ``no_image``, ``epipoles``, ``lines``, ``conics``, ``rim``,
+            ``horizon``, ``message``).
         selected_point: 0-based index of the selected scene point: drawn with a
             ring, its epipolar line/conic thicker.
         highlighted: 0-based indices of highlighted points (a ring too).
@@ -628,8 +630,7 @@ def image_plane_svg(
     n_outside = int(n_points - n_hidden - n_in)
     clauses = [f"{n_in} of {n_points} points in the image"]
     if n_hidden:
-        why = "behind the camera" if plane.kind == "pinhole" else "in the blind cone"
-        clauses.append(f"{n_hidden} hidden ({why})")
+        clauses.append(f"{n_hidden} hidden ({plane.no_image})")
     if n_outside > 0:
         clauses.append(f"{n_outside} outside the image")
     status_lines = _wrap(clauses, 0.8 * panel_px, style.status_px)
@@ -640,7 +641,7 @@ def image_plane_svg(
     lw = style.line_px * k
 
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
-    attrs = (f' data-camera="{escape(str(plane.camera))}" data-camera-kind="{escape(str(plane.kind))}"{rev} '
+    attrs = (f' data-camera="{escape(str(plane.camera))}"{rev} '
              f'data-view="{_f(view.u0)} {_f(view.v0)} {_f(view.width)} {_f(view.height)}"')
     out: list[str] = [
         _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
@@ -661,6 +662,11 @@ def image_plane_svg(
                 f'stroke="{RIM_COLOUR}" '
                 f'stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw * 5)} {_f(lw * 3)}"/>'
             )
+    for arc in plane.horizon:
+        out.append(
+            f'<polyline data-kind="horizon" points="{_points_attr(np.asarray(arc, float), integer=False)}" '
+            f'fill="none" stroke="{RIM_COLOUR}" stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw)} {_f(lw * 3)}"/>'
+        )
 
     # Decimals: a quarter of a CSS pixel; whole image pixels once one is at most a CSS pixel wide.
     dp = int(min(6, max(0, math.ceil(math.log10(4.0 / k)))))

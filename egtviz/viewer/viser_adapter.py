@@ -1,0 +1,112 @@
+"""The one place where egtviz relies on viser's private handle internals (viser 1.1.1).
+
+Assigning a node property through viser's public API (``handle.points = array``) casts the value, checks it against
+the property's type hints and compares it with the old value before queueing the update: tens of microseconds per
+property, on every drag step, for arrays this layer has just compared itself. :func:`assign_array` does what that
+assignment does for a changed array of the node's own dtype, and nothing more; everything else goes the public way.
+
+The private names used are listed in :data:`PRIVATE_NAMES` and checked by :func:`missing_internals`; the test
+``tests/test_viser_adapter.py`` fails when the installed viser no longer has them or no longer sends what the public
+assignment sends, so an upgrade of viser is noticed at once (then fall back to the public path: ``FAST_PATH = False``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+try:  # what a handle's public assignment runs
+    from viser._assignable_props_api import props_setattr as _props_setattr
+except ImportError:  # pragma: no cover - another viser: the public path only
+    _props_setattr = None
+
+#: Private members of a viser scene-node handle this module reads or calls.
+PRIVATE_NAMES = ("_impl", "_impl.props", "_impl.removed", "_queue_update", "_on_prop_assigned", "_prop_hints")
+#: Use the fast path when the installed viser has every private name (set False to always go the public way).
+FAST_PATH = _props_setattr is not None
+
+_MISSING = object()
+
+
+def missing_internals(handle: Any) -> list[str]:
+    """The names of :data:`PRIVATE_NAMES` that ``handle`` (a viser scene-node handle) lacks; empty when all exist."""
+    missing = []
+    if _props_setattr is None:
+        missing.append("viser._assignable_props_api.props_setattr")
+    impl = getattr(handle, "_impl", _MISSING)
+    if impl is _MISSING:
+        return [*missing, *PRIVATE_NAMES]
+    for name in ("props", "removed"):
+        if not hasattr(impl, name):
+            missing.append(f"_impl.{name}")
+    for name in ("_queue_update", "_on_prop_assigned"):
+        if not callable(getattr(handle, name, None)):
+            missing.append(name)
+    if not isinstance(getattr(handle, "_prop_hints", None), dict):
+        missing.append("_prop_hints")
+    return missing
+
+
+def current_value(handle: Any, prop: str) -> Any:
+    """What the node holds for ``prop`` (its stored value, without a copy)."""
+    return getattr(handle._impl.props, prop)
+
+
+def assign_array(handle: Any, prop: str, value: np.ndarray) -> bool:
+    """Assign an array property (points, colours, vertices) unless the node holds the same bytes; True: sent.
+
+    When ``value`` has the node's dtype (a float array is first given the node's float type, as viser would store
+    it), this stores a private copy, queues another copy and runs the handle's assignment hook, as viser's
+    ``props_setattr`` does for a changed array, without its cast, its type-hint checks and its second comparison;
+    otherwise (an unexpected handle or dtype) it assigns the public way.
+    """
+    impl = handle._impl
+    current = getattr(impl.props, prop)
+    if type(current) is np.ndarray and current.dtype != value.dtype and current.dtype.kind == value.dtype.kind == "f":
+        value = value.astype(current.dtype)  # as viser would store it (a point cloud keeps float16 points)
+    if (
+        type(current) is np.ndarray
+        and current.dtype == value.dtype
+        and current.shape == value.shape
+        and current.tobytes() == value.tobytes()
+    ):
+        return False
+    if (
+        FAST_PATH
+        and type(handle).__setattr__ is _props_setattr
+        and not impl.removed
+        and type(current) is np.ndarray
+        and current.dtype == value.dtype
+        and prop in handle._prop_hints
+    ):
+        setattr(impl.props, prop, np.array(value, copy=True))
+        handle._queue_update(prop, np.array(value, copy=True))
+        handle._on_prop_assigned(prop)
+    else:
+        setattr(handle, prop, value)
+    return True
+
+
+def _same(a: Any, b: Any) -> bool:
+    if type(a) is np.ndarray or type(b) is np.ndarray:
+        a, b = np.asarray(a), np.asarray(b)
+        return a.shape == b.shape and bool(np.array_equal(a, b))
+    return bool(a == b)
+
+
+def assign(handle: Any, prop: str, value: Any) -> None:
+    """Assign a node property unless it already holds ``value`` (for small values: flags, colours, poses).
+
+    viser would skip an equal value too, but only after casting it (tens of microseconds per property); a cache
+    of what was last assigned (an attribute of egtviz's own, ``_egt_cache``, on the handle object; it goes with
+    the handle) makes an unchanged node free.
+    """
+    cache = handle.__dict__.get("_egt_cache")
+    if cache is None:
+        cache = handle.__dict__["_egt_cache"] = {}
+    old = cache.get(prop, _MISSING)
+    if old is not _MISSING and _same(old, value):
+        return
+    setattr(handle, prop, value)
+    cache[prop] = value.copy() if isinstance(value, np.ndarray) else value
