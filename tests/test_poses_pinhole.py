@@ -129,3 +129,19 @@ def test_bad_input_messages_name_the_argument():
         Intrinsics.from_K(np.diag([1.0, 0.0, 1.0]))
     with pytest.raises(GeometryError, match="H: expected shape"):
         Pose.from_matrix(np.eye(3))
+
+
+def test_pose_check_false_trusts_its_inputs_and_the_checked_path_still_refuses():
+    """``check=False`` is the per-drag fast path: the arrays are copied read-only, not re-orthonormalised."""
+    from egtviz.geometry import GeometryError, Pose
+    from egtviz.geometry.poses import rotz
+
+    R = rotz(0.3)
+    fast = Pose(R, [1.0, 2.0, 3.0], check=False)
+    slow = Pose(R, [1.0, 2.0, 3.0])
+    assert np.array_equal(fast.R, R) and np.allclose(fast.R, slow.R, atol=1e-15)
+    assert not fast.R.flags.writeable and not fast.t.flags.writeable
+    R[0, 0] = 5.0  # the caller's array is not shared
+    assert fast.R[0, 0] != 5.0
+    with pytest.raises(GeometryError, match="R"):
+        Pose(np.diag([1.0, 1.0, 2.0]), np.zeros(3))

@@ -9,7 +9,7 @@ in world coordinates, so a world point maps into the frame as
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -72,14 +72,25 @@ class Pose:
     t: np.ndarray = field(default_factory=lambda: np.zeros(3))
     """(3,) origin of the frame in world coordinates."""
 
-    def __post_init__(self) -> None:
-        R = as_rotation(self.R, "R")
-        # Re-orthonormalise so repeated composition does not drift.
-        u, _, vt = np.linalg.svd(R)
-        object.__setattr__(self, "R", u @ vt)
-        object.__setattr__(self, "t", as_vector(self.t, "t", 3).copy())
-        self.R.setflags(write=False)
-        self.t.setflags(write=False)
+    check: InitVar[bool] = True
+    """``False``: ``R`` and ``t`` are trusted to be a rotation (orthonormal to rounding) and a finite 3-vector
+    already, e.g. a rotation the caller built from angles; they are only copied, not checked and not
+    re-orthonormalised (the per-drag fast path)."""
+
+    def __post_init__(self, check: bool) -> None:
+        if check:
+            R = as_rotation(self.R, "R")
+            # Re-orthonormalise so repeated composition does not drift.
+            u, _, vt = np.linalg.svd(R)
+            R = u @ vt
+            t = as_vector(self.t, "t", 3).copy()
+        else:
+            R = np.array(self.R, dtype=np.float64).reshape(3, 3)
+            t = np.array(self.t, dtype=np.float64).reshape(3)
+        R.setflags(write=False)
+        t.setflags(write=False)
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "t", t)
 
     @classmethod
     def from_matrix(cls, H: npt.ArrayLike) -> Pose:

@@ -214,7 +214,8 @@ def _egt_pose(ypr_deg: tuple[float, float, float], position: tuple[float, float,
     """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``: the camera-axes convention of a
     pin-hole (and of the unified camera, whose frame is a pin-hole's)."""
     yaw, pitch, roll = (math.radians(a) for a in ypr_deg)
-    return Pose(EGT_CAMERA_BASE @ np.array(_egt_rotation(yaw, pitch, roll)), position)
+    # Built from checked angles and a checked position: a rotation to rounding, nothing to check again.
+    return Pose(EGT_CAMERA_BASE @ np.array(_egt_rotation(yaw, pitch, roll)), position, check=False)
 
 
 def _egt_ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
@@ -512,7 +513,7 @@ class PanoramicSpec(_CameraSpecBase):
     def pose(self) -> Pose:
         """``Pose(panoramic_rotation_from_ypr(*radians(ypr_deg)), position)``."""
         yaw, pitch, roll = (math.radians(a) for a in self.ypr_deg)
-        return Pose(_panoramic_rotation(yaw, pitch, roll), self.position)
+        return Pose(_panoramic_rotation(yaw, pitch, roll), self.position, check=False)
 
     def with_fields(self, **fields: Any) -> PanoramicSpec:
         """``dataclasses.replace``; a new ``mirror`` shape alone keeps the image as it was.
