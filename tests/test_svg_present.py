@@ -475,3 +475,18 @@ def test_zoomed_in_view_keeps_the_contract_and_numbers_only_what_it_shows():
     assert [t for t, _ in label_boxes(svg)] == ["1"]
     assert root.get("data-view") == "75 75 160 120"  # only point 1 (100, 100) is in it
     assert_labels_clear(svg)
+
+
+def test_fit_shows_the_horizon_of_a_unified_camera():
+    """The horizon of a unified camera (radius f / xi about the principal point) may reach beyond the image."""
+    from egtviz.scene import Scene, compute_derived
+    from egtviz.scene.specs import UnifiedSpec
+
+    scene = Scene(cameras=(UnifiedSpec("uni", xi=0.9, focal_pixels=300.0),), points=((0.0, 3.0, 0.5),))
+    plane = compute_derived(scene).image_planes["uni"]
+    assert plane.horizon, "the scene should show a horizon"
+    view = fit_view(plane)
+    for arc in plane.horizon:
+        assert (arc[:, 0] >= view.u0).all() and (arc[:, 0] <= view.u0 + view.width).all()
+        assert (arc[:, 1] >= view.v0).all() and (arc[:, 1] <= view.v0 + view.height).all()
+    assert view.height > 2 * 300.0 / 0.9  # the horizon's diameter (667 px) is taller than the 480 px image

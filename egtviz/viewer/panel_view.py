@@ -92,7 +92,7 @@ def image_view(plane: Any) -> ViewBox:
 
 
 def _content(plane: Any) -> np.ndarray:
-    """Every finite pixel a panel draws: image corners, points, finite epipoles, rim and conic samples."""
+    """Every finite pixel a panel draws: image corners, points, finite epipoles, rim, horizon and conic samples."""
     w, h = float(plane.width), float(plane.height)
     parts = [np.array([[0.0, 0.0], [w, h]])]
     parts.append(np.asarray(plane.points, float).reshape(-1, 2))
@@ -103,6 +103,7 @@ def _content(plane: Any) -> np.ndarray:
         parts.append(np.asarray(plane.rim, float).reshape(-1, 2))
     for arcs in plane.conics or ():
         parts.extend(np.asarray(a, float).reshape(-1, 2) for a in arcs)
+    parts.extend(np.asarray(a, float).reshape(-1, 2) for a in plane.horizon)
     P = np.concatenate(parts)
     P = P[np.all(np.isfinite(P), axis=1)]
     # Leave out what lies absurdly far from the image (see FIT_MAX_EXTENT).
@@ -115,7 +116,7 @@ def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
     """The smallest view with the image's aspect ratio that shows all the panel's content, plus a margin.
 
     Content: the image rectangle, every visible point (also outside the
-    image), every finite epipole, the mirror rim and the epipolar conics'
+    image), every finite epipole, the mirror rim, the horizon and the epipolar conics'
     samples (not further than ``FIT_MAX_EXTENT`` image sizes from the image).
     With ``[a, b]`` the content's range along an axis and ``m`` the margin,
     the range shown is ``[a - m (b - a), b + m (b - a)]``, then the shorter
