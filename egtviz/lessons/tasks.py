@@ -190,8 +190,13 @@ def _in_pair(scene: Scene, name: str, key: str = "camera", pinhole_pair: bool = 
     pair = scene.drawn_pair
     if pair is None or name not in pair:
         raise EntryError(key, f"camera {name!r} is not in the drawn pair {pair} (add a set_pair change)")
-    if pinhole_pair and not all(scene.camera(n).kind == "pinhole" for n in pair):
+    if pinhole_pair and not _projective_pair(scene, pair):
         raise EntryError(key, f"this task needs a drawn pair of pin-hole cameras, got {pair}")
+
+
+def _projective_pair(scene: Scene, pair: tuple[str, str] | None) -> bool:
+    """Both cameras of ``pair`` image linearly (pin-holes: they have a K, and F exists between their pixels)."""
+    return pair is not None and all(scene.camera(n).camera().projective_calibration is not None for n in pair)
 
 
 def _fmt(x: float) -> str:
@@ -314,8 +319,8 @@ class SameOrientationTask(Task):
 
     def validate(self, scene: Scene) -> None:
         a, b = (_camera_in(scene, n, "cameras") for n in self.cameras)
-        if a.kind != b.kind:
-            raise EntryError("cameras", f"expected two cameras of one kind, got {a.kind} and {b.kind}")
+        if a.model_kind != b.model_kind:
+            raise EntryError("cameras", f"expected two cameras of one kind, got {a.model_kind} and {b.model_kind}")
 
     def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         a, b = (ctx.scene.camera(n) for n in self.cameras)
@@ -466,7 +471,7 @@ class InliersRecallTask(Task):
 
 def _lab_scene(scene: Scene) -> None:
     pair = scene.drawn_pair
-    if pair is None or not all(scene.camera(n).kind == "pinhole" for n in pair):
+    if not _projective_pair(scene, pair):
         raise EntryError(None, f"the estimation lab needs a drawn pair of pin-hole cameras, got {pair}")
 
 
@@ -539,11 +544,11 @@ class CameraFieldTask(Task):
 
 def camera_xi(spec: Any) -> float:
     r"""The unified-sphere :math:`\xi` of a camera: its own ``xi``, its mirror's, or 0 for a pin-hole."""
-    if hasattr(spec, "xi"):
-        return float(spec.xi)
-    if spec.kind == "panoramic":
-        return float(spec.mirror_model().xi)
-    return 0.0
+    camera = spec.camera()
+    if hasattr(camera, "xi"):
+        return float(camera.xi)
+    mirror = getattr(camera, "mirror", None)
+    return 0.0 if mirror is None else float(mirror.xi)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -590,7 +595,7 @@ class TriangulationErrorTask(Task):
     def validate(self, scene: Scene) -> None:
         _point_in(scene, self.point)
         pair = scene.drawn_pair
-        if pair is None or not all(scene.camera(n).kind == "pinhole" for n in pair):
+        if not _projective_pair(scene, pair):
             raise EntryError(None, f"triangulation needs a drawn pair of pin-hole cameras, got {pair}")
 
     def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
