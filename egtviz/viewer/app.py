@@ -920,12 +920,16 @@ class ClientView:
         """Zoom, pan, fit and download buttons for camera ``name``'s panel, in the camera's folder."""
         gui = self.client.gui
         groups: dict[str, Any] = {}
+        # After the camera's last field, before its Remove button (viser's default orders are whole numbers).
+        last = max((float(h.order) for h in self._cam_fields.get(name, {}).values()), default=None)
+        order = (lambda k: None) if last is None else (lambda k: last + 0.1 * (k + 1))
         with self._cam_folders[name]:
-            for label, actions in VIEW_BUTTONS.items():
-                groups[label] = gui.add_button_group(label, tuple(actions))
+            for k, (label, actions) in enumerate(VIEW_BUTTONS.items()):
+                groups[label] = gui.add_button_group(label, tuple(actions), order=order(k))
                 self._on(groups[label].on_click, lambda e, n=name, a=actions: self._user_event(
                     lambda: self._view_action(n, a.get(e.target.value, e.target.value))))
-            groups["download panel"] = gui.add_button_group("download panel", DOWNLOAD_FORMATS)
+            groups["download panel"] = gui.add_button_group("download panel", DOWNLOAD_FORMATS,
+                                                            order=order(len(VIEW_BUTTONS)))
             self._on(groups["download panel"].on_click,
                      lambda e, n=name: self._user_event(lambda: self._download(n, e.target.value)))
         self.panel_buttons[name] = groups

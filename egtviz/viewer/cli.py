@@ -90,6 +90,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(see `egtviz scene list`)")
     p.add_argument("--demo", choices=["pinhole", "panoramic"], default=None,
                    help="open this visual-servoing demo in every new tab (docs/servo.md)")
+    p.add_argument("--lesson", metavar="NAME", default=None,
+                   help="open this lesson in every new tab (`egtviz lessons` lists them; docs/lessons.md). "
+                   "Without --scene, --demo or --lesson every new tab opens the course's start page")
+    p.add_argument("--present", action="store_true",
+                   help="presentation mode in every new tab: large type, thick lines, high contrast (a projector)")
 
 
 def _resolve(host: str, port: int, timeout: float) -> list[tuple]:
@@ -198,13 +203,16 @@ def reachable_urls(host: str, port: int) -> list[str]:
 
 
 def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None, *, verbose: bool = False,
-          demo: str | None = None):
+          demo: str | None = None, present: bool = False, lesson: str | None = None, course: bool = False):
     """Start a server and the app without blocking; returns ``(server, app)``.
+
+    ``course``: every new tab opens the course's start page; ``lesson``: every new tab opens that lesson.
 
     The server gets the guards of :func:`egtviz.viewer.guard.install_guards` before any tab connects.
 
     Raises:
         SceneFileError: the scene file cannot be read (the message names the file and entry).
+        LessonError: ``lesson`` is not one of the course's lessons.
         ServeAddressError: ``host``/``port`` cannot be used (see :func:`check_bind`).
         RuntimeError: the installed viser lacks a private name the guards use (the server is stopped again).
     """
@@ -214,11 +222,15 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     from .guard import install_guards
 
     scene = scene_from_argument(str(scene_path)) if scene_path is not None else None
+    if lesson is not None:
+        from ..lessons import load
+
+        load(lesson)  # before a server starts: LessonError names the lessons there are
     check_bind(host, port)
     server = viser.ViserServer(host=host, port=port, verbose=verbose)
     try:
         install_guards(server)
-        app = EgtvizApp(server, scene, demo=demo)
+        app = EgtvizApp(server, scene, demo=demo, present=present, course=course, lesson=lesson)
     except BaseException:
         server.stop()
         raise
@@ -226,21 +238,26 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
 
 
 def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None,
-          *, stop_event: threading.Event | None = None, demo: str | None = None) -> int:
+          *, stop_event: threading.Event | None = None, demo: str | None = None, present: bool = False,
+          lesson: str | None = None, course: bool = False) -> int:
     """Serve until Ctrl-C (or until ``stop_event`` is set); returns the exit status.
 
-    Exit status 2 for a scene file that cannot be read, 1 for an address that cannot be used; either
-    is reported in one line on stderr.
+    Exit status 2 for a scene file that cannot be read or a lesson that does not exist, 1 for an address
+    that cannot be used; either is reported in one line on stderr.
     """
+    from ..lessons import LessonError
     from ..scene import SceneFileError
 
     try:
         bind = check_bind(host, port)
         if bind.port_busy:
             print(f"egtviz: port {port} is busy on {host}; using the next free one", file=sys.stderr, flush=True)
-        server, _app = start(host, port, scene_path, demo=demo)
+        server, _app = start(host, port, scene_path, demo=demo, present=present, lesson=lesson, course=course)
     except SceneFileError as exc:
         print(f"egtviz: cannot read the scene file: {exc}", file=sys.stderr)
+        return 2
+    except LessonError as exc:
+        print(f"egtviz: cannot open the lesson: {exc}", file=sys.stderr)
         return 2
     except (OSError, RuntimeError) as exc:
         print(f"egtviz: cannot start the server: {exc}", file=sys.stderr)
@@ -262,7 +279,11 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
 
 def run(args: argparse.Namespace) -> int:
     """Entry point for the parsed ``serve`` sub-command."""
-    return serve(args.host, args.port, args.scene, demo=getattr(args, "demo", None))
+    demo, lesson = getattr(args, "demo", None), getattr(args, "lesson", None)
+    # Nothing chosen to open: the course's start page, from which the workbench is one click away.
+    course = args.scene is None and demo is None and lesson is None
+    return serve(args.host, args.port, args.scene, demo=demo, present=bool(getattr(args, "present", False)),
+                 lesson=lesson, course=course)
 
 
 def main(argv: list[str] | None = None) -> int:

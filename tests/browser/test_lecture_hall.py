@@ -1,0 +1,268 @@
+"""The viewer in a lecture hall, measured in headless Chromium at 1366 x 768 and 1920 x 1080.
+
+Panel sizes with four cameras, text sizes in presentation mode, the tutorial's
+example scenes (every point inside its fitted panel), the view buttons and the
+panel downloads. Text sizes are measured as the browser draws them: an SVG
+text's computed font size (user units) times the SVG's screen scale.
+
+``EGTVIZ_SCREENSHOTS=1`` also writes ``assets/screenshot-four-cameras.png``,
+``assets/screenshot-present.png`` and ``assets/screenshot-example3.png``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
+from egtviz.viewer.browser import (
+    CHROMIUM,
+    chromium,
+    chromium_available,
+    close_notifications,
+    open_viewer,
+)
+from egtviz.viewer.panels import MIN_PANEL_PX
+from egtviz.viewer.svg import NORMAL, PRESENT
+
+pytestmark = pytest.mark.browser
+
+if not chromium_available():
+    if os.environ.get("CI"):
+        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests (bash .ci/run installs both)")
+    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing (bash .ci/run installs both)", allow_module_level=True)
+
+ASSETS = Path(__file__).resolve().parents[2] / "assets"
+WINDOWS = [(1366, 768), (1920, 1080)]
+
+#: Every shown image-plane panel: its camera, box on screen, frame box, and each text's size on screen in CSS px.
+PANELS_JS = """() => [...document.querySelectorAll('svg[data-egtviz="image-plane"]')]
+  .filter(s => s.getBoundingClientRect().width > 0)
+  .map(s => {
+    const scale = s.getScreenCTM().a;
+    const texts = [...s.querySelectorAll('text')].filter(t => t.textContent.trim() && !t.querySelector('tspan'))
+      .concat([...s.querySelectorAll('tspan')]);
+    return {
+      camera: s.dataset.camera, style: s.dataset.style, view: s.dataset.view,
+      rect: s.getBoundingClientRect().toJSON(),
+      frame: s.querySelector('[data-kind="frame"]').getBoundingClientRect().toJSON(),
+      ticks: [...s.querySelectorAll('[data-kind="axes"] text')].map(
+        t => parseFloat(getComputedStyle(t).fontSize) * scale),
+      texts: texts.map(t => ({text: t.textContent, px: parseFloat(getComputedStyle(t).fontSize) * scale})),
+    };
+  })"""
+
+#: Each drawn point of a panel (in or outside the image): its centre on screen and what the page shows there.
+POINTS_JS = """(camera) => {
+  const s = document.querySelector(`svg[data-egtviz="image-plane"][data-camera="${camera}"]`);
+  return [...s.querySelectorAll('[data-kind="point"], [data-kind="point-outside"]')].map(p => {
+    const c = p.tagName === 'circle' ? p : p.querySelector('circle');
+    const r = c.getBoundingClientRect();
+    const x = r.left + r.width / 2, y = r.top + r.height / 2;
+    const hit = document.elementFromPoint(x, y);
+    return {index: p.dataset.index, x, y, on_panel: hit !== null && s.contains(hit)};
+  });
+}"""
+
+
+def _serve(scene, *, present=False):
+    import viser
+
+    from egtviz.viewer.app import EgtvizApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = EgtvizApp(server, scene, present=present)
+    return server, app, f"http://127.0.0.1:{server.get_port()}"
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with chromium() as b:
+        yield b
+
+
+def _four_cameras():
+    model = SceneModel(default_scene())
+    model.add_camera("pinhole")
+    model.add_camera("panoramic")
+    return model.scene
+
+
+def _settled_panels(page, app, n, timeout=30.0):
+    """The panels once every one is as wide as the tab's grid says (the widths are sent again after docking)."""
+    deadline = time.time() + timeout
+    last = None
+    while time.time() < deadline:
+        panels = page.evaluate(PANELS_JS)
+        views = list(app.views.values())
+        if len(panels) == n and views and views[0].grid is not None:
+            want = views[0].grid.column_px
+            rects = [p["rect"] for p in panels]
+            # Widths as planned, and the same boxes twice in a row (the dock may still be moving).
+            if all(abs(r["width"] - want) <= 1.0 for r in rects) and rects == last:
+                return panels, views[0]
+            last = rects
+        time.sleep(0.3)
+    raise AssertionError(f"panels did not settle: {[p['rect']['width'] for p in page.evaluate(PANELS_JS)]}")
+
+
+def _disjoint(a, b) -> bool:
+    return a["right"] <= b["left"] + 1 or b["right"] <= a["left"] + 1 or a["bottom"] <= b["top"] + 1 or b["bottom"] <= a["top"] + 1
+
+
+def _screenshot(page, name):
+    if os.environ.get("EGTVIZ_SCREENSHOTS"):
+        close_notifications(page)
+        time.sleep(6.0)  # software WebGL: let the 3D view draw and fade in
+        page.screenshot(path=str(ASSETS / name))
+
+
+@pytest.mark.parametrize(("width", "height"), WINDOWS)
+def test_four_cameras_each_panel_readable(browser, width, height):
+    server, app, url = _serve(_four_cameras())
+    page = open_viewer(browser, url, width=width, height=height, n_panels=4)
+    try:
+        panels, view = _settled_panels(page, app, 4)
+        assert sorted(p["camera"] for p in panels) == ["cam1", "cam2", "cam3", "pano1"]
+        for i, p in enumerate(panels):
+            r = p["rect"]
+            assert r["width"] >= MIN_PANEL_PX
+            assert r["left"] >= 0 and r["right"] <= width + 1 and r["bottom"] <= height + 1
+            for q in panels[i + 1:]:
+                assert _disjoint(r, q["rect"])
+            # Drawn for the width it has: the axes' numbers are the style's size on screen, every text readable.
+            assert p["ticks"] and all(abs(t - NORMAL.tick_px) < 0.3 for t in p["ticks"])
+            assert min(t["px"] for t in p["texts"]) >= NORMAL.tick_px - 0.3
+        # Panel width follows the window; the 3D view keeps a real share of it.
+        canvas = page.evaluate("() => document.querySelector('canvas').getBoundingClientRect().toJSON()")
+        assert canvas["width"] >= 0.28 * width
+        assert all(canvas["right"] <= p["rect"]["left"] + 1 for p in panels)
+        assert view.grid.column_px >= (0.22 * width if width >= 1900 else MIN_PANEL_PX)
+        if (width, height) == (1366, 768):
+            _screenshot(page, "screenshot-four-cameras.png")
+    finally:
+        page.close()
+        server.stop()
+
+
+def test_presentation_mode_text_is_16_px_at_1920(browser):
+    server, app, url = _serve(_four_cameras(), present=True)
+    page = open_viewer(browser, url, width=1920, height=1080, n_panels=4)
+    try:
+        panels, _view = _settled_panels(page, app, 4)
+        for p in panels:
+            assert p["style"] == "present"
+            sizes = [t["px"] for t in p["texts"]]
+            assert len(sizes) >= 10
+            small = [t for t in p["texts"] if t["px"] < 16.0]
+            assert not small, f"{p['camera']}: text under 16 px: {small}"
+            assert all(abs(t - PRESENT.tick_px) < 0.3 for t in p["ticks"])
+        # The GUI's type is larger too (Mantine's scale): a field label is at least 16 px.
+        label_px = page.evaluate("() => parseFloat(getComputedStyle(document.querySelector('label')).fontSize)")
+        assert label_px >= 16.0
+        _screenshot(page, "screenshot-present.png")
+    finally:
+        page.close()
+        server.stop()
+
+
+def test_presentation_toggle_in_the_gui(browser):
+    server, app, url = _serve(default_scene())
+    page = open_viewer(browser, url, width=1920, height=1080, n_panels=2)
+    try:
+        panels, _ = _settled_panels(page, app, 2)
+        assert {p["style"] for p in panels} == {"normal"}
+        normal_label = page.evaluate("() => parseFloat(getComputedStyle(document.querySelector('label')).fontSize)")
+        page.get_by_text("Panels", exact=True).first.click()
+        page.get_by_text("presentation mode", exact=True).first.click()
+        page.wait_for_function("""() => [...document.querySelectorAll('svg[data-egtviz="image-plane"]')]
+            .every(s => s.dataset.style === 'present')""", timeout=20_000)
+        panels, _ = _settled_panels(page, app, 2)
+        assert min(t["px"] for p in panels for t in p["texts"]) >= 16.0
+        label = page.evaluate("() => parseFloat(getComputedStyle(document.querySelector('label')).fontSize)")
+        assert label == pytest.approx(1.25 * normal_label, rel=0.02)
+    finally:
+        page.close()
+        server.stop()
+
+
+@pytest.mark.parametrize("name", ["example1", "example2", "example3", "example4"])
+@pytest.mark.parametrize(("width", "height"), WINDOWS)
+def test_example_scenes_show_every_tutorial_point(browser, name, width, height):
+    scene = SCENES[name]()
+    derived = compute_derived(scene)
+    server, app, url = _serve(scene)
+    page = open_viewer(browser, url, width=width, height=height, n_panels=len(scene.cameras))
+    try:
+        panels, _ = _settled_panels(page, app, len(scene.cameras))
+        for p in panels:
+            plane = derived.image_planes[p["camera"]]
+            points = page.evaluate(POINTS_JS, p["camera"])
+            assert len(points) == int(np.asarray(plane.visible).sum()) >= 1
+            f = p["frame"]
+            for pt in points:
+                assert f["left"] <= pt["x"] <= f["right"] and f["top"] <= pt["y"] <= f["bottom"], pt
+                assert 0 <= pt["x"] <= width and 0 <= pt["y"] <= height
+                assert pt["on_panel"], f"{name} {p['camera']}: point {pt['index']} is covered or scrolled away"
+        if name == "example3" and (width, height) == (1366, 768):
+            _screenshot(page, "screenshot-example3.png")
+    finally:
+        page.close()
+        server.stop()
+
+
+def _open_camera_folder(page, title):
+    page.get_by_text(title).first.click()
+
+
+def test_zoom_button_and_downloads(browser, tmp_path):
+    server, app, url = _serve(default_scene())
+    page = open_viewer(browser, url, width=1366, height=768, n_panels=2)
+    try:
+        _settled_panels(page, app, 2)
+        _open_camera_folder(page, "cam1 (pin-hole)")
+        page.get_by_role("button", name="+", exact=True).first.click()
+        page.wait_for_function("""() => document.querySelector(
+            'svg[data-egtviz="image-plane"][data-camera="cam1"]').dataset.view === '64 48 512 384'""", timeout=20_000)
+
+        with page.expect_download(timeout=30_000) as info:
+            page.get_by_role("button", name="SVG", exact=True).first.click()
+        svg_path = tmp_path / info.value.suggested_filename
+        info.value.save_as(svg_path)
+        assert svg_path.name == "cam1-image-plane.svg"
+        root = ET.parse(svg_path).getroot()
+        assert root.get("data-camera") == "cam1" and root.get("data-view") == "64 48 512 384"
+        assert len(root.findall(".//*[@data-kind='point']")) == 8
+
+        with page.expect_download(timeout=60_000) as info:
+            page.get_by_role("button", name="PNG", exact=True).first.click()
+        png_path = tmp_path / info.value.suggested_filename
+        info.value.save_as(png_path)
+        data = png_path.read_bytes()
+        assert png_path.name == "cam1-image-plane.png" and data[:8] == b"\x89PNG\r\n\x1a\n"
+        assert int.from_bytes(data[16:20], "big") == 2 * int(NORMAL.panel_px)
+    finally:
+        page.close()
+        server.stop()
+
+
+def test_high_density_screen_gets_the_layout_of_its_css_size(browser):
+    """At 2 device pixels per CSS pixel the canvas reports 2732 x 1536: the grid is planned for 1366 x 768."""
+    server, app, url = _serve(_four_cameras())
+    page = browser.new_page(viewport={"width": 1366, "height": 768}, device_scale_factor=2)
+    try:
+        page.goto(url)
+        page.wait_for_function(
+            "() => document.querySelectorAll('svg[data-egtviz=\"image-plane\"]').length >= 4", timeout=60_000)
+        panels, view = _settled_panels(page, app, 4)
+        assert view.grid.window.width == 1366 and view.grid.window.height == 768
+        assert all(p["rect"]["width"] >= MIN_PANEL_PX for p in panels)
+        assert all(p["rect"]["right"] <= 1366 + 1 for p in panels)
+    finally:
+        page.close()
+        server.stop()
