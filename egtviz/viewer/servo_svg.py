@@ -68,6 +68,10 @@ class ServoImage:
     message_colour: str = "#a00"
 
 
+#: Least fraction of an axis between its zero and either end (:func:`shared_zero_ranges`).
+ZERO_FRACTION_MARGIN = 0.02
+
+
 def shared_zero_ranges(a: tuple[float, float], b: tuple[float, float], pad: float = 0.05
                        ) -> tuple[tuple[float, float], tuple[float, float]]:
     """Ranges for the two y-axes of one plot that put 0 at the same height on both (for the servo plots).
@@ -75,7 +79,8 @@ def shared_zero_ranges(a: tuple[float, float], b: tuple[float, float], pad: floa
     Each data range ``[lo, hi]`` is first widened to hold 0; with ``p = -lo``,
     ``q = hi``, zero sits at the fraction ``f = p / (p + q)`` of the axis from
     the bottom. One ``f*`` is chosen for both (the larger ``f`` when it is
-    below 1, else the smaller when above 0, else 1/2), and each axis gets the
+    below 1, else the smaller when above 0, else 1/2; then kept within
+    :data:`ZERO_FRACTION_MARGIN` of either end), and each axis gets the
     span ``s = max(p / f*, q / (1 - f*)) (1 + pad)``, i.e. the range
     ``[-f* s, (1 - f*) s]``, which holds its data.
 
@@ -93,6 +98,8 @@ def shared_zero_ranges(a: tuple[float, float], b: tuple[float, float], pad: floa
         pq.append((max(-lo, 0.0), max(hi, 0.0)))
     fs = [p / (p + q) if p + q > 0 else 0.5 for p, q in pq]
     f = max(fs) if max(fs) < 1 else (min(fs) if min(fs) > 0 else 0.5)
+    # Zero never closer than 2 % to an end: a zero fraction of 1e-300 would need a span of 1e300.
+    f = min(max(f, ZERO_FRACTION_MARGIN), 1.0 - ZERO_FRACTION_MARGIN)
     out = []
     for p, q in pq:
         span = max(p / f if p > 0 else 0.0, q / (1 - f) if q > 0 else 0.0) or 1.0
