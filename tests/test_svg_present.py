@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import math
 import re
 import xml.etree.ElementTree as ET
-
 from pathlib import Path
 
 import matplotlib
@@ -490,3 +490,20 @@ def test_fit_shows_the_horizon_of_a_unified_camera():
         assert (arc[:, 0] >= view.u0).all() and (arc[:, 0] <= view.u0 + view.width).all()
         assert (arc[:, 1] >= view.v0).all() and (arc[:, 1] <= view.v0 + view.height).all()
     assert view.height > 2 * 300.0 / 0.9  # the horizon's diameter (667 px) is taller than the 480 px image
+
+
+def test_a_fitted_view_draws_the_lines_that_miss_the_image():
+    """Example 3's cam1: both epipolar lines pass above its 2 x 2 image; the fitted view shows them through their
+    points and the epipole."""
+    from egtviz.scene import SCENES, compute_derived
+
+    pl = compute_derived(SCENES["example3"]()).image_planes["cam1"]
+    assert np.isnan(pl.lines).all()  # clipped to the image: nothing
+    root = ET.fromstring(image_plane_svg(pl, view=fit_view(pl)))
+    lines = [el for el in root.iter() if el.get("data-kind") == "epipolar-line"]
+    assert len(lines) == 2
+    for el, point in zip(lines, pl.points, strict=True):
+        (x1, y1, x2, y2) = (float(el.get(k)) for k in ("x1", "y1", "x2", "y2"))
+        for p in (point, pl.epipoles[0].xy):  # the line holds its point and the epipole
+            cross = (x2 - x1) * (p[1] - y1) - (y2 - y1) * (p[0] - x1)
+            assert abs(cross) / math.hypot(x2 - x1, y2 - y1) < 5e-3  # coordinates are written to 3 decimals

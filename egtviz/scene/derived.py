@@ -77,6 +77,9 @@ class ImagePlane:
     lines: np.ndarray | None = None
     """(N, 2, 2) epipolar line segments clipped to the image, for a camera that images planes to lines inside the
     image rectangle (a pin-hole in the drawn pair); NaN rows where a line misses the image."""
+    line_coefficients: np.ndarray | None = None
+    """(N, 3) the same epipolar lines as ``(a, b, c)``, :math:`a u + b v + c = 0`, also those that miss the image
+    (a panel zoomed out past the image draws them across its whole view); NaN rows where a point has none."""
     conics: tuple[tuple[np.ndarray, ...], ...] | None = None
     """Per point, the visible arcs (k, 2) of its epipolar curve, for any other camera in the drawn pair."""
     rim: np.ndarray | None = None
@@ -296,7 +299,7 @@ def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | 
         if seen or single
     )
     if lines is not None:
-        return {"epipoles": epipoles, "lines": lines}
+        return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(np.array(curves.lines, float))}
     arcs = cam.plane_image_arcs(normals, n_samples)
     return {"epipoles": epipoles, "conics": tuple(a if type(a) is tuple else tuple(a) for a in arcs)}
 

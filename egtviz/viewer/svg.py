@@ -552,6 +552,24 @@ def _wrap(clauses: list[str], max_px: float, size_px: float) -> list[str]:
     return lines
 
 
+def _segments_of_lines(L: np.ndarray, coefficients: np.ndarray | None, view: ViewBox) -> np.ndarray:
+    """The segments ``L`` (N, 4), with a segment of its line ``(a, b, c)`` where the scene layer had none because the
+    line misses the image: the foot of the perpendicular from the view's centre ``p0`` and ``p0 + (-b, a)``."""
+    if coefficients is None:
+        return L
+    missing = ~np.all(np.isfinite(L), axis=1) & np.all(np.isfinite(coefficients), axis=1)
+    if not missing.any():
+        return L
+    a, b, c = np.asarray(coefficients, float)[missing].T
+    n2 = a * a + b * b
+    cu, cv = view.centre
+    dist = (a * cu + b * cv + c) / n2
+    u0, v0 = cu - a * dist, cv - b * dist
+    L = L.copy()
+    L[missing] = np.column_stack([u0, v0, u0 - b, v0 + a])
+    return L
+
+
 def _extend_segments(L: np.ndarray, view: ViewBox) -> np.ndarray:
     """Each segment (x1, y1, x2, y2) extended along its own line to the view's edges (rows that miss it: NaN).
 
@@ -676,7 +694,7 @@ def image_plane_svg(
     if plane.lines is not None:
         L = np.asarray(plane.lines, float).reshape(-1, 4)
         if view != image:
-            L = _extend_segments(L, view)
+            L = _extend_segments(_segments_of_lines(L, plane.line_coefficients, view), view)
         ok = np.all(np.isfinite(L), axis=1)
         idx = np.flatnonzero(ok)
         table = np.empty((len(idx), 9), dtype=object)
