@@ -1,4 +1,5 @@
-"""The ``egtviz`` command: ``serve`` (the default), ``scene``, ``servo``, ``figure``, ``bench``, ``version``.
+"""The ``egtviz`` command: ``serve`` (the default: the course's start page), ``lesson``, ``scene``, ``servo``,
+``figure``, ``bench``, ``version``.
 
 Exit status: 0 success; 1 a run that did not succeed (a servo run that did not converge, an output that
 could not be written); 2 a refused argument or input file (argparse usage errors too). Messages never
@@ -22,8 +23,8 @@ def _add_bench(subparsers) -> None:
         help="measure speed and print a table (ours vs OpenCV where it has the same function)",
         description="Time the numeric core, the viewer's update path or the servo simulations; prints medians.",
     )
-    p.add_argument("suite", nargs="?", default="all", choices=["core", "viewer", "servo", "all"],
-                   help="what to measure (default all)")
+    p.add_argument("suite", nargs="?", default="all", choices=["core", "viewer", "servo", "classroom", "all"],
+                   help="what to measure (default all; classroom: many tabs on one server, not in all)")
     p.add_argument("--repeats", type=whole_number_in(1, 10_000), default=20,
                    help="timed repetitions per case, 1..10000 (median is reported; default 20)")
 
@@ -155,16 +156,17 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="egtviz",
         description="Interactive multiple-view geometry in the browser (a Python Epipolar Geometry Toolbox). "
-        "With no command, starts the viewer on the default scene.",
+        "With no command, starts the viewer on the course's start page (the workbench is one click away).",
         epilog=_serve_options_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"egtviz {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{serve,lessons,progress,check,scene,servo,figure,bench,version}",
+    sub = parser.add_subparsers(dest="command", metavar="{serve,lesson,lessons,progress,check,scene,servo,figure,bench,version}",
                                 help="what to do (default: serve)")
     from .viewer.cli import add_parser as add_serve
 
     add_serve(sub)
+    _add_lesson(sub)
     _add_lessons(sub)
     _add_scene(sub)
     from .servo.cli import add_parser as add_servo
@@ -174,6 +176,17 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     _add_bench(sub)
     sub.add_parser("version", help="print the version", description="Print the version of egtviz.")
     return parser
+
+
+def _add_lesson(subparsers) -> None:
+    """``egtviz lesson NAME [serve options]``: serve with ``--lesson NAME``."""
+    from .viewer.cli import add_arguments
+
+    p = subparsers.add_parser(
+        "lesson", help="open one lesson in the viewer (egtviz serve --lesson NAME)",
+        description="Serve the viewer with this lesson in every new tab (`egtviz lessons` lists them).")
+    p.add_argument("lesson_name", metavar="NAME", help="a lesson's name, e.g. 06-pinhole-epipolar")
+    add_arguments(p)
 
 
 def _check_scene_argument(args) -> int | None:
@@ -211,6 +224,8 @@ def main(argv: list[str] | None = None) -> int:
         from .lessons import cli as lessons_cli
 
         return getattr(lessons_cli, _LESSON_COMMANDS[args.command])(args)
+    if args.command == "lesson":
+        args.command, args.lesson = "serve", args.lesson_name
     if args.command == "serve":
         refused = _check_scene_argument(args)
         if refused is not None:

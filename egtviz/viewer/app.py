@@ -281,6 +281,8 @@ class ClientView:
         self.breakdown: dict[str, float] = {}
         self.last_update_wall: float = 0.0
         self.svgs: dict[str, str] = {}
+        #: Per panel, the image plane and the other inputs its SVG was last drawn from, and that SVG.
+        self._drawn_panels: dict[str, tuple[Any, tuple, str]] = {}
         self.readout = ""
         self._cam_fields: dict[str, dict[str, Any]] = {}
         self._cam_folders: dict[str, Any] = {}
@@ -882,22 +884,35 @@ class ClientView:
         return kept[1]
 
     def _panel_svg(self, name: str, plane: Any, scene: Scene, highlighted: set[int]) -> str:
-        """Panel ``name``'s SVG: its view, the tab's style, drawn for the width its column has on screen."""
+        """Panel ``name``'s SVG: its view, the tab's style, drawn for the width its column has on screen.
+
+        A panel whose image plane is the very object drawn last time (a camera that neither moved nor is in the
+        drawn pair: ``compute_derived`` reuses its plane) and whose other inputs are equal keeps its SVG, revision
+        included: the same text assigned again is not sent.
+        """
         grid = self.grid
         panel_px = grid.column_px if grid is not None and grid.columns else None
         max_height = f"{grid.svg_max_height_px(name):.0f}px" if panel_px is not None else None
-        return image_plane_svg(
+        view = self._panel_view(name, plane).resolve(plane)
+        inputs = (scene.selected_point, frozenset(highlighted), scene.options.show_labels, view, self._style, panel_px,
+                  max_height)
+        kept = self._drawn_panels.get(name)
+        if kept is not None and kept[0] is plane and kept[1] == inputs:
+            return kept[2]
+        svg = image_plane_svg(
             plane,
             selected_point=scene.selected_point,
             highlighted=highlighted,
             show_labels=scene.options.show_labels,
             revision=self.revision,
-            view=self._panel_view(name, plane).resolve(plane),
+            view=view,
             style=self._style,
             panel_px=panel_px,
             # The grid leaves room for the SVG in its cell; the cap only keeps a longer status text from scrolling.
             max_height=max_height,
         )
+        self._drawn_panels[name] = (plane, inputs, svg)
+        return svg
 
     # -- panel view, downloads, presentation mode ------------------------------------------
 

@@ -557,10 +557,13 @@ def _segments_of_lines(L: np.ndarray, coefficients: np.ndarray | None, view: Vie
     line misses the image: the foot of the perpendicular from the view's centre ``p0`` and ``p0 + (-b, a)``."""
     if coefficients is None:
         return L
-    missing = ~np.all(np.isfinite(L), axis=1) & np.all(np.isfinite(coefficients), axis=1)
+    coefficients = np.asarray(coefficients, float)
+    with np.errstate(invalid="ignore"):
+        drawable = np.all(np.isfinite(coefficients), axis=1) & (np.abs(coefficients[:, :2]).sum(axis=1) > 0)
+    missing = ~np.all(np.isfinite(L), axis=1) & drawable
     if not missing.any():
         return L
-    a, b, c = np.asarray(coefficients, float)[missing].T
+    a, b, c = coefficients[missing].T
     n2 = a * a + b * b
     cu, cv = view.centre
     dist = (a * cu + b * cv + c) / n2

@@ -1,0 +1,195 @@
+r"""The convention lens in a tab: its five toggles, the live residuals, and the panels drawn through it.
+
+The numbers come from :func:`egtviz.scene.lens.lens_view`; this module only shows them. With a toggle on,
+the image-plane panels draw the epipoles and the epipolar lines the mistaken code would compute
+(:meth:`LensPanel.panel_filter`, installed as the tab's ``panel_filter``), and the lens's folder lists, per
+point seen in both images, the residual
+
+.. math:: r_i = m_{2i}^T F m_{1i}
+
+with ``F`` as shown (unit Frobenius norm), and the distance of each point from its own epipolar line in
+image 2, :math:`|l_{2i} \cdot m_{2i}|` with :math:`l_{2i} = F m_{1i}` scaled to :math:`a^2 + b^2 = 1`.
+A working lens gives residuals near zero; a broken one does not.
+
+The toggles belong to the lesson (:attr:`egtviz.lessons.LessonRun.lens`): a click applies a ``set_lens``
+change through the run, so the lesson's checks see what the panels show.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import fields, replace
+from html import escape
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..geometry import GeometryError
+from ..geometry.epipolar import clipped_epipolar_lines
+from ..lessons.changes import SetLens
+from ..scene import Derived, Epipole, ImagePlane, Scene, SceneError
+from ..scene.lens import LensToggles, LensView, lens_view
+from .fields import on_event
+
+__all__ = ["LENS_LABELS", "LensPanel", "LessonInstruments", "epipole_mark", "pair_planes", "residual_table_html"]
+
+#: Each toggle of :class:`~egtviz.scene.lens.LensToggles` as the GUI names it (the mistake it applies).
+LENS_LABELS: dict[str, str] = {
+    "f_transposed": "F in place of F\u1d40",
+    "wrong_singular_vector": "epipoles from the wrong singular vector",
+    "r_tx": "E = R [t]\u2093 (for [t]\u2093 R)",
+    "k_transposed": "K\u2082\u207b\u1d40 E K\u2081\u1d40 (for K\u2082\u207b\u1d40 E K\u2081\u207b\u00b9)",
+    "opengl_axes": "OpenGL camera axes (for OpenCV's)",
+}
+#: Rows of the residual table (the selected point is always listed first).
+MAX_RESIDUAL_ROWS = 12
+
+
+class LessonInstruments(Protocol):
+    """What the lab and the lens read and change: a :class:`~egtviz.lessons.LessonRun`."""
+
+    lab: Any
+    lens: LensToggles
+
+    def apply(self, change: Any) -> None: ...
+
+
+def epipole_mark(label: str, e: np.ndarray, width: float, height: float) -> Epipole:
+    """An epipole as the panels draw it, from a homogeneous 3-vector (last coordinate 1, or 0 at infinity)."""
+    x, y, z = (float(c) for c in e)
+    if z == 0.0:
+        n = max(math.hypot(x, y), 1e-300)
+        return Epipole(label, None, np.array([x / n, y / n]), True, False)
+    u, v = x / z, y / z
+    return Epipole(label, np.array([u, v]), None, False, bool(0.0 <= u <= width and 0.0 <= v <= height))
+
+
+def _segments(lines: np.ndarray, width: float, height: float) -> np.ndarray:
+    """(N, 2, 2) lines clipped to the image for drawing; NaN rows for missing lines or lines that miss it."""
+    out = np.full((len(lines), 2, 2), np.nan)
+    ok = np.isfinite(lines).all(axis=1) & (np.abs(lines[:, :2]).sum(axis=1) > 0)
+    if ok.any():
+        try:
+            seg, _ = clipped_epipolar_lines(lines[ok], width, height)
+        except GeometryError:  # a line at infinity: nothing to draw
+            return out
+        out[ok] = seg
+    return out
+
+
+def pair_planes(derived: Derived, names: tuple[str, str], *, lines1: np.ndarray, lines2: np.ndarray,
+                e1: np.ndarray, e2: np.ndarray, points: tuple[np.ndarray, np.ndarray] | None = None,
+                no_image: str = "") -> Derived:
+    """``derived`` with the drawn pair's panels showing other epipolar lines and epipoles (and pixels).
+
+    Args:
+        derived: the model's derived quantities.
+        names: the drawn pair (image 1, image 2).
+        lines1, lines2: (N, 3) lines in image 1 and image 2, one per point (NaN rows: none drawn).
+        e1, e2: homogeneous epipoles of image 1 and image 2.
+        points: (N, 2) pixels to draw instead of the true images (NaN: not drawn), for image 1 and image 2.
+        no_image: why a point of ``points`` is not drawn, in a few words (the panels' status line).
+    """
+    planes = dict(derived.image_planes)
+    for name, lines, e, label, k in ((names[0], lines1, e1, "e1", 0), (names[1], lines2, e2, "e2", 1)):
+        plane: ImagePlane = planes[name]
+        extra: dict[str, Any] = {}
+        if points is not None:
+            px = np.asarray(points[k], float)
+            seen = np.isfinite(px).all(axis=1)
+            inside = seen & (px[:, 0] >= 0) & (px[:, 0] <= plane.width) & (px[:, 1] >= 0) & (px[:, 1] <= plane.height)
+            extra = {"points": px, "visible": seen, "in_image": inside, "n_hidden": int((~seen).sum()),
+                     "no_image": no_image or plane.no_image}
+        lines = np.asarray(lines, float)
+        planes[name] = replace(plane, lines=_segments(lines, plane.width, plane.height), line_coefficients=lines,
+                               epipoles=(epipole_mark(label, e, plane.width, plane.height),), conics=None, **extra)
+    return replace(derived, image_planes=planes)
+
+
+def _num(x: float, digits: int = 3) -> str:
+    return "-" if not math.isfinite(x) else f"{x:.{digits}g}"
+
+
+def residual_table_html(view: LensView, selected: int | None) -> str:
+    """The lens's read-out: per point seen in both images, :math:`m_2^T F m_1` and the point-to-line distance."""
+    both = np.flatnonzero(np.isfinite(view.residuals))
+    order = [i for i in ([selected] if selected is not None else []) if i in set(both.tolist())]
+    order += [int(i) for i in both if i != selected][: MAX_RESIDUAL_ROWS - len(order)]
+    rows = "".join(
+        f'<tr data-point="{i}"{" style=font-weight:bold" if i == selected else ""}><td>{i + 1}</td>'
+        f'<td data-kind="residual">{view.residuals[i]: .2e}</td><td data-kind="distance2">'
+        f"{_num(view.distances2_px[i])}</td><td>{_num(view.distances1_px[i])}</td></tr>"
+        for i in order
+    )
+    worst = float(np.nanmax(np.abs(view.residuals))) if len(both) else math.nan
+    more = f"<br>({len(both) - len(order)} more points not listed)" if len(both) > len(order) else ""
+    return (
+        '<div style="font-size:0.8em" data-egtviz="lens-readout">'
+        f"<b>m\u2082\u1d40 F m\u2081</b> with F as the panels use it (unit norm); distance of each point from its "
+        f"line, px. Largest |m\u2082\u1d40 F m\u2081|: <b data-kind=\"worst\">{_num(worst)}</b>"
+        '<table style="width:100%;text-align:right"><tr><th>point</th><th>m\u2082\u1d40 F m\u2081</th>'
+        f"<th>in {escape(view.names[1])}</th><th>in {escape(view.names[0])}</th></tr>{rows}</table>{more}</div>"
+    )
+
+
+class LensPanel:
+    """The convention lens's folder in a lesson tab.
+
+    Args:
+        gui: the tab's ``client.gui``.
+        run: the lesson run whose ``lens`` toggles are shown and changed.
+        redraw: redraws the tab (the panels pass through :meth:`panel_filter` again).
+        report: receives what a callback raises (the tab's notification).
+        order: the folder's place in the control panel.
+    """
+
+    def __init__(self, gui: Any, run: LessonInstruments, *, redraw: Callable[[], None],
+                 report: Callable[[BaseException], None], order: float) -> None:
+        self.run = run
+        self._redraw = redraw
+        self._syncing = False
+        #: The last lens view drawn (None: the lens could not be applied to the scene).
+        self.view: LensView | None = None
+        self.folder = gui.add_folder("Convention lens", order=order, expand_by_default=True)
+        with self.folder:
+            gui.add_markdown("<small>Each toggle applies a mistake people make; the panels draw what the "
+                             "mistaken code computes.</small>")
+            self.toggles: dict[str, Any] = {}
+            for f in fields(LensToggles):
+                box = gui.add_checkbox(LENS_LABELS[f.name], getattr(run.lens, f.name))
+                on_event(box.on_update, lambda e, k=f.name: self._toggle(k, e.target.value), report)
+                self.toggles[f.name] = box
+            self.readout = gui.add_html("")
+
+    def _toggle(self, key: str, value: Any) -> None:
+        if self._syncing:
+            return
+        if not isinstance(value, bool):  # a raw client can send anything
+            raise SceneError(f"{LENS_LABELS[key]}: expected true or false, got {str(value)[:40]!r}")
+        if getattr(self.run.lens, key) != value:
+            self.run.apply(SetLens(((key, value),)))
+        self._redraw()
+
+    def sync(self) -> None:
+        """Show the run's toggles (after a step changed them)."""
+        self._syncing = True
+        try:
+            for key, box in self.toggles.items():
+                if box.value != getattr(self.run.lens, key):
+                    box.value = getattr(self.run.lens, key)
+        finally:
+            self._syncing = False
+
+    def panel_filter(self, scene: Scene, derived: Derived) -> tuple[Derived, frozenset[int]]:
+        """The panels through the lens: its epipoles and lines in the drawn pair (unchanged if it cannot apply)."""
+        try:
+            view = lens_view(scene, self.run.lens, derived)
+        except SceneError as exc:
+            self.view = None
+            self.readout.content = f'<div style="font-size:0.8em">The lens is off: {escape(str(exc))}</div>'
+            return derived, frozenset()
+        self.view = view
+        self.readout.content = residual_table_html(view, scene.selected_point)
+        return pair_planes(derived, view.names, lines1=view.lines1, lines2=view.lines2, e1=view.e1, e2=view.e2), \
+            frozenset()

@@ -1,0 +1,315 @@
+"""The lesson runner in a tab: the step's text, its tasks with their answers and checks, and the way through.
+
+A :class:`LessonPanel` sits at the top of a workbench tab's control panel and drives one
+:class:`~egtviz.lessons.LessonRun` on the tab's own :class:`~egtviz.scene.SceneModel`: the workbench below
+it (gizmos, fields, panels) is the learner's instrument, and the run's checks read the same scene. It shows
+
+* the lesson's title, "step k of n" and a progress bar;
+* "previous", "reset step" and "next" (entering a step applies its scene changes through the run);
+* the step's text (Markdown with the formulas as MathML);
+* each task: its prompt, an answer field when the task is a question (a text field for a number, a list of
+  the options for a choice), a "Check" button, the feedback on each attempt and the hint after a failed one;
+* the learner's name: progress (the step, the tasks passed) is kept under it in the
+  :class:`~egtviz.lessons.ProgressStore`, so a reload, a new tab or a restarted server resumes there;
+* the estimation lab (:mod:`egtviz.viewer.lab_view`) or the convention lens (:mod:`egtviz.viewer.lens_view`)
+  when the lesson uses them; they draw the panels through the tab's ``panel_filter``.
+
+A ``set_range`` change of a step limits a camera field: the camera fields have no per-field range to set, so
+the limit is enforced when a task is checked (a value outside it is refused with the range) and listed in the
+panel. Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
+notification in this tab.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from html import escape
+from typing import Any
+
+from ..lessons import Lesson, LessonRun, ProgressStore
+from ..lessons.changes import SetLab, SetLens
+from ..lessons.progress import LearnerNameError, learner_key
+from ..lessons.runner import ResolvedTask
+from ..scene import SceneError
+from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, format_number, on_event
+
+__all__ = ["CHOOSE", "LessonPanel", "StepNav", "TaskRow", "lesson_instruments", "range_refusal"]
+
+#: The choice field's value before the learner picks an option.
+CHOOSE = "(choose an answer)"
+#: The step buttons, in their group's order.
+STEP_BUTTONS = ("previous", "reset step", "next")
+#: Where the lesson's folders sit in the control panel (viser puts smaller orders first; the workbench's own
+#: folders take increasing positive orders).
+LESSON_ORDER = -100.0
+LAB_ORDER = -90.0
+LENS_ORDER = -80.0
+MATH_CSS = ('<style>math[display="block"]{max-width:100%;overflow-x:auto;overflow-y:hidden;'
+            "font-size:0.92em;padding:0.35em 0 0.2em}</style>")
+LAB_TASKS = frozenset({"sampson_below", "inliers_recall"})
+LENS_TASKS = frozenset({"point_on_line"})
+
+
+def lesson_instruments(lesson: Lesson) -> tuple[bool, bool]:
+    """``(lab, lens)``: whether the lesson uses the estimation lab, the convention lens (its changes or tasks)."""
+    changes = [c for s in lesson.steps for c in s.changes]
+    kinds = {t.kind for s in lesson.steps for t in s.tasks}
+    lab = any(isinstance(c, SetLab) for c in changes) or bool(kinds & LAB_TASKS)
+    lens = any(isinstance(c, SetLens) for c in changes) or bool(kinds & LENS_TASKS)
+    return lab, lens
+
+
+def range_refusal(run: LessonRun) -> str | None:
+    """Why the scene breaks the step's ``set_range`` limits (a camera field outside its range), or None."""
+    scene = run.model.scene
+    for (camera, field), limit in sorted(run.ranges.items()):
+        if camera not in scene.camera_names:
+            continue
+        value = getattr(scene.camera(camera), field, None)
+        values = value if isinstance(value, tuple) else (value,)
+        if any(not isinstance(v, (int, float)) or not limit.low <= float(v) <= limit.high for v in values):
+            shown = ", ".join(format_number(float(v)) for v in values if isinstance(v, (int, float)))
+            return (f"In this step {camera}'s {field.replace('_', ' ')} must stay between "
+                    f"{format_number(limit.low)} and {format_number(limit.high)} (it is {shown}); "
+                    "bring it back into that range and check again.")
+    return None
+
+
+def _feedback_markdown(passed: bool, feedback: str, hint: str | None) -> str:
+    """One attempt as shown: the verdict, the check's feedback (plain text), the hint (Markdown) after a failure."""
+    text = escape(feedback, quote=False).replace("*", "\\*").replace("_", "\\_")
+    if passed:
+        return f"**\u2713 Passed.** {text}"
+    out = f"**\u2717 Not yet.** {text}"
+    if hint:
+        out += f"\n\n**Hint:** {hint}"
+    return out
+
+
+class TaskRow:
+    """One task of the step in the panel: prompt, answer field, Check button, feedback."""
+
+    def __init__(self, gui: Any, number: int, resolved: ResolvedTask, *, passed_before: bool) -> None:
+        task = resolved.task
+        self.task_id = task.id
+        self.number = number
+        self.prompt = gui.add_markdown(f"**Task {number}.** {resolved.prompt_html}")
+        self.answer: Any = None
+        self.options: tuple[str, ...] = ()
+        if task.kind == "choice":
+            self.options = tuple(task.options)
+            self.answer = gui.add_dropdown(f"answer {number}", (CHOOSE, *self.options), initial_value=CHOOSE)
+        elif task.question:
+            unit = getattr(task, "unit", "")
+            self.answer = gui.add_text(f"answer {number}" + (f" ({unit})" if unit else ""), "",
+                                       hint="A number" + (f", in {unit}" if unit else "") + ".")
+        self.button = gui.add_button(f"Check task {number}")
+        self.feedback = gui.add_markdown("\u2713 passed before." if passed_before else "")
+
+    def answer_text(self) -> str | None:
+        """The learner's answer, checked for what the page can send (None: the task asks no question)."""
+        if self.answer is None:
+            return None
+        value = self.answer.value
+        if not isinstance(value, str):
+            raise FieldError(f"answer {self.number}: expected text, got {type(value).__name__}")
+        if len(value) > MAX_FIELD_CHARS:
+            raise FieldError(f"answer {self.number}: at most {MAX_FIELD_CHARS} characters, got {len(value)}")
+        if self.options:
+            if value == CHOOSE:
+                return ""
+            if value not in self.options:  # a raw client can send any string
+                raise FieldError(f"answer {self.number}: not one of the options")
+        return value
+
+
+class StepNav:
+    """The step's header: title, "step k of n", the progress bar and the step buttons."""
+
+    def __init__(self, gui: Any) -> None:
+        self.head = gui.add_html("")
+        self.bar = gui.add_progress_bar(0.0, color="teal")
+        self.buttons = gui.add_button_group("step", STEP_BUTTONS)
+
+
+class LessonPanel:
+    """A lesson in a workbench tab.
+
+    Args:
+        view: the tab's :class:`~egtviz.viewer.app.ClientView`; its model must be ``run.model``.
+        run: the lesson run (already at the learner's remembered step).
+        progress: where progress is kept when the learner types a name here.
+        on_back: opens the course's start page in this tab (None: no such button).
+        on_learner: told the learner's name whenever it changes (the course remembers it for the tab).
+        field_delay: seconds the name field must stay unchanged before the name is taken (the field sends
+            every keystroke: "Ada" must not make learners "A" and "Ad"); 0: at once.
+    """
+
+    def __init__(self, view: Any, run: LessonRun, *, progress: ProgressStore | None = None,
+                 on_back: Callable[[], None] | None = None, on_learner: Callable[[str], None] | None = None,
+                 field_delay: float = 0.0) -> None:
+        if view.model is not run.model:
+            raise SceneError("the lesson's scene could not be drawn in this tab")
+        self.view = view
+        self.run = run
+        self.progress = progress
+        self._on_learner = on_learner
+        self._typing = Debouncer(field_delay)
+        self.rows: list[TaskRow] = []
+        #: The last attempt per task id in this step (tests read it; the page shows it).
+        self.attempts: dict[str, Any] = {}
+        self.lab: Any = None
+        self.lens: Any = None
+        client = view.client
+        gui = client.gui
+        lesson = run.lesson
+        with view.lock, client.atomic():
+            # A displayed formula wider than the control panel scrolls instead of running past its edge.
+            gui.add_html(MATH_CSS, order=LESSON_ORDER - 1)
+            self.folder = gui.add_folder(f"Lesson: {lesson.title}", order=LESSON_ORDER, expand_by_default=True)
+            with self.folder:
+                self.nav = StepNav(gui)
+                self.text = gui.add_markdown("")
+                self.tasks_folder = gui.add_folder(None)
+                self.ranges = gui.add_html("")
+                self.learner = gui.add_text("your name", run.learner,
+                                            hint="Your progress is kept under this name: type it again in any tab, "
+                                                 "or after a restart, to resume where you were.")
+                self.btn_back = gui.add_button("Back to the course") if on_back is not None else None
+            use_lab, use_lens = lesson_instruments(lesson)
+            if use_lab:
+                from .lab_view import LabPanel
+
+                self.lab = LabPanel(client, run, redraw=view.redraw, report=view.report, order=LAB_ORDER,
+                                    drawn="ransac" if any(t.kind == "inliers_recall" for s in lesson.steps
+                                                          for t in s.tasks) else "normalized")
+                view.panel_filter = self.lab.panel_filter
+            elif use_lens:
+                from .lens_view import LensPanel
+
+                self.lens = LensPanel(gui, run, redraw=view.redraw, report=view.report, order=LENS_ORDER)
+                view.panel_filter = self.lens.panel_filter
+            self._show_step()
+            view.redraw()
+        self._on(self.nav.buttons.on_click, lambda e: self._navigate(e.target.value))
+        self._on(self.learner.on_update, lambda e: self._name_typed(e.target.value))
+        if self.btn_back is not None:
+            self._on(self.btn_back.on_click, lambda _: on_back())
+
+    def _on(self, register: Any, callback: Callable[[Any], None]) -> None:
+        """Attach ``callback`` safely; it runs under the tab's lock, and not after the tab closed."""
+
+        def locked(event: Any) -> None:
+            with self.view.lock:
+                if self.view.closed:
+                    return
+                callback(event)
+
+        on_event(register, locked, self.view.report)
+
+    def _name_typed(self, text: Any) -> None:
+        """The name field changed: take the name once the typing stops (latest text wins)."""
+        self._typing.submit("learner", lambda: self._later(lambda: self._set_learner(text)))
+
+    def _later(self, action: Callable[[], None]) -> None:
+        """Run a debounced action (from a timer thread: no callback wrapper above it) under the tab's lock."""
+        try:
+            with self.view.lock:
+                if not self.view.closed:
+                    action()
+        except Exception as exc:  # noqa: BLE001 - every failure must reach the tab
+            self.view.report(exc)
+
+    # -- the step ----------------------------------------------------------------------------
+
+    def _show_step(self) -> None:
+        """Show the run's current step: header, text, tasks (with what was passed before), ranges, instruments."""
+        run = self.run
+        gui = self.view.client.gui
+        n = len(run.lesson.steps)
+        i = run.step_index
+        self.nav.head.content = (
+            f'<div style="font-size:0.9em" data-egtviz="lesson-head" data-step="{i}">'
+            f"<b>Step {i + 1} of {n}: {escape(run.step.title)}</b></div>"
+        )
+        self.nav.bar.value = 100.0 * (i + 1) / n
+        self.text.content = run.step.html
+        passed = run.progress.passed_tasks(run.learner, run.lesson.name) if run.progress is not None else frozenset()
+        self.tasks_folder.remove()
+        self.attempts = {}
+        self.rows = []
+        with self.folder:
+            self.tasks_folder = gui.add_folder(None, order=self.text.order + 0.5)
+        with self.tasks_folder:
+            for k, resolved in enumerate(run.tasks(), start=1):
+                row = TaskRow(gui, k, resolved, passed_before=(i, resolved.task.id) in passed)
+                self._on(row.button.on_click, lambda _, r=row: self._check(r))
+                self.rows.append(row)
+        limits = [f"{escape(c)}: {escape(f.replace('_', ' '))} {format_number(r.low)} to {format_number(r.high)}"
+                  for (c, f), r in sorted(run.ranges.items())]
+        self.ranges.content = ('<div style="font-size:0.8em">In this step: ' + "; ".join(limits) + "</div>"
+                               if limits else "")
+        for instrument in (self.lab, self.lens):
+            if instrument is not None:
+                instrument.sync()
+
+    def _navigate(self, action: Any) -> None:
+        if action not in STEP_BUTTONS:  # a raw client can send any string
+            raise FieldError(f"step: no button {str(action)[:40]!r}")
+        with self.view.client.atomic():
+            if action == "next":
+                self.run.next()
+            elif action == "previous":
+                self.run.previous()
+            else:
+                self.run.reset_step()
+            self._show_step()
+            self.view.redraw()
+
+    def go_to(self, index: int) -> None:
+        """Start step ``index`` (tests; the page uses the step buttons)."""
+        with self.view.lock, self.view.client.atomic():
+            self.run.go_to(index)
+            self._show_step()
+            self.view.redraw()
+
+    # -- tasks --------------------------------------------------------------------------------
+
+    def _check(self, row: TaskRow) -> None:
+        answer = row.answer_text()
+        refusal = range_refusal(self.run)
+        if refusal is not None:
+            row.feedback.content = _feedback_markdown(False, refusal, None)
+            return
+        attempt = self.run.check(row.task_id, answer)
+        self.attempts[row.task_id] = attempt
+        row.feedback.content = _feedback_markdown(attempt.result.passed, attempt.result.feedback, attempt.hint)
+
+    def row(self, task_id: str) -> TaskRow:
+        """The task row of ``task_id`` in the current step."""
+        for row in self.rows:
+            if row.task_id == task_id:
+                return row
+        raise KeyError(f"task: no task {task_id!r} in this step")
+
+    # -- the learner ------------------------------------------------------------------------------
+
+    def _set_learner(self, name: Any) -> None:
+        """A name typed: the run is keyed by it from now on, and resumes where that learner was."""
+        if not isinstance(name, str):
+            raise FieldError(f"your name: expected text, got {type(name).__name__}")
+        try:
+            key = learner_key(name) if name.strip() else ""
+        except LearnerNameError as exc:
+            raise FieldError(str(exc)) from exc
+        if key == self.run.learner:
+            return
+        with self.view.client.atomic():
+            self.run = LessonRun(self.run.lesson, key, model=self.view.model, progress=self.progress)
+            for instrument in (self.lab, self.lens):
+                if instrument is not None:
+                    instrument.run = self.run
+            self._show_step()
+            self.view.redraw()
+        if self._on_learner is not None:
+            self._on_learner(key)

@@ -1,0 +1,284 @@
+"""The course in the viewer: a start page in each tab, the lessons it opens, and the workbench one click away.
+
+``egtviz`` with no arguments serves the course (:class:`Course`, ``EgtvizApp(course=True)``). A new tab
+shows the :class:`StartPage`: the learner's name, one line per lesson (its number and title, its summary, and
+"done", "step k of n" or "not started" for that name), a button to open each lesson and one to open the
+workbench. A lesson opens as the workbench with the lesson's panel on top
+(:class:`~egtviz.viewer.lesson_view.LessonPanel`); "Back to the course" returns to the start page, and the
+workbench has the same button. ``egtviz lesson NAME`` opens that lesson in every new tab instead.
+
+The lessons are read once, when the server starts: a lesson file edited later is read on the next start.
+"""
+
+from __future__ import annotations
+
+import threading
+from html import escape
+from typing import Any
+
+from ..lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
+from ..lessons.progress import LearnerNameError, learner_key
+from ..scene import SceneModel
+from .fields import FieldError, on_event
+from .lesson_view import LESSON_ORDER, LessonPanel
+
+__all__ = ["Course", "LessonStatus", "StartPage", "lesson_status"]
+
+#: The start page's control panel is wider than the workbench's: it is the page.
+START_PAGE_WIDTH_PX = 560
+START_PAGE_MARGIN_PX = 16
+
+
+class LessonStatus:
+    """How far a learner got in a lesson, as the start page says it."""
+
+    NOT_STARTED = "not started"
+    DONE = "done"
+
+
+def lesson_status(progress: ProgressStore, learner: str, lesson: Lesson) -> str:
+    """``"done"`` (every task passed; a lesson without tasks: its last step reached), ``"step k of n"``, or
+    ``"not started"`` (also for an anonymous learner, whose progress is not kept)."""
+    if not learner:
+        return LessonStatus.NOT_STARTED
+    tasks = {(i, t.id) for i, step in enumerate(lesson.steps) for t in step.tasks}
+    passed = progress.passed_tasks(learner, lesson.name)
+    step = progress.current_step(learner, lesson.name)
+    if (tasks and tasks <= passed) or (not tasks and step == len(lesson.steps) - 1):
+        return LessonStatus.DONE
+    started = any(r.learner == learner and r.lesson == lesson.name for r in progress.summary())
+    return f"step {step + 1} of {len(lesson.steps)}" if started else LessonStatus.NOT_STARTED
+
+
+class StartPage:
+    """The course's start page in one tab.
+
+    Args:
+        client: the tab's viser client.
+        course: the course (its lessons, progress, and what the buttons open).
+        learner: the name to show (the tab's last one).
+    """
+
+    def __init__(self, client: Any, course: Course, learner: str = "") -> None:
+        self.client = client
+        self.course = course
+        self.learner = learner
+        self.closed = False
+        self._lock = threading.RLock()
+        gui = client.gui
+        with client.atomic():
+            gui.configure_theme(dark_mode=False, show_logo=False)
+            try:
+                # Floating, not docked: the 3D canvas keeps the whole window, and the workbench a lesson opens
+                # plans its panels from the canvas size the tab reports (the window's, before anything docks).
+                gui.main_panel.float(x=START_PAGE_MARGIN_PX, y=START_PAGE_MARGIN_PX, width=START_PAGE_WIDTH_PX,
+                                     height=self._height())
+            except Exception:  # noqa: BLE001 - placement is cosmetic
+                pass
+            gui.add_html(
+                '<div style="padding:0 0.6em" data-egtviz="start-page"><h2 style="margin:0.3em 0">'
+                f"Two-view geometry: a course</h2>{len(course.lessons)} lessons, from camera poses to visual "
+                "servoing. Each lesson is a workbench with a panel of steps; its tasks are checked as you go. "
+                "Type your name to keep your progress.</div>")
+            self.name = gui.add_text("your name", learner,
+                                     hint="Your progress is kept under this name: type it again in any tab, or "
+                                          "after a restart, to resume where you were.")
+            self.btn_workbench = gui.add_button(
+                "Open the workbench", color="gray",
+                hint="Cameras, points and image planes without a lesson; this page is one click away from it.")
+            self.buttons: dict[str, Any] = {}
+            self.status: dict[str, Any] = {}
+            with gui.add_folder("Lessons", expand_by_default=True):
+                for k, lesson in enumerate(course.lessons.values(), start=1):
+                    self.buttons[lesson.name] = gui.add_button(f"{k}. {lesson.title}")
+                    self.status[lesson.name] = gui.add_html("")
+            self._show_status()
+        for name, button in self.buttons.items():
+            self._on(button.on_click, lambda _, n=name: self.course.open_lesson(self.client, n, self.learner))
+        self._on(self.btn_workbench.on_click, lambda _: self.course.open_workbench(self.client))
+        self._on(self.name.on_update, lambda e: self._set_name(e.target.value))
+
+    def _height(self) -> float:
+        """The page's height: the window's (as the tab reported its canvas) less the margins."""
+        from .panels import DEFAULT_WINDOW, window_from_canvas
+
+        try:
+            window = window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
+        except (AssertionError, AttributeError):  # no camera message yet
+            window = DEFAULT_WINDOW
+        return max(window.height - 2 * START_PAGE_MARGIN_PX, 300.0)
+
+    def report(self, exc: BaseException) -> None:
+        """Show what went wrong in this tab."""
+        from .fields import describe_error
+
+        title, body = describe_error(exc)
+        try:
+            self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
+        except Exception:  # noqa: BLE001 - the tab may be gone
+            pass
+
+    def _on(self, register: Any, callback: Any) -> None:
+        def guarded(event: Any) -> None:
+            with self._lock:
+                if self.closed:
+                    return
+                callback(event)
+
+        on_event(register, guarded, self.report)
+
+    def _set_name(self, name: Any) -> None:
+        if not isinstance(name, str):
+            raise FieldError(f"your name: expected text, got {type(name).__name__}")
+        try:
+            key = learner_key(name) if name.strip() else ""
+        except LearnerNameError as exc:
+            raise FieldError(str(exc)) from exc
+        if key != self.learner:
+            self.learner = key
+            self.course.remember(self.client.client_id, key)
+            self._show_status()
+
+    def _show_status(self) -> None:
+        """Each lesson's summary and how far this learner got in it."""
+        for name, lesson in self.course.lessons.items():
+            status = lesson_status(self.course.progress, self.learner, lesson)
+            colour = "#117733" if status == LessonStatus.DONE else "#555"
+            mark = "\u2713 " if status == LessonStatus.DONE else ""
+            self.status[name].content = (
+                f'<div style="font-size:0.8em;padding:0 0.6em 0.4em" data-lesson="{escape(name)}" '
+                f'data-status="{escape(status)}">{escape(lesson.summary)} '
+                f'<b style="color:{colour}">{mark}{escape(status)}</b></div>'
+            )
+
+    def close(self) -> None:
+        with self._lock:
+            self.closed = True
+
+
+class Course:
+    """The course served by an :class:`~egtviz.viewer.app.EgtvizApp`: what each tab shows, and its learner.
+
+    Args:
+        app: the app (its ``show_workbench`` and ``clear_tab`` build and clear a tab).
+        lesson: open this lesson in every new tab instead of the start page.
+        progress: where progress is kept (default: :class:`ProgressStore` in the user's data folder).
+
+    Raises:
+        LessonError: ``lesson`` is not a shipped lesson, or a shipped lesson is invalid.
+    """
+
+    def __init__(self, app: Any, *, lesson: str | None = None, progress: ProgressStore | None = None) -> None:
+        self.app = app
+        self.progress = progress if progress is not None else ProgressStore()
+        #: Every shipped lesson, in course order.
+        self.lessons: dict[str, Lesson] = {info.name: load(info.name) for info in list_lessons()}
+        if lesson is not None and lesson not in self.lessons:
+            load(lesson)  # raises the LessonError naming the lessons there are
+        self.lesson = lesson
+        self._lock = threading.Lock()
+        #: What each tab shows: a :class:`StartPage`, a :class:`LessonPanel`, or a workbench view.
+        self.tabs: dict[int, Any] = {}
+        self._learners: dict[int, str] = {}
+
+    def open(self, client: Any) -> None:
+        """A new tab: the lesson of ``egtviz lesson NAME``, else the start page."""
+        if self.lesson is not None:
+            self.open_lesson(client, self.lesson, "")
+        else:
+            self.show_start(client)
+
+    def remember(self, client_id: int, learner: str) -> None:
+        """The tab's learner, kept while the tab lives (the start page and the lessons it opens show it)."""
+        with self._lock:
+            self._learners[client_id] = learner
+
+    def _set_tab(self, client: Any, what: Any) -> None:
+        with self._lock:
+            old = self.tabs.get(client.client_id)
+            self.tabs[client.client_id] = what
+        if isinstance(old, StartPage):
+            old.close()
+
+    def show_start(self, client: Any) -> StartPage:
+        """Show the start page in this tab."""
+        self._close_tab(client)
+        self.app.clear_tab(client)
+        with self._lock:
+            learner = self._learners.get(client.client_id, "")
+        page = StartPage(client, self, learner)
+        self._set_tab(client, page)
+        return page
+
+    def _close_tab(self, client: Any) -> None:
+        with self._lock:
+            old = self.tabs.pop(client.client_id, None)
+        if isinstance(old, StartPage):
+            old.close()
+
+    def open_lesson(self, client: Any, name: str, learner: str) -> LessonPanel | None:
+        """Open lesson ``name`` for ``learner`` in this tab (at the step they were at); None if the tab left."""
+        lesson = self.lessons.get(name)
+        if lesson is None:
+            raise FieldError(f"lesson: no lesson {str(name)[:40]!r}")
+        self._close_tab(client)
+        run = LessonRun(lesson, learner, model=SceneModel(lesson.scene), progress=self.progress)
+        view = self.app.show_workbench(client, run.model)
+        if view is None:
+            return None
+        panel = LessonPanel(view, run, progress=self.progress, on_back=lambda: self.show_start(client),
+                            on_learner=lambda key: self.remember(client.client_id, key),
+                            field_delay=self.app.field_delay)
+        self.remember(client.client_id, run.learner)
+        self._set_tab(client, panel)
+        return panel
+
+    def open_workbench(self, client: Any) -> Any:
+        """Open the workbench in this tab, with a button back to the course."""
+        self._close_tab(client)
+        view = self.app.show_workbench(client, None)
+        if view is None:
+            return None
+        self._add_back_button(client, view)
+        self._set_tab(client, view)
+        return view
+
+    def restore(self, client: Any, view: Any) -> None:
+        """The tab is back from a servo demo on ``view``: its lesson's panel (same run) or its way back to the
+        course comes back with it."""
+        with self._lock:
+            was = self.tabs.get(client.client_id)
+        if isinstance(was, LessonPanel) and was.run.model is view.model:
+            panel = LessonPanel(view, was.run, progress=self.progress, on_back=lambda: self.show_start(client),
+                                on_learner=lambda key: self.remember(client.client_id, key),
+                                field_delay=self.app.field_delay)
+            self._set_tab(client, panel)
+        else:
+            self._add_back_button(client, view)
+            self._set_tab(client, view)
+
+    def _add_back_button(self, client: Any, view: Any) -> None:
+        with view.lock, client.atomic():
+            back = client.gui.add_button("Back to the course", order=LESSON_ORDER)
+        on_event(back.on_click, lambda _: self.show_start(client), view.report)
+
+    def forget(self, client_id: int) -> None:
+        """The tab left."""
+        with self._lock:
+            old = self.tabs.pop(client_id, None)
+            self._learners.pop(client_id, None)
+        if isinstance(old, StartPage):
+            old.close()
+
+    def wait_for_tab(self, kind: type, timeout: float = 10.0, count: int = 1) -> list[Any]:
+        """Block until ``count`` tabs show a ``kind`` (:class:`StartPage`, :class:`LessonPanel`; tests)."""
+        import time
+
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            with self._lock:
+                found = [t for t in self.tabs.values() if isinstance(t, kind)]
+            if len(found) >= count:
+                return found
+            time.sleep(0.02)
+        raise TimeoutError(f"fewer than {count} tabs show a {kind.__name__} after {timeout} s")
