@@ -413,12 +413,14 @@ class ClientView:
         gui = self.client.gui
         name = spec.name
         with self.cameras_folder:
-            folder = gui.add_folder(f"{name} ({SHORT_LABELS[spec.model_kind]})", expand_by_default=False)
+            # The first two cameras (the drawn pair, usually) start open: their fields are what a lesson edits.
+            folder = gui.add_folder(f"{name} ({SHORT_LABELS[spec.model_kind]})",
+                                    expand_by_default=len(self._cam_folders) < 2)
         values = _spec_values(spec)
         fields, _ = _model_fields(spec.model_kind)
         f: dict[str, Any] = {}
         with folder:
-            f["position"] = gui.add_text("position (m)", format_numbers(values["position"]),
+            f["position"] = gui.add_text("position x, y, z (m)", format_numbers(values["position"]),
                                          hint="Camera centre (single viewpoint) in world coordinates: x, y, z.")
             hint = spec.ANGLE_CONVENTION
             f["ypr"] = gui.add_text("yaw, pitch, roll (deg)", format_numbers(values["ypr"]), hint=hint)

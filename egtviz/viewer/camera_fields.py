@@ -38,8 +38,11 @@ class CameraField:
 
     @property
     def title(self) -> str:
-        """The label with its unit, e.g. ``"focal length (mm)"``."""
-        return f"{self.label} ({self.unit})" if self.unit else self.label
+        """The label with its components and unit, e.g. ``"focal length (mm)"``, ``"principal point u, v (px)"``."""
+        label = self.label
+        if len(self.parameters) > 1:
+            label += " " + ", ".join(_AXES.get(p, p) for p in self.parameters)
+        return f"{label} ({self.unit})" if self.unit else label
 
     def shown(self, values: dict[str, float]) -> tuple[float, ...]:
         """The field's numbers from the model's parameter values."""
