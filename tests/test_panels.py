@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
+from egtviz.viewer.app import PRESENT_LABEL_SCALE
 from egtviz.viewer.headless import FakeTab, start_headless
 from egtviz.viewer.panel_view import fit_view, image_view
 from egtviz.viewer.panels import (
@@ -381,9 +382,14 @@ def test_presentation_mode_toggle(four_camera_tab):
     assert _wait(lambda: all(_svg_root(s).get("data-style") == "present" for s in view.svgs.values()))
     assert view.present and view.grid.control_px == CONTROL_PX["present"] and view.grid != normal_grid
     assert "--mantine-scale" in view._gui_style.content
+    # The 3D view's labels grow too: every camera name and point number.
+    labels = view.scene3d._labels
+    assert len(labels) >= 4 + 8 and all(h.font_screen_scale == pytest.approx(size * PRESENT_LABEL_SCALE)
+                                        for h, size in labels.values())
     fake.send("GuiUpdateMessage", uuid=view.present_checkbox._impl.uuid, updates={"value": False})
     assert _wait(lambda: all(_svg_root(s).get("data-style") == "normal" for s in view.svgs.values()))
     assert view.grid == normal_grid and view._gui_style.content == ""
+    assert all(h.font_screen_scale == pytest.approx(size) for h, size in labels.values())
 
 
 def test_present_option_starts_every_tab_in_presentation_mode():

@@ -100,6 +100,8 @@ DOWNLOAD_FORMATS = ("SVG", "PNG")
 DOCK_DEFAULT_PX = 300.0
 #: Presentation mode's GUI type: Mantine (viser's GUI toolkit) scales its rem-based sizes by this variable.
 PRESENT_GUI_CSS = "<style>:root:root{--mantine-scale:1.25}</style>"
+#: How much larger the 3D view's labels (point numbers, camera names) are in presentation mode.
+PRESENT_LABEL_SCALE = 1.6
 
 def _fmt_matrix(M: np.ndarray) -> str:
     """A matrix's rows; an entry below ``ZERO_FRACTION`` of the matrix's norm is rounding and shown as 0."""
@@ -315,6 +317,7 @@ class ClientView:
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event,
                                    report=self.report)
+            self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if self.present else 1.0)
             self._build_controls()
             self._build_panel_controls()
             self._render(self.model.scene, None)
@@ -984,6 +987,7 @@ class ClientView:
             return
         self.present = value
         self._gui_style.content = PRESENT_GUI_CSS if value else ""
+        self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if value else 1.0)
         self._render(self.model.scene, None)
 
     def _client_window(self) -> tuple[WindowSize, float]:

@@ -126,6 +126,9 @@ class Scene3D:
         self._cam_sig: dict[str, tuple] = {}
         self._point_gizmos: dict[int, Any] = {}
         self._point_labels: list[Any] = []
+        #: Every label's handle and its size at scale 1 (presentation mode multiplies them: :meth:`set_label_scale`).
+        self._labels: dict[str, tuple[Any, float]] = {}
+        self.label_scale = 1.0
         self._rays: dict[str, Any] = {}
         self._surf_key: Any = None
         self._points_key: Any = None
@@ -155,11 +158,24 @@ class Scene3D:
         api.configure_default_lights(enabled=True, cast_shadow=False)
         api.add_grid("/egt/grid", width=20.0, height=20.0, plane="xy", cell_size=1.0, section_size=5.0)
         api.add_frame("/egt/world", axes_length=1.0, axes_radius=0.03, origin_radius=0.06)
-        api.add_label("/egt/world/x", "x", position=(1.15, 0.0, 0.0), font_screen_scale=0.9)
-        api.add_label("/egt/world/y", "y", position=(0.0, 1.15, 0.0), font_screen_scale=0.9)
-        api.add_label("/egt/world/z", "z", position=(0.0, 0.0, 1.15), font_screen_scale=0.9)
-        api.add_label("/egt/grid_units", "grid: 1 m squares (world frame, z up)", position=(-4.0, -3.0, 0.0),
-                      font_screen_scale=0.8)
+        self._label("/egt/world/x", "x", 0.9, position=(1.15, 0.0, 0.0))
+        self._label("/egt/world/y", "y", 0.9, position=(0.0, 1.15, 0.0))
+        self._label("/egt/world/z", "z", 0.9, position=(0.0, 0.0, 1.15))
+        self._label("/egt/grid_units", "grid: 1 m squares (world frame, z up)", 0.8, position=(-4.0, -3.0, 0.0))
+
+    def _label(self, path: str, text: str, size: float, **kwargs: Any) -> Any:
+        """A screen-sized label whose size follows :attr:`label_scale`."""
+        handle = self.api.add_label(path, text, font_screen_scale=size * self.label_scale, **kwargs)
+        self._labels[path] = (handle, size)
+        return handle
+
+    def set_label_scale(self, scale: float) -> None:
+        """Every label at ``scale`` times its size (presentation mode: larger, to read from the back of a room)."""
+        if scale == self.label_scale:
+            return
+        self.label_scale = scale
+        for handle, size in self._labels.values():
+            handle.font_screen_scale = size * scale
 
     # -- cameras ---------------------------------------------------------------
 
@@ -181,8 +197,7 @@ class Scene3D:
         on_event(gizmo.on_update, _cb, self._report)
         nodes: dict[str, Any] = {"gizmo": gizmo}
         nodes["axes"] = api.add_frame(f"{root}/axes", axes_length=0.5, axes_radius=0.015, origin_radius=0.03)
-        nodes["label"] = api.add_label(f"{root}/label", name, position=(0.0, -0.35, 0.0), font_screen_scale=1.1,
-                                       anchor="bottom-center")
+        nodes["label"] = self._label(f"{root}/label", name, 1.1, position=(0.0, -0.35, 0.0), anchor="bottom-center")
         drawing = drawing_class(spec.model_kind)(api, root, k, colour)
         nodes["drawing"] = drawing
         nodes.update(drawing.named_nodes())
@@ -210,6 +225,8 @@ class Scene3D:
             drawing.remove()
         if "gizmo" in nodes:
             nodes["gizmo"].remove()  # removes its children
+        if "label" in nodes:
+            self._labels.pop(nodes["label"].name, None)
         ray = self._rays.pop(name, None)
         if ray is not None:
             ray.remove()
@@ -234,11 +251,12 @@ class Scene3D:
         _put(self.points, "visible", n > 0)
         # Labels: one per point, 1-based.
         while len(self._point_labels) > n:
-            self._point_labels.pop().remove()
+            label = self._point_labels.pop()
+            self._labels.pop(label.name, None)
+            label.remove()
         for i in range(len(self._point_labels), n):
             self._point_labels.append(
-                self.api.add_label(f"/egt/plabel_{i}", str(i + 1), position=tuple(X[i]), font_screen_scale=1.0,
-                                   anchor="bottom-left")
+                self._label(f"/egt/plabel_{i}", str(i + 1), 1.0, position=tuple(X[i]), anchor="bottom-left")
             )
         # Over MAX_LABELLED_POINTS points only the selected and highlighted ones keep their numbers.
         labelled = None if n <= MAX_LABELLED_POINTS else {scene.selected_point} | {
