@@ -87,9 +87,13 @@ def close_notifications(page: Any) -> None:
         pass
 
 
-def field_input(page: Any, label: str) -> Any:
-    """The text box of the GUI field labelled ``label`` (the first one after that label in the page).
+def folder_field(page: Any, folder: str, label: str) -> Any:
+    """The text box of field ``label`` inside the GUI folder titled ``folder``, opening the folder if it is closed
+    (the first two cameras' folders start open, the others closed)."""
+    field = page.locator(f'xpath=//*[normalize-space(text())="{folder}"]/following::label['
+                         f'normalize-space(.)="{label}"][1]/following::input[1]').first
+    if not field.is_visible():
+        page.get_by_text(folder).first.click()
+    field.wait_for(state="visible", timeout=10_000)
+    return field
 
-    viser labels its text fields without linking label and input, so ``get_by_label`` does not find them.
-    """
-    return page.locator(f'xpath=//label[normalize-space(.)="{label}"]/following::input[1]').first

@@ -19,7 +19,7 @@ from egtviz.viewer.browser import (
     LINES_JS,
     chromium,
     chromium_available,
-    field_input,
+    folder_field,
     open_viewer,
 )
 
@@ -116,8 +116,7 @@ def _wait_rev_change(page, camera, rev, timeout=15.0):
 
 
 def _edit_focal(page, value: str) -> None:
-    page.get_by_text("cam1 (pin-hole)").first.click()
-    field = field_input(page, "focal length (mm)")
+    field = folder_field(page, "cam1 (pin-hole)", "focal length (mm)")
     field.click()
     field.fill(value)
     field.press("Enter")
@@ -158,8 +157,7 @@ def test_text_a_number_field_cannot_read_is_refused_and_reverted(browser, pinhol
     app, url = pinhole_server
     page = open_viewer(browser, url)
     try:
-        page.get_by_text("cam1 (pin-hole)").first.click()
-        field = field_input(page, "focal length (mm)")
+        field = folder_field(page, "cam1 (pin-hole)", "focal length (mm)")
         field.click()
         field.press("Control+a")
         field.press_sequentially(text, delay=30)

@@ -25,6 +25,7 @@ from egtviz.viewer.browser import (
     chromium,
     chromium_available,
     close_notifications,
+    folder_field,
     open_viewer,
 )
 from egtviz.viewer.panels import MIN_PANEL_PX
@@ -217,7 +218,7 @@ def test_example_scenes_show_every_tutorial_point(browser, name, width, height):
 
 
 def _open_camera_folder(page, title):
-    page.get_by_text(title).first.click()
+    folder_field(page, title, "position x, y, z (m)")
 
 
 def test_zoom_button_and_downloads(browser, tmp_path):

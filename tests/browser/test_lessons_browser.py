@@ -20,6 +20,7 @@ from egtviz.viewer.browser import (
     chromium,
     chromium_available,
     close_notifications,
+    folder_field,
 )
 
 pytestmark = pytest.mark.browser
@@ -99,17 +100,13 @@ def _next(page, step: int) -> None:
 
 
 def _type_angles(page, panel, camera: str, ypr: tuple[float, float, float]) -> None:
-    """Open the camera's folder, type yaw, pitch, roll into its field and press Enter; close the folder once the
+    """Type yaw, pitch, roll into the camera's field (opening its folder if needed) and press Enter; wait until the
     server has judged the text (a field is judged when the typing stops)."""
-    header = page.get_by_text(f"{camera} (pin-hole)").first
-    header.click()
-    field = page.locator(f'xpath=//*[normalize-space(text())="{camera} (pin-hole)"]/following::label['
-                         'normalize-space(.)="yaw, pitch, roll (deg)"][1]/following::input[1]').first
+    field = folder_field(page, f"{camera} (pin-hole)", "yaw, pitch, roll (deg)")
     field.click()
     field.fill(", ".join(f"{a:.6f}" for a in ypr))
     field.press("Enter")
     _wait(lambda: np.allclose(panel.view.model.scene.camera(camera).ypr_deg, ypr, atol=1e-5))
-    header.click()
 
 
 def _aim(scene, name: str, u: float, v: float) -> tuple[float, float, float]:

@@ -39,8 +39,9 @@ def test_moving_the_xi_slider_moves_the_conics():
             before = page.evaluate(CONICS_JS, "uni")
             rev = page.evaluate(COUNT_JS)["uni"]["rev"]
             assert len(before) == 8
-            page.get_by_text("uni (unified sphere)", exact=True).first.click()
             slider = page.get_by_role("slider").first
+            if not slider.is_visible():  # the first two cameras' folders start open, others closed
+                page.get_by_text("uni (unified sphere)", exact=True).first.click()
             slider.focus()
             for _ in range(10):  # ten steps of 0.01: xi 0.8 -> 0.9
                 slider.press("ArrowRight")
