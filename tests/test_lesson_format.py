@@ -333,3 +333,70 @@ def test_any_single_bad_value_gives_a_lesson_error_never_a_traceback(data):
         parse(text)
     except LessonError as err:
         assert err.line >= 1 and err.reason and str(err).startswith(f"t.toml:{err.line}: ")
+
+
+SERVO = GOOD + """
+[[steps]]
+title = "The demo"
+text = "Open it."
+
+[[steps.changes]]
+do = "open_demo"
+demo = "pinhole"
+seed = 0
+beta = 0
+
+[[steps.tasks]]
+id = "when"
+kind = "servo_number"
+prompt = "When?"
+measure = "rotation_below_time"
+below = 0.1
+tolerance = 0.1
+"""
+
+
+def test_a_servo_step_parses_with_its_demo_and_task():
+    lesson = parse(SERVO)
+    (opened,) = lesson.steps[2].changes
+    assert opened.demo == "pinhole" and opened.options() == {"beta": 0.0, "seed": 0}
+    (t,) = lesson.steps[2].tasks
+    assert t.kind == "servo_number" and t.question and t.answer_for(opened) > 0
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "fragment", "words"),
+    [
+        ('demo = "pinhole"', 'demo = "drone"', 'demo = "drone"', "demo: expected one of pinhole, panoramic"),
+        ("beta = 0", "beta = -1", "beta = -1", "beta: expected a number in 0..100"),
+        ('demo = "pinhole"', 'demo = "panoramic"', "beta = 0", "beta: unknown key for an 'open_demo' change"),
+        ('measure = "rotation_below_time"', 'measure = "joy"', 'measure = "joy"', "measure: expected one of steps"),
+        ("below = 0.1", "below = 0.1\nunit = 's'", "unit = 's'", "unit: unknown key for a 'servo_number' task"),
+        ('measure = "rotation_below_time"', 'measure = "translation_phase_time"', "below = 0.1",
+         "below: 'translation_phase_time' takes no 'below'"),
+        # beta = 0 leaves the translation alone: the run never comes within 1 cm.
+        ('measure = "rotation_below_time"\nbelow = 0.1', 'measure = "translation_below_time"\nbelow = 1',
+         "below = 1", "never gets there"),
+        ('do = "open_demo"\ndemo = "pinhole"\nseed = 0\nbeta = 0', 'do = "hide"\nwhat = "rays"', ("[[steps.tasks]]", 2),
+         "a servo_number task needs an open_demo change in its step or an earlier one"),
+    ],
+)
+def test_malformed_servo_steps_are_refused_at_their_line(old, new, fragment, words):
+    text = SERVO.replace(old, new)
+    assert text != SERVO
+    err = refused(text)
+    assert words in err.reason, err.reason
+    at = fragment if isinstance(fragment, tuple) else (fragment,)
+    assert err.line == line_of(text, *at), (err.line, err.reason)
+
+
+def test_markdown_syntax_inside_formulas_is_quoted_so_the_markdown_cannot_break_them():
+    """Two \\tilde (or two '*', '_') in a paragraph would otherwise be read by the viewer's Markdown as a
+    strike-through (an emphasis) across the MathML tags."""
+    from html import unescape
+
+    html = render_markdown(r"Then $\tilde X_w = H \tilde X_c$ and $a * b * c$, $x_{\_}$.")
+    texts = re.findall(r">([^<]+)<", html)
+    assert not any(c in t for t in texts for c in "~*_")
+    assert "&#126;" in html and "&#42;" in html and "&#95;" in html
+    assert unescape("".join(texts)).count("~") == 2 and unescape("".join(texts)).count("*") == 2

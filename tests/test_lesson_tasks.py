@@ -14,6 +14,7 @@ from egtviz.lessons.changes import (
     Lock,
     MoveCamera,
     MovePoint,
+    OpenDemo,
     Select,
     SetField,
     SetLab,
@@ -310,3 +311,122 @@ def test_changes_naming_what_the_scene_lacks_leave_the_model_unchanged():
     with pytest.raises(EntryError, match="no field 'mirror'"):
         apply(model, SetRange("cam1", "mirror", 0, 1))
     assert apply(model, Show("rays", False)) is None and not model.scene.options.show_rays
+
+
+# -- servo runs: open_demo and servo_number ------------------------------------------------------------
+
+
+def first_time_below(time, values, below):
+    """The first sample time with ``values < below``, by a plain scan (NaN if never): the reference here."""
+    for t, v in zip(time, values):
+        if v < below:
+            return float(t)
+    return math.nan
+
+
+def test_open_demo_is_a_record_with_the_demos_run_fields():
+    model = SceneModel(SCENES["default"]())
+    before = model.scene
+    opened = apply(model, change(do="open_demo", demo="pinhole", seed=3, beta=0, estimator="normalized"))
+    assert isinstance(opened, OpenDemo) and model.scene is before
+    assert opened.options() == {"beta": 0.0, "estimator": "normalized", "seed": 3}
+    # The keywords the pin-hole demo passes to simulate_pinhole (its Run folder's defaults for the rest).
+    assert opened.simulation_kwargs() == {"seed": 3, "noise_px": 0.0, "steps": 1000, "beta": 0.0, "f_algorithm": 2}
+    assert OpenDemo("panoramic").simulation_kwargs() == {"seed": 0, "noise_px": 0.0, "steps": 1500}
+    assert opened.describe() == "beta 0, estimator normalized, seed 3"
+
+
+@pytest.mark.parametrize(
+    ("table", "words"),
+    [
+        ({"do": "open_demo", "demo": "planar"}, "demo: expected one of pinhole, panoramic"),
+        ({"do": "open_demo"}, "demo: missing"),
+        ({"do": "open_demo", "demo": "panoramic", "beta": 1},
+         "beta: unknown key for an 'open_demo' change of the panoramic demo"),
+        ({"do": "open_demo", "demo": "pinhole", "gain": 1}, "gain: unknown key"),
+        ({"do": "open_demo", "demo": "pinhole", "seed": -1}, "seed: expected a whole number in 0.."),
+        ({"do": "open_demo", "demo": "pinhole", "seed": 1.5}, "seed: expected a whole number"),
+        ({"do": "open_demo", "demo": "pinhole", "beta": 1e9}, "beta: expected a number in 0..100"),
+        ({"do": "open_demo", "demo": "pinhole", "noise_px": 51}, "noise_px: expected a number in 0..50 px"),
+        ({"do": "open_demo", "demo": "pinhole", "steps": 0}, "steps: expected a whole number in 1..10000"),
+        ({"do": "open_demo", "demo": "pinhole", "estimator": "ransac"}, "estimator: expected one of true, linear"),
+    ],
+)
+def test_bad_open_demo_changes_name_the_key(table, words):
+    with pytest.raises(EntryError) as info:
+        parse_change(table)
+    assert words in str(info.value)
+
+
+def test_servo_number_reads_the_steps_run_as_the_simulation_gives_it():
+    from egtviz.servo import simulate_pinhole
+
+    run = OpenDemo("pinhole", (("beta", 0.0), ("seed", 0)))
+    result = simulate_pinhole(seed=0, beta=0.0)  # what the pin-hole demo runs with seed 0, beta 0
+    expected = first_time_below(result.time, np.degrees(result.errors["rotation_error_rad"]), 0.1)
+    assert math.isfinite(expected) and expected > 0
+    t = task(kind="servo_number", measure="rotation_below_time", below=0.1, tolerance=0.1,
+             prompt="below {below} deg, within {tolerance} s")
+    assert t.unit == "s" and t.prompt_for(t.resolve(0)) == "below 0.1 deg, within 0.1 s"
+    assert t.answer_for(run) == pytest.approx(expected, abs=1e-12)
+    assert check(t, ctx(SCENES["default"](), answer=f"{expected + 0.09:g} s", demo=run)).passed
+    high = check(t, ctx(SCENES["default"](), answer=f"{expected + 0.2:g}", demo=run))
+    assert not high.passed and high.feedback.endswith("s is too high.")
+    assert not check(t, ctx(SCENES["default"](), answer="soon", demo=run)).passed
+    unopened = check(t, ctx(SCENES["default"](), answer=f"{expected:g}"))
+    assert not unopened.passed and "opens no servo demo" in unopened.feedback
+    steps = task(kind="servo_number", measure="steps")
+    assert steps.answer_for(run) == result.steps == len(result.time) - 1
+    final = task(kind="servo_number", measure="final_translation_error", tolerance=0.5)
+    assert final.unit == "cm" and final.answer_for(run) == pytest.approx(100 * result.errors["translation_error"][-1])
+
+
+def test_servo_number_on_the_panoramic_run_finds_the_start_of_step_2():
+    from egtviz.servo import simulate_panoramic
+
+    run = OpenDemo("panoramic", (("seed", 0),))
+    result = simulate_panoramic(seed=0)
+    phase = result.extras["phase"]
+    k = next(i for i, p in enumerate(phase) if p == 2)
+    assert all(p == 1 for p in phase[:k])  # the rotation comes first
+    t = task(kind="servo_number", measure="translation_phase_time", tolerance=0.1)
+    assert t.answer_for(run) == pytest.approx(float(result.time[k]))
+    start = task(kind="servo_number", measure="initial_rotation_error", tolerance=0.5)
+    assert start.unit == "deg" and start.answer_for(run) == pytest.approx(math.degrees(result.initial_rotation_error_rad))
+
+
+@pytest.mark.parametrize(
+    ("table", "words"),
+    [
+        ({"measure": "speed"}, "measure: expected one of steps, sim_time"),
+        ({"measure": "rotation_below_time"}, "below: 'rotation_below_time' needs 'below' (in deg)"),
+        ({"measure": "steps", "below": 1}, "below: 'steps' takes no 'below'"),
+        ({"measure": "rotation_below_time", "below": 200}, "below: expected a number in 1e-06..180 deg"),
+        ({"measure": "steps", "tolerance": -1}, "tolerance: expected a number"),
+        ({"measure": "steps", "unit": "s"}, "unit: unknown key for a 'servo_number' task"),
+    ],
+)
+def test_bad_servo_number_tasks_name_the_key(table, words):
+    with pytest.raises(EntryError) as info:
+        task(kind="servo_number", **table)
+    assert words in str(info.value)
+
+
+def test_servo_number_needs_a_run_that_gets_where_it_asks():
+    t = task(kind="servo_number", measure="translation_below_time", below=1)
+    with pytest.raises(EntryError, match="needs an open_demo change"):
+        t.validate_run(None)
+    with pytest.raises(EntryError, match=r"below: the pinhole run \(beta 0, seed 0\) never gets there"):
+        t.validate_run(OpenDemo("pinhole", (("beta", 0.0), ("seed", 0))))  # beta = 0: the translation stays
+    with pytest.raises(EntryError, match="measure: the pinhole demo has no 'translation_phase_time'"):
+        task(kind="servo_number", measure="translation_phase_time").validate_run(OpenDemo("pinhole"))
+
+
+def test_prompts_and_feedback_name_points_by_the_viewers_number():
+    """The viewer labels point index i as i + 1 (panels, 3D, the point list): prompts and feedback do too."""
+    scene = SCENES["example1"]()  # index 1 projects to (0.238, 0.202), inside the 2 x 2 image
+    t = task(kind="point_in_image", point=1, camera="cam", prompt="Bring point {point} into the image.")
+    assert t.prompt_for(t.resolve(0)) == "Bring point 2 into the image."
+    assert check(t, ctx(scene)).feedback.startswith("Done: point 2 is at (0.2381")
+    tri = task(kind="triangulation_error", point=6, noise_px=1, at_most=1, prompt="point {point}")
+    assert tri.prompt_for(tri.resolve(0)) == "point 7"

@@ -413,3 +413,32 @@ def test_an_unknown_lesson_is_refused_before_a_server_starts(capsys):
     assert main(["lesson", "99-nothing", "--port", "0"]) == 2
     err = capsys.readouterr().err
     assert "cannot open the lesson" in err and "06-pinhole-epipolar" in err
+
+
+def test_a_servo_step_opens_its_demo_with_the_lessons_run_fields_and_comes_back(store):
+    from egtviz.lessons.servo_runs import simulate
+
+    with course(store, lesson="12-visual-servoing") as (app, open_tab):
+        open_tab()
+        (panel,) = app.course.wait_for_tab(LessonPanel)
+        panel.go_to(0)
+        assert panel.demo_button is None  # the hand-servoing steps offer no run
+        panel.go_to(3)
+        info = panel.demo_info.content
+        assert 'data-demo="pinhole"' in info and "beta 0, seed 0" in info
+        client = panel.view.client
+        panel.demo_button.value = True
+        (demo,) = app.wait_for_demo()
+        assert demo.wait(60.0) and demo.result is not None
+        opened = panel.run.demo
+        assert demo.params() == opened.simulation_kwargs()  # the same keywords the task's answer is computed with
+        assert demo.result.steps == simulate(opened).steps
+        assert demo.fields["beta"].value in (0, 0.0, "0")
+        app.close_demo(client)
+        (again,) = app.course.wait_for_tab(LessonPanel)
+        assert again.run is panel.run and again.run.step_index == 3 and again.demo_button is not None
+        t = simulate(opened).time[np.flatnonzero(np.degrees(simulate(opened).errors["rotation_error_rad"]) < 0.1)[0]]
+        assert answer(again, "rotation-time", f"{t:g} s").result.passed
+        wrong = answer(again, "rotation-time", f"{t + 1:g}")
+        assert not wrong.result.passed and "too high" in again.row("rotation-time").feedback.content
+        assert "Hint" in again.row("rotation-time").feedback.content

@@ -59,9 +59,15 @@ def aim_epipole(run: LessonRun, task: EpipoleNearTask, params: dict) -> None:
     run.apply(MoveCamera(name, ypr_deg=(float(fit.x[0]), float(fit.x[1]), spec.ypr_deg[2])))
 
 
-def wrong_answer(task) -> str:
-    if task.kind == "number":
-        return f"{task.answer + 10 * task.tolerance + 1:g}"
+def right_answer(task, run: LessonRun) -> str:
+    if task.kind == "servo_number":  # computed by simulating the step's servo run, as the demo does
+        return f"{task.answer_for(run.demo):.12g}"
+    return f"{task.answer:g}" if task.kind == "number" else task.answer
+
+
+def wrong_answer(task, run: LessonRun) -> str:
+    if task.kind in ("number", "servo_number"):
+        return f"{float(right_answer(task, run)) + 10 * task.tolerance + 1:g}"
     return next(o for o in task.options if o != task.answer)
 
 
@@ -75,10 +81,10 @@ def test_every_task_fails_at_the_start_of_its_step_and_passes_when_solved(name):
             for resolved in run.tasks():
                 t = resolved.task
                 if t.question:
-                    attempt = run.check(t.id, wrong_answer(t))
+                    attempt = run.check(t.id, wrong_answer(t, run))
                     assert not attempt.result.passed, (name, index, t.id)
                     assert (attempt.hint is not None) == bool(t.hint)
-                    assert run.check(t.id, f"{t.answer:g}" if t.kind == "number" else t.answer).result.passed
+                    assert run.check(t.id, right_answer(t, run)).result.passed
                     continue
                 start = run.check(t.id)
                 assert not start.result.passed, (name, index, t.id, learner, start.result.feedback)
@@ -186,3 +192,80 @@ def test_an_installed_wheel_reads_the_lessons_bundled_in_the_package(tmp_path, m
     assert load("01-frames-and-poses").source == "lessons/01-frames-and-poses.toml"
     with pytest.raises(LessonError, match="no lesson of that name"):
         load("06-pinhole-epipolar")
+
+
+def test_unified_lesson_answers_agree_with_the_model():
+    """Lesson 5: the typed answers by hand, and what the slider steps claim, measured on the scene."""
+    from egtviz.geometry.catadioptric import HyperbolicMirror
+
+    lesson = load("05-unified-sphere")
+    answers = {t.id: t for s in lesson.steps for t in s.tasks}
+    e = math.sqrt(10.0)
+    assert answers["tutorial-xi"].answer == pytest.approx(6 * e / 19, abs=1e-5)  # 2 a e / (2 a^2 + b^2), a=3, b=1
+    assert HyperbolicMirror(3.0, 1.0).xi == pytest.approx(6 * e / 19, abs=1e-12)
+    assert answers["horizon-radius"].answer == 300 / 0.5
+    horizon = answers["horizon-400"]  # f / xi within 10 px of 400 with f = 300
+    assert (horizon.low, horizon.high) == (pytest.approx(300 / 410, abs=1e-4), pytest.approx(300 / 390, abs=1e-4))
+    run = LessonRun(lesson)
+    run.go_to(1)
+    assert run.model.scene.camera("uni").focal_pixels == 300
+
+    def bend(xi: float) -> float:
+        """Largest distance (px) of the line's images from the line through the first and last of them."""
+        run.model.update_camera("uni", xi=xi)
+        px = run.model.derived.image_planes["uni"].points
+        a, b = px[0], px[-1]
+        n = np.array([b[1] - a[1], a[0] - b[0]]) / np.hypot(*(b - a))
+        return float(np.max(np.abs((px - a) @ n)))
+
+    assert bend(0.0) < 1e-9  # xi = 0: the images of the points of one line are collinear
+    assert bend(0.8) > 8.0  # the row bends: a conic
+    assert answers["lines-at-zero"].answer == "straight lines"
+
+
+def servo_run(name: str, step: int) -> LessonRun:
+    run = LessonRun(load(name))
+    run.go_to(step)
+    assert run.demo is not None
+    return run
+
+
+def test_pinhole_servo_lesson_answers_agree_with_the_simulation():
+    """Lesson 12: the choices about the runs, read off the simulations by plain scans of their error series."""
+    from egtviz.servo import simulate_pinhole
+
+    rotation_only = servo_run("12-visual-servoing", 3)
+    assert rotation_only.demo.simulation_kwargs() == {"seed": 0, "noise_px": 0.0, "steps": 1000, "beta": 0.0,
+                                                       "f_algorithm": None}
+    r0 = simulate_pinhole(seed=0, beta=0.0)
+    assert abs(r0.final_translation_error - r0.initial_translation_error) < 0.01 * r0.initial_translation_error
+    assert next(t for t in rotation_only.step.tasks if t.id == "distance-compared").answer.startswith("about the same")
+    hybrid = servo_run("12-visual-servoing", 4)
+    r1 = simulate_pinhole(seed=0, beta=1.0)
+    assert r1.converged
+
+    def first(times, values, below):
+        return next(float(t) for t, v in zip(times, values) if v < below)
+
+    t_rot = first(r1.time, np.degrees(r1.errors["rotation_error_rad"]), 0.1)
+    t_trans = first(r1.time, 100 * r1.errors["translation_error"], 1.0)
+    assert t_rot < t_trans
+    assert next(t for t in hybrid.step.tasks if t.id == "first-phase").answer == "the rotation error"
+    # The secondary task acts in the null space of the priority task: the rotation converges as fast as alone.
+    assert t_rot == pytest.approx(first(r0.time, np.degrees(r0.errors["rotation_error_rad"]), 0.1))
+    assert hybrid.check("steps", str(r1.steps)).result.passed
+    assert not hybrid.check("steps", str(r1.steps + 1)).result.passed
+    assert hybrid.check("translation-time", f"{t_trans:g}").result.passed
+
+
+def test_panoramic_servo_lesson_answers_agree_with_the_simulation():
+    from egtviz.servo import simulate_panoramic
+
+    run = servo_run("13-panoramic-servoing", 3)
+    r = simulate_panoramic(seed=0)
+    assert r.converged and r.extras["phase"][0] == 1  # the run starts in step 1, the rotation
+    assert next(t for t in run.step.tasks if t.id == "first-phase").answer == "the rotation (step 1)"
+    k = int(np.flatnonzero(r.extras["phase"] == 2)[0])
+    assert run.check("switch-time", f"{r.time[k]:g}").result.passed
+    assert run.check("start-heading", f"{math.degrees(r.initial_rotation_error_rad):.1f}").result.passed
+    assert run.check("steps", str(r.steps)).result.passed

@@ -2,9 +2,10 @@
 
 Each ``[[steps.changes]]`` table names its kind with ``do`` and is parsed by :func:`parse_change`. The changes
 that alter the scene are applied to a :class:`~egtviz.scene.SceneModel` by :func:`apply` (through the model's
-own validated API, so the scene layer's checks and limits hold); :class:`SetRange`, :class:`SetLab` and
-:class:`SetLens` are records for the runner and the GUI (a field's slider range, the estimation lab's
-settings, the convention lens's toggles), which :func:`apply` returns untouched.
+own validated API, so the scene layer's checks and limits hold); :class:`SetRange`, :class:`SetLab`,
+:class:`SetLens` and :class:`OpenDemo` are records for the runner and the GUI (a field's slider range, the
+estimation lab's settings, the convention lens's toggles, the servo demo the step opens), which
+:func:`apply` returns untouched.
 
 The kinds (``do = ...``) and their keys are listed in ``docs/lessons.md``; :func:`parse_change` reads them.
 """
@@ -33,6 +34,7 @@ from ..scene.limits import (
 )
 from . import fields
 from .errors import EntryError
+from .servo_runs import DEMOS, RUN_FIELDS, DemoRun, parse_run_fields
 
 DISPLAY_OPTIONS = ("rays", "planes", "frames", "labels", "surfaces")
 """What ``show`` / ``hide`` switch (the ``show_<what>`` fields of :class:`~egtviz.scene.DisplayOptions`)."""
@@ -248,11 +250,22 @@ class SetLens:
         return dataclasses.replace(toggles, **dict(self.values))
 
 
+@dataclass(frozen=True)
+class OpenDemo(DemoRun):
+    """Record: the step offers a button that opens servo demo ``demo`` with these run fields
+    (:class:`~egtviz.lessons.servo_runs.DemoRun`); its ``servo_number`` tasks measure that run."""
+
+    do: ClassVar[str] = "open_demo"
+
+    def _apply(self, model: SceneModel) -> OpenDemo:
+        return self
+
+
 Change = (
     Show | MoveCamera | MovePoint | Highlight | Lock | Select | SetPair | SetField | SetPoints | RandomPoints
-    | SetRange | SetLab | SetLens
+    | SetRange | SetLab | SetLens | OpenDemo
 )
-Record = SetRange | SetLab | SetLens
+Record = SetRange | SetLab | SetLens | OpenDemo
 
 
 def apply(model: SceneModel, change: Change) -> Record | None:
@@ -283,6 +296,7 @@ _KEYS = {
     "set_range": ("do", "camera", "field", "low", "high"),
     "set_lab": ("do", *(f.name for f in dataclasses.fields(LabSettings))),
     "set_lens": ("do", *(f.name for f in dataclasses.fields(LensToggles))),
+    "open_demo": ("do", "demo", *RUN_FIELDS["pinhole"]),
 }
 CHANGE_KINDS = tuple(_KEYS)
 """The values ``do`` accepts."""
@@ -376,6 +390,12 @@ def parse_change(table: Any) -> Change:
         if not low < high:
             raise EntryError("high", f"expected high > low ({low:g}), got {high:g}")
         return SetRange(camera, field, low, high)
+    if do == "open_demo":
+        demo = fields.text(table, "demo")
+        if demo not in DEMOS:
+            raise EntryError("demo", f"expected one of {', '.join(DEMOS)}, got {fields.short(demo)}")
+        fields.refuse_unknown(table, ("do", "demo", *RUN_FIELDS[demo]), f"an 'open_demo' change of the {demo} demo")
+        return OpenDemo(demo, parse_run_fields(table, demo))
     if do == "set_lab":
         values = {k: v for k, v in table.items() if k != "do"}
         try:

@@ -25,12 +25,18 @@ from ..scene import SCENES, Scene, SceneError, SceneFileError, SceneModel
 from ..scene.io import scene_from_dict
 from ..scene.lab import LabSettings, make_correspondences
 from . import fields
-from .changes import Change, SetField, parse_change
+from .changes import Change, OpenDemo, SetField, parse_change
 from .changes import apply as apply_change
 from .errors import EntryError, LessonError
 from .locate import Locator, scene_entry_path, toml_locator
 from .markup import MarkupError, render_markdown
-from .tasks import InliersRecallTask, SampsonBelowTask, Task, parse_task
+from .tasks import (
+    InliersRecallTask,
+    SampsonBelowTask,
+    ServoNumberTask,
+    Task,
+    parse_task,
+)
 
 __all__ = ["MAX_LESSON_FILE_BYTES", "Lesson", "Step", "load_lesson", "parse_lesson"]
 
@@ -144,6 +150,8 @@ class _Reader:
         self.name = name
         self.where = where
         self.known = known
+        self.demo: OpenDemo | None = None
+        """The servo run the steps read so far offer (the last ``open_demo``), for ``servo_number`` tasks."""
 
     def error(self, path: tuple, reason: str) -> LessonError:
         return LessonError(self.source, self.where.line(*path), reason)
@@ -219,6 +227,8 @@ class _Reader:
             except EntryError as exc:
                 raise self.entry(here, exc, what) from None
             self.apply(model, change, here, what, table)
+            if isinstance(change, OpenDemo):
+                self.demo = change
             out.append(change)
         return tuple(out)
 
@@ -242,6 +252,8 @@ class _Reader:
                 if any(t.id == task.id for t in out):
                     raise EntryError("id", f"another task of this step has the id {task.id!r}")
                 task.validate(model.scene)
+                if isinstance(task, ServoNumberTask):
+                    task.validate_run(self.demo)
             except EntryError as exc:
                 raise self.entry(here, exc, what) from None
             if isinstance(task, (SampsonBelowTask, InliersRecallTask)):

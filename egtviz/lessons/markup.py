@@ -77,7 +77,17 @@ def formula_to_mathml(latex: str, *, display: bool, offset: int = 0) -> str:
         ) from None
     rebuilt = _rebuild(root, offset)
     rebuilt.set("xmlns", _MATHML)
-    return ET.tostring(rebuilt, encoding="unicode")
+    return _MARKDOWN_TEXT.sub(_quote_markdown, ET.tostring(rebuilt, encoding="unicode"))
+
+
+# The viewer's Markdown parses the text between the MathML tags too: two tildes (two \tilde) would become a
+# strike-through, two '*' or '_' an emphasis, and the formula would break. They go in as character references.
+_MARKDOWN_TEXT = re.compile(r">([^<]+)<")
+_MARKDOWN_ACTIVE = {"~": "&#126;", "*": "&#42;", "_": "&#95;"}
+
+
+def _quote_markdown(m: re.Match) -> str:
+    return ">" + "".join(_MARKDOWN_ACTIVE.get(c, c) for c in m.group(1)) + "<"
 
 
 def render_markdown(text: str) -> str:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from ..scene import SceneError, SceneModel
 from ..scene.lab import LabSettings
 from ..scene.lens import LensToggles
-from .changes import Change, SetLab, SetLens, SetRange
+from .changes import Change, OpenDemo, SetLab, SetLens, SetRange
 from .changes import apply as apply_change
 from .format import Lesson, Step
 from .markup import render_markdown
@@ -67,6 +67,8 @@ class LessonRun:
         self.lens = LensToggles()
         self.ranges: dict[tuple[str, str], SetRange] = {}
         """``(camera, field)``: the range the GUI offers, from the ``set_range`` changes so far."""
+        self.demo: OpenDemo | None = None
+        """The servo demo and run fields the step offers (the last ``open_demo`` so far); its tasks measure it."""
         self.step_index = 0
         start = self.progress.current_step(self.learner, lesson.name) if self.progress else 0
         self.go_to(min(max(start, 0), len(lesson.steps) - 1))
@@ -85,6 +87,8 @@ class LessonRun:
             self.lens = record.applied_to(self.lens)
         elif isinstance(record, SetRange):
             self.ranges[(record.camera, record.field)] = record
+        elif isinstance(record, OpenDemo):
+            self.demo = record
 
     def _enter(self, index: int) -> None:
         with self.model.batch("lesson"):
@@ -98,7 +102,7 @@ class LessonRun:
         """Start step ``index`` afresh: the lesson's scene with the changes of steps ``0..index`` replayed."""
         if not 0 <= index < len(self.lesson.steps):
             raise IndexError(f"step: expected 0..{len(self.lesson.steps) - 1}, got {index}")
-        self.lab, self.lens, self.ranges = LabSettings(), LensToggles(), {}
+        self.lab, self.lens, self.ranges, self.demo = LabSettings(), LensToggles(), {}, None
         with self.model.batch("lesson"):
             self.model.load_scene(self.lesson.scene)
             for i in range(index):
@@ -114,11 +118,11 @@ class LessonRun:
         """
         if self.step_index + 1 >= len(self.lesson.steps):
             return False
-        lab, lens, ranges = self.lab, self.lens, dict(self.ranges)
+        lab, lens, ranges, demo = self.lab, self.lens, dict(self.ranges), self.demo
         try:
             self._enter(self.step_index + 1)
         except SceneError:
-            self.lab, self.lens, self.ranges = lab, lens, ranges
+            self.lab, self.lens, self.ranges, self.demo = lab, lens, ranges, demo
             self.go_to(self.step_index + 1)
         return True
 
@@ -149,7 +153,7 @@ class LessonRun:
                 break
         else:
             raise KeyError(f"task: no task {task_id!r} in step {self.step_index}")
-        ctx = TaskContext(self.model.scene, self.model.derived, answer, self.lab, self.lens)
+        ctx = TaskContext(self.model.scene, self.model.derived, answer, self.lab, self.lens, self.demo)
         result = resolved.task.check(ctx, resolved.params)
         if self.progress is not None:
             self.progress.record_attempt(self.learner, self.lesson.name, self.step_index, task_id, result.passed)

@@ -41,6 +41,7 @@ from . import fields
 from .changes import Change, parse_change
 from .errors import EntryError
 from .markup import MarkupError, render_markdown
+from .servo_runs import MEASURES, DemoRun, measure_run
 
 __all__ = ["TASK_KINDS", "Task", "TaskContext", "TaskResult", "Uniform", "parse_task", "task_seed"]
 
@@ -54,6 +55,7 @@ DEPTH_ERROR = Range(1e-6, COORDINATE.high, "m")
 _POINT = Range(0, MAX_POINTS - 1, "", integer=True)
 _COMPONENT = Range(0, 2, "", integer=True)
 _MAX_OPTIONS = 12
+_BELOW = {"deg": Range(1e-6, 180.0, "deg"), "cm": Range(1e-6, 100.0 * COORDINATE.high, "cm")}
 _TRIANGULATION_DRAWS = 200
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
@@ -86,14 +88,16 @@ Param = float | Uniform
 
 @dataclass(frozen=True, eq=False)
 class TaskContext:
-    """What a check may look at: the scene (and what is drawn of it), the learner's typed answer, and the
-    estimation lab's settings and the convention lens's toggles as the runner holds them."""
+    """What a check may look at: the scene (and what is drawn of it), the learner's typed answer, the
+    estimation lab's settings, the convention lens's toggles and the servo run of the step (its
+    ``open_demo``) as the runner holds them."""
 
     scene: Scene
     derived: Derived | None = None
     answer: str | None = None
     lab: LabSettings = LabSettings()
     lens: LensToggles = LensToggles()
+    demo: DemoRun | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     def drawn(self) -> Derived:
@@ -199,6 +203,12 @@ def _projective_pair(scene: Scene, pair: tuple[str, str] | None) -> bool:
     return pair is not None and all(scene.camera(n).camera().projective_calibration is not None for n in pair)
 
 
+def point_label(index: int) -> int:
+    """The number the viewer shows for point ``index`` (panels, 3D labels, the point list count from 1); prompts
+    (``{point}``) and feedback name points by it, lesson files by their index from 0."""
+    return index + 1
+
+
 def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
@@ -228,16 +238,63 @@ class NumberTask(Task):
     question: ClassVar[bool] = True
 
     def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
-        m = _NUMBER.match(ctx.answer or "")
-        if m is None:
-            return TaskResult(False, "Type a number" + (f" (in {self.unit})." if self.unit else "."))
-        x = float(m.group(1))
-        if not math.isfinite(x):
-            return TaskResult(False, "Type a finite number.")
-        unit = f" {self.unit}" if self.unit else ""
-        if abs(x - self.answer) <= self.tolerance:
-            return TaskResult(True, f"Right: {_fmt(x)}{unit}.")
-        return TaskResult(False, f"{_fmt(x)}{unit} is too {'high' if x > self.answer else 'low'}.")
+        return _compare_number(ctx.answer, self.answer, self.tolerance, self.unit)
+
+
+def _compare_number(typed: str | None, answer: float, tolerance: float, unit: str) -> TaskResult:
+    """The typed number against ``answer`` within ``tolerance`` (a unit typed after the number is ignored)."""
+    m = _NUMBER.match(typed or "")
+    if m is None:
+        return TaskResult(False, "Type a number" + (f" (in {unit})." if unit else "."))
+    x = float(m.group(1))
+    if not math.isfinite(x):
+        return TaskResult(False, "Type a finite number.")
+    shown = f" {unit}" if unit else ""
+    if abs(x - answer) <= tolerance:
+        return TaskResult(True, f"Right: {_fmt(x)}{shown}.")
+    return TaskResult(False, f"{_fmt(x)}{shown} is too {'high' if x > answer else 'low'}.")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ServoNumberTask(Task):
+    """A number read off the step's servo run (its ``open_demo``): ``measure`` (with ``below`` for the
+    ``*_below_time`` measures) within ``tolerance``. The answer is computed by simulating the run headless,
+    as the demo does (:mod:`egtviz.lessons.servo_runs`); the unit is the measure's."""
+
+    measure: str
+    below: float | None = None
+    tolerance: float = 0.0
+
+    kind: ClassVar[str] = "servo_number"
+    question: ClassVar[bool] = True
+
+    @property
+    def unit(self) -> str:
+        """The measure's unit (s, steps, deg, cm)."""
+        return MEASURES[self.measure].unit
+
+    def params(self) -> dict[str, Param]:
+        return {"tolerance": self.tolerance, **({"below": self.below} if self.below is not None else {})}
+
+    def answer_for(self, run: DemoRun) -> float:
+        """The right answer for ``run`` (NaN: the run never gets there)."""
+        return measure_run(run, self.measure, math.nan if self.below is None else self.below)
+
+    def validate_run(self, run: DemoRun | None) -> None:
+        """Refuse a task without a servo run in its step, a measure the demo does not have, or a run that never
+        gets where the measure asks (an :class:`EntryError` naming the key)."""
+        if run is None:
+            raise EntryError(None, "a servo_number task needs an open_demo change in its step or an earlier one")
+        if run.demo not in MEASURES[self.measure].demos:
+            raise EntryError("measure", f"the {run.demo} demo has no {self.measure!r}")
+        if not math.isfinite(self.answer_for(run)):
+            raise EntryError("below" if self.below is not None else "measure",
+                             f"the {run.demo} run ({run.describe() or 'its defaults'}) never gets there")
+
+    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        if ctx.demo is None:
+            return TaskResult(False, "This step opens no servo demo to read the answer from.")
+        return _compare_number(ctx.answer, self.answer_for(ctx.demo), params["tolerance"], self.unit)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -389,7 +446,7 @@ class PointOnLineTask(Task):
     kind: ClassVar[str] = "point_on_line"
 
     def params(self) -> dict[str, Param]:
-        return {"point": float(self.point), "within_px": self.within_px}
+        return {"point": float(point_label(self.point)), "within_px": self.within_px}
 
     def validate(self, scene: Scene) -> None:
         _point_in(scene, self.point)
@@ -399,8 +456,8 @@ class PointOnLineTask(Task):
         view = ctx.lens_view()
         d = (view.distances1_px if self.camera == view.names[0] else view.distances2_px)[self.point]
         if not math.isfinite(d):
-            return TaskResult(False, f"Point {self.point} has no image in both cameras.")
-        msg = f"point {self.point} is {d:.2f} px from its epipolar line in {self.camera}"
+            return TaskResult(False, f"Point {point_label(self.point)} has no image in both cameras.")
+        msg = f"point {point_label(self.point)} is {d:.2f} px from its epipolar line in {self.camera}"
         if d <= params["within_px"]:
             return TaskResult(True, f"Done: {msg}.")
         return TaskResult(False, f"Not yet: {msg}; at most {params['within_px']:g} px allowed.")
@@ -485,7 +542,7 @@ class PointInImageTask(Task):
     kind: ClassVar[str] = "point_in_image"
 
     def params(self) -> dict[str, Param]:
-        return {"point": float(self.point)}
+        return {"point": float(point_label(self.point))}
 
     def validate(self, scene: Scene) -> None:
         _point_in(scene, self.point)
@@ -493,14 +550,14 @@ class PointInImageTask(Task):
 
     def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         plane = ctx.drawn().image_planes[self.camera]
-        i = self.point
+        i, label = self.point, point_label(self.point)
         if plane.in_image[i]:
             u, v = plane.points[i]
-            return TaskResult(True, f"Done: point {i} is at ({u:.4g}, {v:.4g}) in {self.camera}'s image.")
+            return TaskResult(True, f"Done: point {label} is at ({u:.4g}, {v:.4g}) in {self.camera}'s image.")
         if not plane.visible[i]:
-            return TaskResult(False, f"Not yet: point {i} has no image in {self.camera} (behind it, or blind).")
+            return TaskResult(False, f"Not yet: point {label} has no image in {self.camera} (behind it, or blind).")
         u, v = plane.points[i]
-        return TaskResult(False, f"Not yet: point {i} projects to ({u:.4g}, {v:.4g}), outside the "
+        return TaskResult(False, f"Not yet: point {label} projects to ({u:.4g}, {v:.4g}), outside the "
                                  f"{plane.width} x {plane.height} image.")
 
 
@@ -590,7 +647,7 @@ class TriangulationErrorTask(Task):
     kind: ClassVar[str] = "triangulation_error"
 
     def params(self) -> dict[str, Param]:
-        return {"point": float(self.point), "noise_px": self.noise_px, "at_most": self.at_most}
+        return {"point": float(point_label(self.point)), "noise_px": self.noise_px, "at_most": self.at_most}
 
     def validate(self, scene: Scene) -> None:
         _point_in(scene, self.point)
@@ -601,8 +658,8 @@ class TriangulationErrorTask(Task):
     def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         err = triangulation_rms(ctx.scene, self.point, params["noise_px"], self.method)
         if not math.isfinite(err):
-            return TaskResult(False, f"Point {self.point} is not seen by both cameras.")
-        msg = f"the RMS triangulation error of point {self.point} is {err:.3g} m"
+            return TaskResult(False, f"Point {point_label(self.point)} is not seen by both cameras.")
+        msg = f"the RMS triangulation error of point {point_label(self.point)} is {err:.3g} m"
         if err <= params["at_most"]:
             return TaskResult(True, f"Done: {msg}.")
         return TaskResult(False, f"Not yet: {msg}; at most {params['at_most']:g} m allowed.")
@@ -630,7 +687,7 @@ TASK_KINDS: dict[str, type[Task]] = {
     cls.kind: cls
     for cls in (NumberTask, ChoiceTask, EpipoleNearTask, SameOrientationTask, LinesParallelTask, PointOnLineTask,
                 SampsonBelowTask, InliersRecallTask, PointInImageTask, CameraFieldTask, XiBetweenTask,
-                TriangulationErrorTask)
+                TriangulationErrorTask, ServoNumberTask)
 }
 """Every task kind by its ``kind`` name."""
 
@@ -650,6 +707,7 @@ _KEYS: dict[str, tuple[str, ...]] = {
     "camera_field": ("camera", "field", "component", "low", "high"),
     "xi_between": ("camera", "low", "high"),
     "triangulation_error": ("point", "noise_px", "at_most", "method"),
+    "servo_number": ("measure", "below", "tolerance"),
 }
 _ID = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,39}")
 # A placeholder may round its value ({u:.1f}); nothing that could build a huge string.
@@ -797,6 +855,17 @@ def _parse_kind(kind: str, t: dict, common: dict[str, Any]) -> Task:
         if not low <= high:
             raise EntryError("high", f"expected high >= low ({low:g}), got {high:g}")
         return XiBetweenTask(**common, camera=fields.text(t, "camera"), low=low, high=high)
+    if kind == "servo_number":
+        measure = fields.text(t, "measure")
+        if measure not in MEASURES:
+            raise EntryError("measure", f"expected one of {', '.join(MEASURES)}, got {fields.short(measure)}")
+        below_unit = MEASURES[measure].below_unit
+        if bool(below_unit) != ("below" in t):
+            raise EntryError("below", f"{measure!r} needs 'below' (in {below_unit})" if below_unit
+                             else f"{measure!r} takes no 'below'")
+        below = fields.number(t, "below", _BELOW[below_unit]) if below_unit else None
+        return ServoNumberTask(**common, measure=measure, below=below,
+                               tolerance=fields.number(t, "tolerance", TOLERANCE, required=False, default=0.0))
     method = fields.text(t, "method", required=False, default="linear")
     if method not in ("linear", "optimal"):
         raise EntryError("method", f"expected 'linear' or 'optimal', got {fields.short(method)}")

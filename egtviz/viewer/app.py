@@ -267,7 +267,8 @@ class ClientView:
 
         self.client = client
         self.model = model
-        self._open_demo = open_demo
+        #: ``open_demo(kind, **run_fields)`` replaces this tab by a servo demo (the app passes it); None: no demos.
+        self.open_demo = open_demo
         self.lock = threading.RLock()
         self.closed = False
         self.revision = 0
@@ -383,12 +384,12 @@ class ClientView:
                 cb = gui.add_checkbox(label, getattr(self.model.scene.options, opt))
                 self._on(cb.on_update, lambda e, opt=opt: self._user_event(lambda: self._toggle(opt, e.target.value)))
                 self.toggles[opt] = cb
-        if self._open_demo is not None:
+        if self.open_demo is not None:
             with gui.add_folder("Visual servoing", expand_by_default=False):
                 self.btn_servo_pinhole = gui.add_button("Pin-hole camera on a Puma 560")
-                self._on(self.btn_servo_pinhole.on_click, lambda _: self._open_demo("pinhole"))
+                self._on(self.btn_servo_pinhole.on_click, lambda _: self.open_demo("pinhole"))
                 self.btn_servo_panoramic = gui.add_button("Panoramic camera on a mobile robot")
-                self._on(self.btn_servo_panoramic.on_click, lambda _: self._open_demo("panoramic"))
+                self._on(self.btn_servo_panoramic.on_click, lambda _: self.open_demo("panoramic"))
         with gui.add_folder("Scene", expand_by_default=False):
             self.btn_undo = gui.add_button("Undo")
             self._on(self.btn_undo.on_click, lambda _: self._user_event(self.model.undo))
@@ -1209,7 +1210,7 @@ class EgtvizApp:
         If that fails (a scene that cannot be drawn), the tab is cleared and
         gets the default scene, with a notification giving the reason.
         """
-        open_demo = lambda kind, c=client: self.open_demo(c, kind)  # noqa: E731
+        open_demo = lambda kind, c=client, **options: self.open_demo(c, kind, **options)  # noqa: E731
         try:
             return ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
                               field_delay=self.field_delay, present=self.present)
@@ -1243,8 +1244,9 @@ class EgtvizApp:
 
     # -- visual-servoing demos (egtviz.viewer.servo_demo) ---------------------------------
 
-    def open_demo(self, client: viser.ClientHandle, kind: str) -> Any:
-        """Replace the tab's workbench by a servo demo (its scene is kept for the way back)."""
+    def open_demo(self, client: viser.ClientHandle, kind: str, **options: Any) -> Any:
+        """Replace the tab's workbench by a servo demo (its scene is kept for the way back); ``options``: the
+        demo's run fields (``seed``, ``beta``, ...: ``make_servo_demo``)."""
         from .servo_demo import make_servo_demo
 
         cid = client.client_id
@@ -1260,7 +1262,7 @@ class EgtvizApp:
         client.scene.reset()
         try:
             demo = make_servo_demo(client, kind, on_back=lambda: self.close_demo(client),
-                                   field_delay=self.field_delay)
+                                   field_delay=self.field_delay, **options)
         except Exception as exc:  # noqa: BLE001 - back to a working workbench, with the reason
             import traceback
 

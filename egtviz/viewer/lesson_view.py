@@ -12,7 +12,9 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
 * the learner's name: progress (the step, the tasks passed) is kept under it in the
   :class:`~egtviz.lessons.ProgressStore`, so a reload, a new tab or a restarted server resumes there;
 * the estimation lab (:mod:`egtviz.viewer.lab_view`) or the convention lens (:mod:`egtviz.viewer.lens_view`)
-  when the lesson uses them; they draw the panels through the tab's ``panel_filter``.
+  when the lesson uses them; they draw the panels through the tab's ``panel_filter``;
+* when the step has a servo run (an ``open_demo`` change), its settings and a button that opens that demo
+  with them in this tab (the demo's *Back* button returns to the lesson, at the same step).
 
 A ``set_range`` change of a step limits a camera field: the camera fields have no per-field range to set, so
 the limit is enforced when a task is checked (a value outside it is refused with the range) and listed in the
@@ -46,6 +48,7 @@ LAB_ORDER = -90.0
 LENS_ORDER = -80.0
 MATH_CSS = ('<style>math[display="block"]{max-width:100%;overflow-x:auto;overflow-y:hidden;'
             "font-size:0.92em;padding:0.35em 0 0.2em}</style>")
+DEMO_TITLES = {"pinhole": "the pin-hole demo (Puma 560)", "panoramic": "the panoramic demo (mobile robot)"}
 LAB_TASKS = frozenset({"sampson_below", "inliers_recall"})
 LENS_TASKS = frozenset({"point_on_line"})
 
@@ -160,13 +163,16 @@ class LessonPanel:
         self.attempts: dict[str, Any] = {}
         self.lab: Any = None
         self.lens: Any = None
+        #: The button that opens the step's servo run (None: the step has none).
+        self.demo_button: Any = None
         client = view.client
         gui = client.gui
         lesson = run.lesson
         with view.lock, client.atomic():
             # A displayed formula wider than the control panel scrolls instead of running past its edge.
             gui.add_html(MATH_CSS, order=LESSON_ORDER - 1)
-            self.folder = gui.add_folder(f"Lesson: {lesson.title}", order=LESSON_ORDER, expand_by_default=True)
+            # A long title in the folder's legend would wrap over the folder's first line: it goes in the head.
+            self.folder = gui.add_folder("Lesson", order=LESSON_ORDER, expand_by_default=True)
             with self.folder:
                 self.nav = StepNav(gui)
                 self.text = gui.add_markdown("")
@@ -230,6 +236,7 @@ class LessonPanel:
         i = run.step_index
         self.nav.head.content = (
             f'<div style="font-size:0.9em" data-egtviz="lesson-head" data-step="{i}">'
+            f'<div style="color:#555">{escape(run.lesson.title)}</div>'
             f"<b>Step {i + 1} of {n}: {escape(run.step.title)}</b></div>"
         )
         self.nav.bar.value = 100.0 * (i + 1) / n
@@ -238,9 +245,12 @@ class LessonPanel:
         self.tasks_folder.remove()
         self.attempts = {}
         self.rows = []
+        self.demo_button = None
         with self.folder:
             self.tasks_folder = gui.add_folder(None, order=self.text.order + 0.5)
         with self.tasks_folder:
+            if run.demo is not None:
+                self._add_demo_row(run)
             for k, resolved in enumerate(run.tasks(), start=1):
                 row = TaskRow(gui, k, resolved, passed_before=(i, resolved.task.id) in passed)
                 self._on(row.button.on_click, lambda _, r=row: self._check(r))
@@ -252,6 +262,23 @@ class LessonPanel:
         for instrument in (self.lab, self.lens):
             if instrument is not None:
                 instrument.sync()
+
+    def _add_demo_row(self, run: LessonRun) -> None:
+        """The step's servo run: what it is, and a button that opens the demo with its run fields."""
+        demo = run.demo
+        assert demo is not None
+        gui = self.view.client.gui
+        settings = demo.describe() or "its default settings"
+        opener = self.view.open_demo
+        how = ("" if opener is not None else
+               f" Open it with <code>egtviz --demo {escape(demo.demo)}</code> and set those fields.")
+        self.demo_info = gui.add_html(
+            f'<div style="font-size:0.85em;padding:0 0.75em" data-egtviz="lesson-demo" data-demo="{escape(demo.demo)}">'
+            f"This step's run: {escape(DEMO_TITLES[demo.demo])} with {escape(settings)}.{how}</div>")
+        if opener is not None:
+            self.demo_button = gui.add_button("Open the demo with these settings")
+            on_event(self.demo_button.on_click,
+                     lambda _: None if self.view.closed else opener(demo.demo, **demo.options()), self.view.report)
 
     def _navigate(self, action: Any) -> None:
         if action not in STEP_BUTTONS:  # a raw client can send any string
