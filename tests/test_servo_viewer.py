@@ -272,10 +272,20 @@ def test_app_opens_demo_and_goes_back():
         assert demo.kind == "panoramic" and not app.views
         assert views[0].closed
         demo.wait(30)
+        # The demo's docked panels narrow the 3D canvas the tab reports.
+        fakes[0].send("ViewerCameraMessage", wxyz=[1.0, 0.0, 0.0, 0.0], position=[0.0, -10.0, 3.0], fov=1.0,
+                      near=0.01, far=1000.0, image_height=768, image_width=558, look_at=[0.0, 0.0, 0.0],
+                      up_direction=[0.0, 0.0, 1.0])
+        deadline = time.time() + 10
+        while client.camera.image_width != 558 and time.time() < deadline:
+            time.sleep(0.02)
+        assert client.camera.image_width == 558
         demo.btn_back.value = None  # click "Back to the epipolar workbench"
         view = app.views.get(client.client_id)
         assert demo.closed and view is not None and app.views[client.client_id] is view
         assert not app.demos
+        # The workbench comes back laid out for the window it had, not for the demo's narrowed canvas.
+        assert view.window == views[0].window and view.grid == views[0].grid
     finally:
         for f in fakes:
             f.close()

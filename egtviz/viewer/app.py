@@ -262,7 +262,8 @@ class ClientView:
     """
 
     def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None,
-                 field_delay: float = FIELD_DELAY, present: bool = False) -> None:
+                 field_delay: float = FIELD_DELAY, present: bool = False,
+                 window: tuple[WindowSize, float] | None = None) -> None:
         from .scene3d import Scene3D
 
         self.client = client
@@ -294,7 +295,9 @@ class ClientView:
         self._pair_options: dict[str, tuple[str, str]] = {}
         #: Presentation mode (larger type and lines in the panels and the GUI).
         self.present = bool(present)
-        self._window, self._pixel_ratio = self._client_window()
+        # A tab coming back from a servo demo reports the demo's narrowed canvas: the app passes the window
+        # its previous workbench had measured instead.
+        self._window, self._pixel_ratio = window if window is not None else self._client_window()
         #: Where the panels are (see :func:`egtviz.viewer.panels.plan_grid`); None before the first layout.
         self.grid: PanelGrid | None = None
         self._grid_key: tuple | None = None
@@ -991,6 +994,11 @@ class ClientView:
         self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if value else 1.0)
         self._render(self.model.scene, None)
 
+    @property
+    def window(self) -> tuple[WindowSize, float]:
+        """The tab's window in CSS pixels and its device pixels per CSS pixel, as this view estimated them."""
+        return self._window, self._pixel_ratio
+
     def _client_window(self) -> tuple[WindowSize, float]:
         """The tab's window in CSS pixels and the device pixels per CSS pixel, from the canvas size it reported."""
         try:
@@ -1154,6 +1162,8 @@ class EgtvizApp:
         #: The servo demo shown in a tab (``egtviz.viewer.servo_demo.ServoDemo``), by client id.
         self.demos: dict[int, Any] = {}
         self._models: dict[int, SceneModel] = {}
+        #: Each tab's window as its last workbench estimated it (a servo demo narrows the canvas it reports).
+        self._windows: dict[int, tuple[WindowSize, float]] = {}
         self._lock = threading.Lock()
         self._gone: set[int] = set()
         #: The course (start page, lessons) that new tabs open in; None: the workbench or ``demo``.
@@ -1211,9 +1221,10 @@ class EgtvizApp:
         gets the default scene, with a notification giving the reason.
         """
         open_demo = lambda kind, c=client, **options: self.open_demo(c, kind, **options)  # noqa: E731
+        window = self._windows.get(client.client_id)
         try:
             return ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
-                              field_delay=self.field_delay, present=self.present)
+                              field_delay=self.field_delay, present=self.present, window=window)
         except Exception as exc:  # noqa: BLE001 - the tab must come up whatever the scene holds
             title, body = describe_error(exc)
             if title == "Something went wrong":
@@ -1223,7 +1234,7 @@ class EgtvizApp:
             client.gui.reset()
             client.scene.reset()
             view = ClientView(client, SceneModel(default_scene()), open_demo=open_demo, field_delay=self.field_delay,
-                              present=self.present)
+                              present=self.present, window=window)
             client.add_notification("Showing the default scene instead",
                                     f"The scene could not be drawn: {body}", color="red", auto_close_seconds=None)
             return view
@@ -1233,6 +1244,7 @@ class EgtvizApp:
             view = self.views.pop(client.client_id, None)
             demo = self.demos.pop(client.client_id, None)
             self._models.pop(client.client_id, None)
+            self._windows.pop(client.client_id, None)
             if view is None and demo is None:
                 self._gone.add(client.client_id)
         if view is not None:
@@ -1256,6 +1268,7 @@ class EgtvizApp:
         if view is not None:
             view.close()
             self._models[cid] = view.model
+            self._windows[cid] = view.window
         if old is not None:
             old.close()
         client.gui.reset()
