@@ -3,21 +3,42 @@
 Two hyperbolic-mirror cameras placed as in Example 3 look at the eight
 corners of a box. Each image has two epipoles (the baseline meets each
 mirror twice) and one epipolar conic per point; every conic passes through
-both epipoles of its image and through the image of its point.
+both epipoles of its image and through the image of its point. The figure
+shows both mirrors, their frames, the box's corners and, in each camera's
+panel, the points, the epipoles and the conics.
 """
 
 import numpy as np
 
-from egtviz.egt import DEFAULT_PANORAMIC_K, f_epipconics, f_panepipoles, f_panproj, pi, rotoz
+from egtviz.egt import (
+    DEFAULT_PANORAMIC_K,
+    clf,
+    f_3Dframe,
+    f_3Dpanoramic,
+    f_3Dwf,
+    f_epipconics,
+    f_panepipoles,
+    f_panproj,
+    f_scenepnt,
+    pi,
+    rotoz,
+    show,
+)
 
 
 def main() -> tuple[np.ndarray, np.ndarray]:
+    clf()  # start from an empty figure, as a MATLAB script with clf
     K = DEFAULT_PANORAMIC_K
     H1 = np.eye(4)
     H1[:3, :3] = rotoz(pi / 4)
     H1[:3, 3] = [-10, -10, 0]
     H2 = np.eye(4)
     corners = np.array([[x, y, z] for x in (-6, -2) for y in (-6, -2) for z in (-3, 1)], float).T
+    f_3Dwf("k", 3)
+    for H, colour in ((H1, "b"), (H2, "g")):
+        f_3Dpanoramic(H, colour, 1, 3, 1)
+        f_3Dframe(H, colour, 3, "_{m}")
+    f_scenepnt(corners, "r*", 1)
     m1, _ = f_panproj(corners, H1, K, 3, 1, 1, "b")
     m2, _ = f_panproj(corners, H2, K, 3, 1, 1, "g")
     e1, e1p, e2, e2p = f_panepipoles(H1, H2, K)
@@ -36,3 +57,4 @@ def main() -> tuple[np.ndarray, np.ndarray]:
 
 if __name__ == "__main__":
     main()
+    show()  # keep the figure in the browser until Ctrl-C (``--no-wait``: return at once)

@@ -14,8 +14,9 @@ functions and the differences from EGT 2.0: ``docs/egt.md``).
 
 EGT's trailing plotting arguments (``f_perspproj(P, H, K, 1)``,
 ``f_epipline(Ua, Ud, F, 1, 2, 3, 'b:')``, colours) are accepted everywhere;
-they are handed to the figure front-end ``egtviz.egt_figure`` when it is
-installed and are otherwise ignored. Every function raises
+they are handed to the figure front-end ``egtviz.egt_figure``, which draws
+them live in the browser (``figure``, ``clf``, ``hold_on``, ``show`` and EGT's
+drawing functions ``f_3Dcamera``, ``f_3Dframe``, ... are here too; ``docs/egt.md``). Every function raises
 :class:`~egtviz.geometry.GeometryError` naming the argument for bad input.
 """
 
@@ -30,6 +31,20 @@ from ..geometry.poses import rotx, roty, rotz
 from ._algebra import f_atan, f_E2Motion, f_forcerank2, f_normalize, f_Procrustes, f_skew, f_stack, f_unstacked
 from ._convert import DEFAULT_PANORAMIC_K
 from ._estimation import FESTIM_ALGORITHMS, FESTIM_NAMES, f_Festim, f_panEestim
+from ._figures import (
+    clf,
+    f_3Dcamera,
+    f_3Dframe,
+    f_3Dpanoramic,
+    f_3Dplane,
+    f_3Dreflenum,
+    f_3Dwf,
+    f_3Dwfenum,
+    f_scenepnt,
+    figure,
+    hold_on,
+    show,
+)
 from ._mirror import f_reflcamera, f_reflFestim, f_reflmatrix, f_reflpersproj, f_reflpoint
 from ._panoramic import (
     f_backcatmod,
@@ -57,7 +72,15 @@ __all__ = [
     "FESTIM_ALGORITHMS",
     "FESTIM_NAMES",
     "GeometryError",
+    "clf",
     "eye",
+    "f_3Dcamera",
+    "f_3Dframe",
+    "f_3Dpanoramic",
+    "f_3Dplane",
+    "f_3Dreflenum",
+    "f_3Dwf",
+    "f_3Dwfenum",
     "f_3Dpointplanedistance",
     "f_3Drandpoint",
     "f_3Dsurface",
@@ -90,11 +113,15 @@ __all__ = [
     "f_reflmatrix",
     "f_reflpersproj",
     "f_reflpoint",
+    "f_scenepnt",
     "f_skew",
     "f_stack",
     "f_unstacked",
+    "figure",
+    "hold_on",
     "pi",
     "rotox",
     "rotoy",
     "rotoz",
+    "show",
 ]

@@ -48,6 +48,7 @@ __all__ = [
     "MAX_POLYLINE_VERTICES",
     "MAX_TEXT_LENGTH",
     "Mesh",
+    "POLYLINE_KINDS",
     "PlanarMirror",
     "Plot",
     "PlotCircle",
@@ -56,6 +57,7 @@ __all__ = [
     "annotations_from_dict",
     "annotations_to_dict",
     "resolve_reflections",
+    "virtual_camera_spec",
 ]
 
 #: Items of each kind (frames, polylines, labels, point sets, meshes, mirrors) in one scene.
@@ -72,8 +74,9 @@ MAX_PLOT_ITEMS = 2000
 MAX_TEXT_LENGTH = 200
 #: Pixel coordinates of plots (the same bound as a principal point, with room for far epipoles).
 PLOT_COORDINATE = Range(-1e9, 1e9, "px")
-#: Line width factor and mesh opacity.
+#: A mesh's opacity.
 OPACITY = Range(0.0, 1.0, "")
+#: A frame's axis length.
 LENGTH = Range(1e-6, 1e4, "m")
 
 _COLOUR = re.compile(r"#[0-9a-fA-F]{6}")
@@ -337,7 +340,8 @@ class Plot:
         _set(self, "lines", _homogeneous(self.lines, "plot lines", MAX_PLOT_ITEMS))
         _set(self, "line_points", _pairs(self.line_points, "plot line_points", MAX_PLOT_ITEMS))
         if len(self.line_points) != len(self.lines):
-            raise SceneError(f"plot line_points: expected one per line ({len(self.lines)}), got {len(self.line_points)}")
+            raise SceneError(
+                f"plot line_points: expected one per line ({len(self.lines)}), got {len(self.line_points)}")
         for i, (line, p) in enumerate(zip(self.lines, self.line_points)):
             if math.hypot(line[0], line[1]) == 0.0:
                 raise SceneError(f"plot lines[{i}]: the line at infinity (0, 0, c) cannot be drawn")

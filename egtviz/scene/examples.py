@@ -1,9 +1,11 @@
-"""Ready-made scenes: the default classroom pair, a panoramic pair, and the EGT tutorial's Examples 1-4."""
+"""Ready-made scenes: the default classroom pair, a panoramic pair, the EGT tutorial's Examples 1-4, and a
+planar mirror with a camera and its reflection."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .annotations import Annotations, PlanarMirror
 from .scene import Scene
 from .specs import PanoramicSpec, PinholeSpec
 
@@ -105,6 +107,27 @@ def tutorial_example_4() -> Scene:
     )
 
 
+def mirror_scene() -> Scene:
+    """A plane mirror (``y = 3``), a pin-hole camera in front of it, and the camera's reflection.
+
+    The virtual camera ``cam_virtual`` is the mirror image of ``cam``, kept up to date by the scene when
+    ``cam`` moves (:func:`egtviz.scene.annotations.resolve_reflections`); its gizmo is locked. Both see the
+    cube: ``cam`` directly, ``cam_virtual`` as ``cam`` sees it in the mirror (left and right swapped back),
+    so the drawn pair is the planar mirror's two-view geometry: every epipolar line of ``cam`` passes through
+    the vanishing point of the mirror's normal.
+    """
+    mirror = PlanarMirror(normal=(0.0, 1.0, 0.0), distance=3.0, centre=(0.0, 3.0, 1.0), size=6.0, reflects="cam",
+                          virtual="cam_virtual")
+    return Scene(
+        cameras=(_looking_at_origin("cam", (-3.0, -8.0, 1.5)),),
+        points=CUBE,
+        annotations=Annotations(mirrors=(mirror,)),
+        pair=("cam", "cam_virtual"),
+        locked=frozenset({"cam_virtual"}),
+        title="Planar mirror: a camera and its reflection",
+    )
+
+
 SCENES = {
     "default": default_scene,
     "panoramic": panoramic_scene,
@@ -112,4 +135,5 @@ SCENES = {
     "example2": tutorial_example_2,
     "example3": tutorial_example_3,
     "example4": tutorial_example_4,
+    "mirror": mirror_scene,
 }

@@ -26,6 +26,7 @@ from .limits import (
     MAX_SCENE_FILE_BYTES,
     MAX_SURFACES,
 )
+from .annotations import annotations_from_dict, annotations_to_dict
 from .scene import FILE_FORMAT, FILE_VERSION, Scene, SceneFileError
 from .specs import CAMERA_KINDS, DisplayOptions, SceneError, SurfaceSpec, _short, spec_to_dict
 
@@ -41,7 +42,7 @@ __all__ = [
 
 _TOP_LEVEL = (
     "format", "version", "title", "cameras", "points", "surfaces", "pair",
-    "selected_point", "options", "locked", "highlighted",
+    "selected_point", "options", "locked", "highlighted", "annotations",
 )  # fmt: skip
 
 
@@ -210,6 +211,10 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
             raise SceneFileError(f"{source}: {key}: expected a list of names, got {_short(value)}")
         marks[key] = frozenset(value)
     try:
+        annotations = annotations_from_dict(data.get("annotations", {}))
+    except SceneError as exc:
+        raise SceneFileError(f"{source}: {exc}") from None
+    try:
         scene = Scene(
             cameras=tuple(cameras),
             points=points,
@@ -218,6 +223,7 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
             selected_point=data.get("selected_point"),
             options=options,
             title=data.get("title", ""),
+            annotations=annotations,
             **marks,
         )
     except SceneError as exc:  # messages start with the entry ("points[3]: ...", "pair: ...")
@@ -245,6 +251,8 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         "options": dataclasses.asdict(scene.options),
         "locked": sorted(scene.locked),
         "highlighted": sorted(scene.highlighted),
+        # Only a figure has annotations: other scene files stay as they were.
+        **({} if scene.annotations.empty else {"annotations": annotations_to_dict(scene.annotations)}),
     }
 
 

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .annotations import Annotations, resolve_reflections
 from .limits import (
     COORDINATE,
     MAX_CAMERAS,
@@ -90,6 +91,9 @@ class Scene:
     highlighted: frozenset[str] = frozenset()
     """Camera names and ``"point:<i>"`` a lesson draws attention to."""
     title: str = ""
+    annotations: Annotations = field(default_factory=Annotations)
+    """What a figure draws besides cameras and points: frames, polylines, labels, point sets, meshes,
+    plane mirrors (which may keep a reflected camera in ``cameras``) and 2D plots."""
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -102,6 +106,13 @@ class Scene:
         for c in cameras:
             if type(c) not in _CAMERA_TYPES:
                 raise SceneError(f"cameras: expected camera specs, got {_short(c)}")
+        if type(self.annotations) is not Annotations:
+            raise SceneError(f"annotations: expected Annotations, got {_short(self.annotations)}")
+        if self.annotations.mirrors:  # a reflected camera follows the camera it reflects
+            cameras = resolve_reflections(cameras, self.annotations)
+            if len(cameras) > MAX_CAMERAS:
+                raise SceneError(f"cameras: at most {MAX_CAMERAS} (with the mirrors' virtual cameras), got {len(cameras)}")
+            set_(self, "cameras", cameras)
         names = [c.name for c in cameras]
         if len(set(names)) != len(names):
             raise SceneError(f"cameras: names must be unique, got {names}")

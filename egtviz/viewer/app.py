@@ -85,6 +85,7 @@ from .panels import (
     window_from_canvas,
 )
 from .models import SHORT_LABELS
+from .plot_svg import plot_svg
 from .svg import NORMAL, PRESENT, empty_svg, image_plane_svg
 from .svg import warm_up as svg_warm_up
 
@@ -411,8 +412,12 @@ class ClientView:
 
     def _title_html(self) -> str:
         title = escape(_plain(self.model.scene.title or "egtviz", limits.MAX_TITLE_LENGTH))
+        # A figure's messages: what its drawing calls could not draw.
+        notes = "".join(f'<br><span data-egtviz="figure-message" style="color:#a00">{escape(_plain(m, 200))}</span>'
+                        for m in self.model.scene.annotations.messages)
         return (f'<div style="font-size:0.9em;padding:0 0.6em"><b>{title}</b><br>Drag the gizmos or edit the fields; '
-                "the image planes are in the panels on the right. Point numbers match in 3D and in the images.</div>")
+                f"the image planes are in the panels on the right. Point numbers match in 3D and in the images.{notes}"
+                "</div>")
 
     def _build_camera_fields(self, spec: Any) -> None:
         """A camera's folder: its pose, the choice among the models its spec builds, and one field per model
@@ -738,6 +743,11 @@ class ClientView:
                 svg = self._panel_svg(spec.name, plane, scene, highlighted)
                 self.svgs[spec.name] = svg
                 self._html[spec.name].content = svg
+            for plot in scene.annotations.plots:  # a figure's 2D plots
+                key = _plot_key(plot.number)
+                svg = self._plot_panel_svg(key, plot)
+                self.svgs[key] = svg
+                self._html[key].content = svg
             t2 = time.perf_counter()
             self.readout = pair_html(derived)
             self.readout_md.content = self.readout
@@ -754,6 +764,20 @@ class ClientView:
         if t_event is not None:
             self.timings.append(t5 - t_event)
             self._t_event = None
+
+    def _plot_panel_svg(self, key: str, plot: Any) -> str:
+        """A figure's plot panel (:func:`egtviz.viewer.plot_svg.plot_svg`), drawn again only when the plot, the
+        style or the panel's size changed (a drag leaves a plot alone)."""
+        grid = self.grid
+        panel_px = grid.column_px if grid is not None and grid.columns else None
+        max_height = f"{grid.svg_max_height_px(key):.0f}px" if panel_px is not None else None
+        inputs = (self._style, panel_px, max_height)
+        kept = self._drawn_panels.get(key)
+        if kept is not None and kept[0] is plot and kept[1] == inputs:
+            return kept[2]
+        svg = plot_svg(plot, revision=self.revision, max_height=max_height, style=self._style, panel_px=panel_px)
+        self._drawn_panels[key] = (plot, inputs, svg)
+        return svg
 
     def _filtered(self, scene: Scene, derived: Any) -> tuple[Any, frozenset[int]]:
         """What the panels draw: ``derived``, or what :attr:`panel_filter` makes of it (its failure is reported)."""
@@ -810,12 +834,14 @@ class ClientView:
                 self._build_view_buttons(spec.name)
             self._panel_sig = sig
         cameras = tuple((c.name, float(c.width), float(c.height)) for c in scene.cameras)
+        plots = {_plot_key(p.number): p for p in scene.annotations.plots}  # a figure's 2D plots: 4:3 panels
+        cameras += tuple((key, 640.0, 480.0) for key in plots)
         key = (cameras, self._window, self.present)
         if key == self._grid_key:
             return  # a drag: nothing the layout depends on has changed
         grid = plan_grid(cameras, self._window, style=self._style)
         if grid != self.grid:
-            self._apply_grid(grid, {c.name: c for c in scene.cameras})
+            self._apply_grid(grid, {c.name: c for c in scene.cameras} | plots)
         self._grid_key = key
 
     @property
@@ -838,6 +864,10 @@ class ClientView:
                     panel = gui.add_panel()
                     for name in col[cell]:
                         spec = specs[name]
+                        if name.startswith(PLOT_KEY):
+                            with panel.add_tab(spec.title):
+                                self._html[name] = gui.add_html(empty_svg(spec.title))
+                            continue
                         with panel.add_tab(f"{name}: image plane"):
                             self._html[name] = gui.add_html(empty_svg(name, spec.width, spec.height))
                     if anchor is None:
@@ -1107,6 +1137,15 @@ class ClientView:
             self._unsubscribe()
 
 
+#: Panel keys of a figure's plots start with a control character, which no camera name has.
+PLOT_KEY = "\x1fplot "
+
+
+def _plot_key(number: int) -> str:
+    """The panel key of a figure's plot ``Figure <number>``."""
+    return f"{PLOT_KEY}{number}"
+
+
 def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:
     """``np.allclose(a, b, atol=atol)`` (rtol 1e-5) without its per-call overhead (runs on every drag event)."""
     return bool((np.abs(a - b) <= atol + 1e-5 * np.abs(b)).all())
@@ -1198,6 +1237,20 @@ class EgtvizApp:
         cam.position = framed.position
         cam.up = (0.0, 0.0, 1.0)
         cam.fov = framed.fov
+
+    def show_scene(self, scene: Scene) -> None:
+        """Show ``scene`` in every open workbench tab and start new tabs on it (the EGT figure front-end).
+
+        Each tab loads it as a new scene (undoable); new tabs' view camera is framed on it.
+        """
+        if not isinstance(scene, Scene):
+            raise SceneError(f"scene: expected a Scene, got {type(scene).__name__}")
+        self.initial_scene = scene
+        self._frame_view(scene)
+        with self._lock:
+            views = list(self.views.values())
+        for view in views:
+            view.model.load_scene(scene)
 
     def _connect(self, client: viser.ClientHandle) -> None:
         if self.course is not None:

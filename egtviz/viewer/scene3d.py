@@ -149,6 +149,9 @@ class Scene3D:
         self.surfaces = api.add_point_cloud(
             "/egt/surfaces", _EMPTY_PTS, (150, 150, 150), point_size=0.05, point_shape="circle", visible=False
         )
+        from .annotations3d import Annotations3D
+
+        self.annotations = Annotations3D(api)
 
     # -- static scaffolding ------------------------------------------------------
 
@@ -314,6 +317,7 @@ class Scene3D:
 
     def _draw(self, scene: Any, derived: Any, moving: str | None) -> None:
         opts = scene.options
+        self.annotations.draw(scene.annotations, show_labels=opts.show_labels)  # frames, lines, mirrors (figures)
         self._sync_cameras(scene)
         X = scene.points_array()
         n = len(X)
@@ -387,6 +391,7 @@ class Scene3D:
 
     def remove_all(self) -> None:
         """Remove every node (client teardown)."""
+        self.annotations.clear()
         for name in list(self._cams):
             self._drop_camera(name)
         for g in self._point_gizmos.values():

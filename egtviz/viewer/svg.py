@@ -482,8 +482,10 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     outside = np.flatnonzero(in_view & ~in_image).tolist()
     number_all = numbered_points(len(idx), show_labels)
     marked = {i for i in idx + outside if i == selected_point or i in highlighted}
-    # Points outside the view (zoomed in) keep their disc for the contract, clipped, but get no number.
-    numbered = [i for i in idx + outside if show_labels and in_view[i] and (number_all or i in marked)]
+    # Points outside the view (zoomed in) keep their disc for the contract, clipped, but get no number. Only the
+    # marked ones are numbered above MAX_NUMBERED_POINTS (the sort below fixes the order).
+    numbered = [i for i in (idx + outside if number_all else marked) if show_labels and in_view[i]
+                and (number_all or i in marked)]
     # Placement order: epipole labels, then the selected, the highlighted, the others by index.
     numbered.sort(key=lambda i: (i != selected_point, i not in marked, i))
     size = style.label_px * k
@@ -503,19 +505,21 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     ep_boxes = tuple(tuple(b) for b in boxes[: len(epipoles)])
     label_of = dict(zip(numbered, boxes[len(epipoles):]))
     disc = f'" r="{_f(r_pt)}" fill="'
-    rows = []
     halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}"'
-    for kind, members in (("point", idx), ("point-outside", outside)):
-        for i in members:
+    plain = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
+    rows = []
+    members = iter(plain)
+    for kind, kind_members in (("point", idx), ("point-outside", outside)):
+        for i in kind_members:
+            row = next(members)
+            if i not in label_of and i not in marked:
+                rows.append(row)
+                continue
             x, y = P[i]
             col = colours[i % nc]
             hollow = kind == "point-outside"
             fill = "#fff" if hollow else col
             stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
-            if i not in label_of and i not in marked:
-                rows.append(f'<circle data-kind="{kind}" data-index="{i}" cx="{c % x}" cy="{c % y}{disc}{fill}"'
-                            f"{stroke}/>")
-                continue
             ring = ""
             if i in marked:
                 ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(ring_r)}" fill="none" stroke="{style.ink}" '
@@ -528,6 +532,37 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     body = (f'<g stroke="{style.ink}" stroke-width="{_f(lw * 0.5)}" font-size="{_f(size)}" font-weight="bold" '
             f'fill="{style.ink}" paint-order="stroke">{"".join(rows)}</g>')
     return body, ep_boxes
+
+
+@lru_cache(maxsize=16)
+def _plain_point_rows(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, style: PanelStyle, k: float,
+                      dp: int) -> tuple[str, ...]:
+    """Every drawn point as a bare disc (no ring, no number), in :func:`_marks`'s order: the points in the image,
+    then those in the view outside it. Cached apart from the labels: a panel whose points stay put (the camera
+    that does not move during a drag) keeps these rows while its epipoles, and so its labels, move."""
+    P = np.frombuffer(P_bytes).reshape(-1, 2)
+    in_image = np.frombuffer(in_image_bytes, dtype=bool)
+    in_view = np.frombuffer(in_view_bytes, dtype=bool)
+    colours = style.point_colours
+    nc = len(colours)
+    disc = f'" r="{_f(style.mark_px * k)}" fill="'
+    hollow = f' stroke-width="{_f(style.line_px * k * 1.6)}"/>'
+    rows = []
+    for kind, members in (("point", np.flatnonzero(in_image)), ("point-outside", np.flatnonzero(in_view & ~in_image))):
+        if not len(members):
+            continue
+        if dp >= 1:  # the exact "%.{dp}f" text from the tables (their integer part needs dp >= 1)
+            xy = _fixed_strs(P[members], dp).tolist()
+        else:
+            xy = [[f"{x:.0f}", f"{y:.0f}"] for x, y in P[members].tolist()]
+        for i, (sx, sy) in zip(members.tolist(), xy):
+            col = colours[i % nc]
+            if kind == "point":
+                rows.append(f'<circle data-kind="point" data-index="{i}" cx="{sx}" cy="{sy}{disc}{col}"/>')
+            else:
+                rows.append(f'<circle data-kind="point-outside" data-index="{i}" cx="{sx}" cy="{sy}{disc}#fff" '
+                            f'stroke="{col}"{hollow}')
+    return tuple(rows)
 
 
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:

@@ -1,0 +1,188 @@
+"""EGT's figures, live in the browser: the figure front-end of the EGT facade.
+
+Every EGT drawing (a plot flag of ``f_perspproj``, ``f_epipline``'s line
+style, ``f_3Dcamera``, ``f_3Dframe``, ...) becomes one call
+:func:`draw` ``(kind, **data)`` that adds to the *current figure*. A figure is
+a :class:`~egtviz.scene.Scene` of the scene model, drawn by the ordinary
+viewer: cameras become scene cameras (with their image panels), points scene
+points, frames, rays, lines, normals, surfaces and plane mirrors become
+annotations (:mod:`egtviz.scene.annotations`), and image-plane plots become 2D
+plot panels titled ``Figure <n>`` after EGT's figure numbers.
+
+As MATLAB with ``hold on``: every call adds to the current figure;
+:func:`figure` ``(n)`` selects (or creates) figure ``n``, :func:`clf` clears
+the current one. The browser shows the current figure: each tab switches to
+it when it changes (one scene per figure).
+
+The first drawing starts a local egtviz server (``127.0.0.1``, port 8080 or
+the next free one; viser serves from a daemon thread) and prints its URL once;
+later drawings reuse it. In a Jupyter kernel the page is also shown inline
+(an ``IPython.display.IFrame``) when a figure is first drawn. With the
+environment variable ``EGTVIZ_FIGURE=off`` no server starts: figures are kept
+in memory only (headless scripts, tests), readable with :func:`current_figure`.
+
+A drawing that cannot be drawn (an unknown kind, bad data, a scene over its
+limits) never raises into the student's script: the figure stays as it was,
+the reason is added to the figure's messages (shown by the viewer) and issued
+as a ``RuntimeWarning``.
+
+Kinds handled: those of ``egtviz.egt._convert._draw`` (``image_points``,
+``projection_rays``, ``epipolar_lines``, ``panoramic_points``,
+``sphere_model``, ``circle``, ``normal``, ``line3d``, ``scene_points``,
+``camera``, ``surface``) and the front-end's own, used by EGT's drawing
+functions in ``egtviz.egt``: ``frame`` (``H``, ``style``, ``length``,
+``label``), ``panoramic_camera`` (``H``, ``style``, ``quadric``, ``a``,
+``b``), ``world_points`` (``points``, ``style``), ``numbered_points``
+(``points``, ``numbers``, ``style``) and ``plane`` (``normal``, ``distance``,
+``xlimit``, ``ylimit``, ``zlimit``, ``reflects``, ``virtual``).
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from typing import Any
+
+from ._builder import KINDS, Figure
+from ._server import FigureServer, figures_enabled, in_jupyter, show_inline
+
+__all__ = [
+    "KINDS",
+    "Figure",
+    "clf",
+    "current_figure",
+    "draw",
+    "figure",
+    "figure_server",
+    "figures",
+    "hold_on",
+    "reset",
+    "server_url",
+    "show",
+    "stop_server",
+]
+
+_lock = threading.RLock()
+_figures: dict[int, Figure] = {}
+_current: int | None = None
+_running: FigureServer | None = None
+
+
+def _current_figure() -> Figure:
+    global _current
+    if _current is None:
+        _current = 1
+    fig = _figures.get(_current)
+    if fig is None:
+        fig = _figures[_current] = Figure(_current)
+    return fig
+
+
+def _publish(fig: Figure) -> None:
+    """Show ``fig`` in the browser (starting the server on first use), unless figures are off."""
+    global _running
+    if not figures_enabled():
+        return
+    if _running is None:
+        _running = FigureServer()
+        print(f"egtviz figure: {_running.url}", flush=True)
+    _running.show(fig.scene())
+    if not fig.displayed and in_jupyter():
+        show_inline(_running.url)
+    fig.displayed = True
+
+
+def draw(kind: str, **data: Any) -> bool:
+    """Add one drawing to the current figure and show it; True if it was drawn (see the module docstring)."""
+    with _lock:
+        fig = _current_figure()
+        drawn = fig.draw(kind, data)
+        _publish(fig)
+        return drawn
+
+
+def figure(number: int | None = None) -> int:
+    """Select figure ``number`` (created empty if new; None: a new figure numbered after the highest) and show it.
+
+    Returns:
+        The figure's number.
+    """
+    global _current
+    if number is not None and (isinstance(number, bool) or not isinstance(number, int) or number < 1):
+        raise ValueError(f"number: expected a whole number >= 1 (a figure number), got {number!r}")
+    with _lock:
+        _current = number if number is not None else max(_figures, default=0) + 1
+        fig = _current_figure()
+        _publish(fig)
+        return fig.number
+
+
+def clf() -> None:
+    """Clear the current figure (EGT's ``clf``)."""
+    with _lock:
+        fig = _current_figure()
+        fig.clear()
+        _publish(fig)
+
+
+def hold_on() -> None:
+    """MATLAB's ``hold on``. egtviz always holds: drawings add to the current figure until :func:`clf`."""
+
+
+def current_figure() -> Figure:
+    """The current figure (created empty if there is none): its :meth:`Figure.scene` is what the browser shows."""
+    with _lock:
+        return _current_figure()
+
+
+def figures() -> dict[int, Figure]:
+    """Every figure by number (a copy of the registry)."""
+    with _lock:
+        return dict(_figures)
+
+
+def figure_server() -> FigureServer | None:
+    """The running figure server (its viser ``server`` and egtviz ``app``), or None."""
+    return _running
+
+
+def server_url() -> str | None:
+    """The URL of the figure server, or None when none is running."""
+    return None if _running is None else _running.url
+
+
+def stop_server() -> None:
+    """Stop the figure server, if one runs (the next drawing starts a new one)."""
+    global _running
+    with _lock:
+        if _running is not None:
+            _running.stop()
+            _running = None
+
+
+def reset() -> None:
+    """Forget every figure (the server, if running, keeps serving; the next drawing starts figure 1)."""
+    global _current
+    with _lock:
+        _figures.clear()
+        _current = None
+
+
+def show(wait: bool | None = None) -> None:
+    """Keep a script's figures in the browser until Ctrl-C (the end of an example script).
+
+    Args:
+        wait: block until Ctrl-C; None: block unless ``--no-wait`` is on the command line. Never blocks when
+            no server runs (``EGTVIZ_FIGURE=off``) or inside a notebook.
+    """
+    if wait is None:
+        wait = "--no-wait" not in sys.argv[1:]
+    if not wait or _running is None or in_jupyter():
+        return
+    print("egtviz figure: serving until Ctrl-C", flush=True)
+    try:
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        print("egtviz figure: stopped", flush=True)

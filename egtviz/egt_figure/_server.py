@@ -1,0 +1,69 @@
+"""The local egtviz server that shows the current figure, and the notebook check for inline display."""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = ["FigureServer", "figures_enabled", "in_jupyter", "show_inline"]
+
+#: The first port tried; the server takes the next free one above it when it is busy.
+FIRST_PORT = 8080
+#: ``EGTVIZ_FIGURE=off``: no server; figures are kept in memory only (headless scripts, tests).
+ENV = "EGTVIZ_FIGURE"
+#: Height of the inline frame in a notebook (CSS pixels).
+INLINE_HEIGHT = 640
+
+
+def figures_enabled(environ: Mapping[str, str] = os.environ) -> bool:
+    """False when ``EGTVIZ_FIGURE`` is ``off`` (or ``0``, ``false``, ``no``): figures stay in memory, no server
+    starts (headless scripts; the test suite sets it for every test and the scripts it runs)."""
+    value = environ.get(ENV)
+    return value is None or value.strip().lower() not in ("off", "0", "false", "no")
+
+
+def in_jupyter(modules: Mapping[str, Any] = sys.modules) -> bool:
+    """True inside a Jupyter kernel: IPython is imported and its shell has a kernel (a terminal IPython has none).
+
+    Only modules already imported are looked at, so this never imports IPython.
+    """
+    ipython = modules.get("IPython")
+    get_ipython = getattr(ipython, "get_ipython", None)
+    if get_ipython is None:
+        return False
+    try:
+        shell = get_ipython()
+    except Exception:  # noqa: BLE001 - a broken or partial IPython is not a notebook
+        return False
+    return shell is not None and getattr(shell, "kernel", None) is not None
+
+
+def show_inline(url: str, modules: Mapping[str, Any] = sys.modules) -> Any:
+    """Display the figure's page in the notebook cell (an ``IPython.display.IFrame``); returns the frame."""
+    display = modules["IPython"].display
+    frame = display.IFrame(url, width="100%", height=INLINE_HEIGHT)
+    display.display(frame)
+    return frame
+
+
+class FigureServer:
+    """An egtviz viewer on the loopback interface (``127.0.0.1``, port 8080 or the next free one).
+
+    viser serves from its own daemon thread, so a script goes on while the page is open. Every tab shows
+    the scene last given to :meth:`show`.
+    """
+
+    def __init__(self, port: int | None = None) -> None:
+        from ..viewer.cli import start
+
+        self.server, self.app = start("127.0.0.1", FIRST_PORT if port is None else port)
+        self.url = f"http://127.0.0.1:{self.server.get_port()}"
+
+    def show(self, scene: Any) -> None:
+        """Show ``scene`` in every open tab and in tabs opened later."""
+        self.app.show_scene(scene)
+
+    def stop(self) -> None:
+        self.server.stop()
