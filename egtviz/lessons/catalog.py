@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ..resources import shipped_folder
 from .errors import LessonError
-from .format import MAX_LESSON_FILE_BYTES, Lesson, parse_lesson
+from ..scene.limits import MAX_LESSON_FILE_BYTES
+from .format import Lesson, parse_lesson
 
 __all__ = ["LessonInfo", "lessons_folder", "list_lessons", "load"]
 

@@ -24,6 +24,7 @@ from ..files import FileSafetyError, printable, read_limited
 from ..scene import SCENES, Scene, SceneError, SceneFileError, SceneModel
 from ..scene.io import scene_from_dict
 from ..scene.lab import LabSettings, make_correspondences
+from ..scene.limits import MAX_CHANGES, MAX_LESSON_FILE_BYTES, MAX_PREREQUISITES, MAX_STEPS, MAX_TASKS
 from . import fields
 from .changes import Change, OpenDemo, SetField, parse_change
 from .changes import apply as apply_change
@@ -38,16 +39,8 @@ from .tasks import (
     parse_task,
 )
 
-__all__ = ["MAX_LESSON_FILE_BYTES", "Lesson", "Step", "load_lesson", "parse_lesson"]
+__all__ = ["Lesson", "Step", "load_lesson", "parse_lesson"]
 
-MAX_LESSON_FILE_BYTES = 1_000_000
-"""Largest lesson file read (1 MB; a long lesson is about 20 kB)."""
-MAX_STEPS = 60
-MAX_CHANGES = 100
-"""Changes of one step (and of one task's solution)."""
-MAX_TASKS = 20
-"""Tasks of one step."""
-MAX_PREREQUISITES = 20
 _TOP = ("title", "summary", "prerequisites", "scene", "steps")
 _STEP = ("title", "text", "changes", "tasks")
 _LESSON_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,79}")

@@ -34,7 +34,8 @@ from ..geometry.epipolar import epipolar_planes, lines_of_planes
 from ..geometry.triangulation import triangulate_linear, triangulate_optimal
 from ..scene import Scene
 from ..scene.derived import Derived, compute_derived
-from ..scene.lab import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, METHODS, LabResult, LabSettings, run_lab
+from ..scene.lab import METHODS, LabResult, LabSettings, run_lab
+from ..scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT
 from ..scene.lens import LensToggles, LensView, lens_view
 from ..scene.limits import COORDINATE, MAX_POINTS, PRINCIPAL_POINT, Range
 from . import fields

@@ -33,7 +33,22 @@ from typing import Any
 
 import numpy as np
 
-from .limits import COORDINATE, IMAGE_SIZE, MAX_NAME_LENGTH, SURFACE_SIZE, Range
+from .limits import (
+    COORDINATE,
+    FRAME_AXIS_LENGTH,
+    IMAGE_SIZE,
+    MAX_ANNOTATION_ITEMS,
+    MAX_MESH_VERTICES,
+    MAX_NAME_LENGTH,
+    MAX_PLOT_ITEMS,
+    MAX_PLOTS,
+    MAX_POLYLINE_VERTICES,
+    MAX_TEXT_LENGTH,
+    MESH_OPACITY,
+    PLOT_COORDINATE,
+    SURFACE_SIZE,
+    Range,
+)
 from .specs import PinholeSpec, SceneError, _pair, _ranged, _short, _triple, has_control_characters
 
 __all__ = [
@@ -59,25 +74,6 @@ __all__ = [
     "resolve_reflections",
     "virtual_camera_spec",
 ]
-
-#: Items of each kind (frames, polylines, labels, point sets, meshes, mirrors) in one scene.
-MAX_ANNOTATION_ITEMS = 2000
-#: Vertices of one polyline or points of one point set.
-MAX_POLYLINE_VERTICES = 2000
-#: Vertices of all meshes of a scene together (a 20 x 20 surface has 400).
-MAX_MESH_VERTICES = 20_000
-#: 2D plot panels in one scene (each is a panel beside the cameras' panels).
-MAX_PLOTS = 8
-#: Points, lines, epipoles or circles of one plot.
-MAX_PLOT_ITEMS = 2000
-#: Characters of a label, a plot title or a message.
-MAX_TEXT_LENGTH = 200
-#: Pixel coordinates of plots (the same bound as a principal point, with room for far epipoles).
-PLOT_COORDINATE = Range(-1e9, 1e9, "px")
-#: A mesh's opacity.
-OPACITY = Range(0.0, 1.0, "")
-#: A frame's axis length.
-LENGTH = Range(1e-6, 1e4, "m")
 
 _COLOUR = re.compile(r"#[0-9a-fA-F]{6}")
 
@@ -150,7 +146,7 @@ class Frame:
         if np.abs(A @ A.T - np.eye(3)).max() > 1e-6:
             raise SceneError("frame axes: expected three orthonormal directions")
         _set(self, "axes", axes)
-        _set(self, "length", _ranged(self.length, LENGTH, "frame length"))
+        _set(self, "length", _ranged(self.length, FRAME_AXIS_LENGTH, "frame length"))
         _set(self, "colour", _colour(self.colour, "frame colour"))
         _set(self, "label", _text(self.label, "frame label"))
 
@@ -246,7 +242,7 @@ class Mesh:
             checked.append(f)
         _set(self, "faces", tuple(checked))
         _set(self, "colour", _colour(self.colour, "mesh colour"))
-        _set(self, "opacity", _ranged(self.opacity, OPACITY, "mesh opacity"))
+        _set(self, "opacity", _ranged(self.opacity, MESH_OPACITY, "mesh opacity"))
 
 
 @dataclass(frozen=True)

@@ -43,15 +43,11 @@ from ..geometry.estimation import (
 )
 from ..geometry.robust import fundamental_mestimator
 from .derived import Derived, compute_derived
-from .limits import Range
+from .limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_SEED, LAB_THRESHOLD_PX, Range
 from .scene import Scene
 from .specs import SceneError
 
 __all__ = [
-    "LAB_NOISE_PX",
-    "LAB_OUTLIER_PERCENT",
-    "LAB_SEED",
-    "LAB_THRESHOLD_PX",
     "METHODS",
     "Correspondences",
     "FitResult",
@@ -61,14 +57,6 @@ __all__ = [
     "make_correspondences",
     "run_lab",
 ]
-
-LAB_NOISE_PX = Range(0.0, 20.0, "px")
-"""Standard deviation of the pixel noise."""
-LAB_OUTLIER_PERCENT = Range(0.0, 60.0, "%")
-"""Share of the correspondences replaced by gross mismatches."""
-LAB_THRESHOLD_PX = Range(0.05, 100.0, "px")
-"""RANSAC's inlier threshold on the Sampson distance."""
-LAB_SEED = Range(0, 2**31 - 1, "", integer=True)
 
 Method = Literal["linear", "normalized", "sampson", "ransac", "lmeds", "mestimator"]
 METHODS: tuple[Method, ...] = ("linear", "normalized", "sampson", "ransac", "lmeds", "mestimator")

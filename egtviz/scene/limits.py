@@ -155,3 +155,48 @@ UNIFIED_FOCAL_PIXELS = parameter_range(UnifiedCamera.kind, "focal_pixels")
 
 SURFACE_SIZE = Range(1e-3, 1e3, "m")
 """Plane side, sphere radius, mesh scale factor."""
+
+# -- figures: annotations and plots (egtviz.scene.annotations) ---------------------------------------
+
+MAX_ANNOTATION_ITEMS = 2000
+"""Items of each kind (frames, polylines, labels, point sets, meshes, mirrors) in one scene."""
+MAX_POLYLINE_VERTICES = 2000
+"""Vertices of one polyline or points of one point set."""
+MAX_MESH_VERTICES = 20_000
+"""Vertices of all meshes of a scene together (a 20 x 20 surface has 400)."""
+MAX_PLOTS = 8
+"""2D plot panels in one scene (each is a panel beside the cameras' panels)."""
+MAX_PLOT_ITEMS = 2000
+"""Points, lines, epipoles or circles of one plot."""
+MAX_TEXT_LENGTH = 200
+"""Characters of a label, a plot title or a message."""
+PLOT_COORDINATE = Range(-1e9, 1e9, "px")
+"""Pixel coordinates of plots (the same bound as a principal point, with room for far epipoles)."""
+MESH_OPACITY = Range(0.0, 1.0, "")
+"""A mesh's opacity."""
+FRAME_AXIS_LENGTH = Range(1e-6, 1e4, "m")
+"""A frame's axis length."""
+
+# -- the estimation lab (egtviz.scene.lab) ------------------------------------------------------------
+
+LAB_NOISE_PX = Range(0.0, 20.0, "px")
+"""Standard deviation of the pixel noise."""
+LAB_OUTLIER_PERCENT = Range(0.0, 60.0, "%")
+"""Share of the correspondences replaced by gross mismatches."""
+LAB_THRESHOLD_PX = Range(0.05, 100.0, "px")
+"""RANSAC's inlier threshold on the Sampson distance."""
+LAB_SEED = Range(0, 2**31 - 1, "", integer=True)
+"""Seed of the noise and the outliers."""
+
+# -- lesson files (egtviz.lessons) --------------------------------------------------------------------
+
+MAX_LESSON_FILE_BYTES = 1_000_000
+"""Largest lesson file read (1 MB; a long lesson is about 20 kB)."""
+MAX_STEPS = 60
+"""Steps of one lesson."""
+MAX_CHANGES = 100
+"""Changes of one step (and of one task's solution)."""
+MAX_TASKS = 20
+"""Tasks of one step."""
+MAX_PREREQUISITES = 20
+"""Prerequisites of one lesson."""

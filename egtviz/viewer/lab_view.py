@@ -29,10 +29,8 @@ import numpy as np
 from ..geometry.epipolar import epipolar_lines, epipolar_lines_in_first
 from ..lessons.changes import SetLab
 from ..scene import Derived, Scene, SceneError
+from ..scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_THRESHOLD_PX
 from ..scene.lab import (
-    LAB_NOISE_PX,
-    LAB_OUTLIER_PERCENT,
-    LAB_THRESHOLD_PX,
     METHOD_TITLES,
     METHODS,
     ROBUST_METHODS,
