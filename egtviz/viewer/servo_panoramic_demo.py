@@ -86,9 +86,12 @@ class PanoramicServoDemo(ServoPlayer):
             return node
 
         n["target"] = robot("/servo/target", (0, 158, 115), 0.35)
-        api.add_label("/servo/target/label", "target", position=(0.0, 0.0, 0.75), font_screen_scale=0.9)
+        # At the goal the robot stands on the target: their labels grow away from each other, never overlap.
+        api.add_label("/servo/target/label", "target", position=(0.0, 0.0, 0.75), font_screen_scale=0.9,
+                      anchor="bottom-right")
         n["body"] = robot("/servo/robot", (86, 110, 140), None)
-        api.add_label("/servo/robot/label", "robot", position=(0.0, 0.0, 0.75), font_screen_scale=0.9)
+        api.add_label("/servo/robot/label", "robot", position=(0.0, 0.0, 0.75), font_screen_scale=0.9,
+                      anchor="bottom-left")
         self._add_common_nodes(point_size=0.09, label_lift=0.12, label_scale=0.8, path_width=0.025, ray_width=0.008)
         self._view(np.array([0.0, 0.0, 0.3]), np.array([2.0, -8.0, 6.0]))
 

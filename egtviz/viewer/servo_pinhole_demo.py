@@ -119,10 +119,13 @@ class PinholeServoDemo(ServoPlayer):
         n["target"] = api.add_camera_frustum("/servo/target", fov=fov, aspect=aspect, scale=0.07, color=(0, 158, 115),
                                              thickness=0.004, wxyz=self.target_pose.quat_wxyz,
                                              position=self.target_pose.t)
-        api.add_label("/servo/target/label", "target", position=(0.0, -0.06, 0.0), font_screen_scale=0.9)
+        # At the goal the camera sits on the target: their labels grow away from each other, never overlap.
+        api.add_label("/servo/target/label", "target", position=(0.0, -0.06, 0.0), font_screen_scale=0.9,
+                      anchor="bottom-right")
         n["body"] = api.add_camera_frustum("/servo/camera", fov=fov, aspect=aspect, scale=0.07, color=(20, 20, 20),
                                            thickness=0.005)
-        api.add_label("/servo/camera/label", "camera", position=(0.0, -0.06, 0.0), font_screen_scale=0.9)
+        api.add_label("/servo/camera/label", "camera", position=(0.0, -0.06, 0.0), font_screen_scale=0.9,
+                      anchor="bottom-left")
         self._add_common_nodes(point_size=0.022, label_lift=0.02, label_scale=0.7, path_width=0.004,
                                ray_width=0.0025)
         self._pose_arm(puma_chain().link_poses(TARGET_Q)[0])

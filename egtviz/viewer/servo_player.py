@@ -59,6 +59,8 @@ PANEL_WIDTH = 470
 FPS = 15.0
 #: Most samples per uPlot series sent per frame (the series are thinned, the newest sample kept).
 PLOT_SAMPLES = 300
+#: Top of the errors plot's axis (%): above 100 by enough that the "100" tick label is not cut by the frame.
+ERRORS_TOP_PERCENT = 115.0
 #: Most simulation steps a run may take (the demos converge in a few hundred).
 MAX_STEPS = 10_000
 #: What the run fields of every demo accept; a refused value gets a notification and the field shows the last
@@ -406,7 +408,7 @@ class ServoPlayer(ABC):
                     uplot.Axis(scale="w", side=1, label="ω (rad/s)", grid={"show": False}, space=Y_TICK_SPACE))
         else:
             scales = {"x": uplot.Scale(time=False, auto=False, range=(0.0, t_end)),
-                      "e": uplot.Scale(auto=False, range=(0.0, 105.0))}
+                      "e": uplot.Scale(auto=False, range=(0.0, ERRORS_TOP_PERCENT))}
             axes = (uplot.Axis(label="t (s)"), uplot.Axis(scale="e", label="%"))
         data = tuple([np.zeros(1)] + [np.full(1, np.nan) for _ in series])
         return self.client.gui.add_uplot(data, tuple(ser), title=title, scales=scales, axes=axes, height=140,
