@@ -376,6 +376,7 @@ class PinholeSpec(_CameraSpecBase):
     kind: ClassVar[str] = "pinhole"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "cam"
+    """A new camera's name: this and a number."""
     ANGLE_CONVENTION: ClassVar[str] = (
         "EGT convention (f_Rt2H): yaw, pitch, roll turn the camera about its own axes "
         "(x right, y down, z = optical axis): R = roty(yaw) rotx(pitch) rotz(roll), then H = [rotx(-90) R, t]. "
@@ -386,7 +387,6 @@ class PinholeSpec(_CameraSpecBase):
         "skew": ("skew", None), "u0": ("principal_point", 0), "v0": ("principal_point", 1),
         "width": ("width", None), "height": ("height", None),
     }
-    """A new camera's name: this and a number."""
 
     @staticmethod
     def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
@@ -461,6 +461,7 @@ class PanoramicSpec(_CameraSpecBase):
     kind: ClassVar[str] = "panoramic"
     """The entry's ``kind`` in a scene file (the mirror's shape is ``mirror``)."""
     NAME_PREFIX: ClassVar[str] = "pano"
+    """A new camera's name: this and a number."""
     ANGLE_CONVENTION: ClassVar[str] = (
         "Mirror frame: z = mirror axis. R = rotz(yaw) roty(pitch) rotx(roll); all zero: an upright mirror."
     )
@@ -469,7 +470,6 @@ class PanoramicSpec(_CameraSpecBase):
         "u0": ("principal_point", 0), "v0": ("principal_point", 1),
         "width": ("width", None), "height": ("height", None),
     }
-    """A new camera's name: this and a number."""
 
     @staticmethod
     def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
@@ -585,6 +585,7 @@ class UnifiedSpec(_CameraSpecBase):
     kind: ClassVar[str] = "unified"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "uni"
+    """A new camera's name: this and a number."""
     ANGLE_CONVENTION: ClassVar[str] = (
         "As a pin-hole (EGT's f_Rt2H): yaw, pitch, roll about the camera's own axes (z = optical axis, the sphere's "
         "axis); all zero: looking along world +y. The projection centre is xi behind the sphere's centre."
@@ -593,7 +594,6 @@ class UnifiedSpec(_CameraSpecBase):
         "xi": ("xi", None), "focal_pixels": ("focal_pixels", None), "u0": ("principal_point", 0), "v0": ("principal_point", 1),
         "width": ("width", None), "height": ("height", None),
     }
-    """A new camera's name: this and a number."""
 
     @staticmethod
     def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
