@@ -102,7 +102,9 @@ def shared_zero_ranges(a: tuple[float, float], b: tuple[float, float], pad: floa
     f = min(max(f, ZERO_FRACTION_MARGIN), 1.0 - ZERO_FRACTION_MARGIN)
     out = []
     for p, q in pq:
-        span = max(p / f if p > 0 else 0.0, q / (1 - f) if q > 0 else 0.0) or 1.0
+        span = max(p / f if p > 0 else 0.0, q / (1 - f) if q > 0 else 0.0)
+        if not span > 1e-300:  # no data away from zero (or a subnormal span whose fractions would underflow)
+            span = 1.0
         span *= 1.0 + pad
         out.append((-f * span, (1 - f) * span))
     return out[0], out[1]
