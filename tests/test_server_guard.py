@@ -2,7 +2,7 @@
 
 Each test starts a viser server on a free loopback port with the guards installed, speaks viser's
 wire protocol itself (msgpack messages up, zstd-framed msgpack down, as ``viser/infra/_infra.py``
-does) and stops the server. The app served is a small one made here (a slider, a gizmo and an
+does; the client is :mod:`egtviz.bench.ws_client`) and stops the server. The app served is a small one made here (a slider, a gizmo and an
 upload button per tab, callbacks that cost a few milliseconds) so the figures measure the guards,
 not the workbench's drawing code.
 """
@@ -24,16 +24,12 @@ import viser
 import websockets.asyncio.client
 import websockets.asyncio.server
 import websockets.exceptions
-import zstandard
 
+from egtviz.bench import ws_client
+from egtviz.bench.ws_client import CAMERA
 from egtviz.viewer import guard
 from egtviz.viewer.guard import FairExecutor, GuardLimits, install_guards, origin_allowed
 
-CAMERA = {
-    "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [0.0, -5.0, 2.0], "fov": 1.0,
-    "near": 0.01, "far": 100.0, "image_height": 600, "image_width": 800, "look_at": [0.0, 0.0, 0.0],
-    "up_direction": [0.0, 0.0, 1.0],
-}
 CALLBACK_SECONDS = 0.003
 
 
@@ -94,55 +90,13 @@ def guarded_server(limits: GuardLimits | None = None):
         server.stop()
 
 
-def _decode_frame(frame: bytes) -> list[dict]:
-    """Messages of one server-to-client frame: [8 B size][8 B compressed size][zstd msgpack]..."""
-    size = int.from_bytes(frame[:8], "little")
-    compressed = int.from_bytes(frame[8:16], "little")
-    inner = zstandard.ZstdDecompressor().decompress(frame[16:16 + compressed], max_output_size=size)
-    return msgspec.msgpack.decode(inner)["messages"]
-
-
-class RawClient:
-    """A viser client in a few lines: what a hostile program can send without a browser."""
-
-    def __init__(self, ws: websockets.asyncio.client.ClientConnection) -> None:
-        self.ws = ws
-        self.messages: list[dict] = []
-
-    @classmethod
-    @contextlib.asynccontextmanager
-    async def connect(cls, port: int, *, origin: str | None = None):
-        async with websockets.asyncio.client.connect(
-            f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], origin=origin,
-            max_size=None, open_timeout=5,
-        ) as ws:
-            yield cls(ws)
-
-    async def send(self, message: dict) -> None:
-        await self.ws.send(msgspec.msgpack.encode(message))
-
-    async def read_until_quiet(self, quiet: float = 0.3, limit: float = 10.0) -> None:
-        deadline = time.perf_counter() + limit
-        while time.perf_counter() < deadline:
-            try:
-                frame = await asyncio.wait_for(self.ws.recv(), quiet)
-            except asyncio.TimeoutError:
-                return
-            self.messages.extend(_decode_frame(frame))
+class RawClient(ws_client.RawClient):
+    """The shared raw client, joining this module's small app."""
 
     async def join(self, app: TabApp) -> int:
         """Send the first camera (viser then runs the connect callbacks) and wait for the tab's widgets."""
-        await self.send(CAMERA)
-        deadline = time.perf_counter() + 10.0
-        while time.perf_counter() < deadline:
-            await self.read_until_quiet(0.2)
-            if self.find("GuiSliderMessage") and self.find("TransformControlsMessage") and \
-                    self.find("GuiUploadButtonMessage"):
-                return int(self.find("TransformControlsMessage")["owner"])
-        raise AssertionError(f"the tab never got its widgets: {sorted({m['type'] for m in self.messages})}")
-
-    def find(self, kind: str) -> dict | None:
-        return next((m for m in self.messages if m["type"] == kind), None)
+        await self.wait_for(("GuiSliderMessage", "TransformControlsMessage", "GuiUploadButtonMessage"))
+        return int(self.find("TransformControlsMessage")["owner"])
 
 
 def _run(coro) -> None:

@@ -1,0 +1,1 @@
+"""``egtviz bench``: speed measurements (``core``, ``viewer``, ``servo``, ``classroom``); see ``docs/benchmarks.md``."""

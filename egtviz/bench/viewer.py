@@ -8,8 +8,14 @@ Method (also in ``docs/viewer.md``):
   by 1 cm exactly as viser does before it runs our callback (the handle's
   pose and timestamp are set, then ``on_update`` fires); the time is measured
   from the callback's entry to the exit of the ``client.atomic()`` block that
-  carries the 3D scene, both panels, the read-out and the fields. 200 events,
+  carries the 3D scene, the panels, the read-out and the fields. 200 events,
   5 ms apart, each to a new place (no cached result is reused); p50 and p99.
+  Scenes (:data:`SCENES`): the default pin-hole pair, the panoramic pair (the
+  targets), four cameras (a third pin-hole and a unified camera beside the
+  drawn pair) and a pin-hole / unified pair; 8 and 200 points.
+* **Server CPU per drag update.** :mod:`egtviz.bench.classroom` with :data:`CPU_TABS` raw websocket tabs
+  dragging camera 1 of the default pin-hole and panoramic scenes at 20 Hz: the server process's CPU time
+  over the drag divided by the updates it applied, with its parts.
 * **Browser.** The same with headless Chromium as the tab. Each update gives
   the SVGs a new ``data-rev``; a ``MutationObserver`` in the page records
   ``performance.timeOrigin + performance.now()`` when an SVG with a new
@@ -35,6 +41,9 @@ from typing import Any
 import numpy as np
 
 EVENTS = 200
+#: Tabs dragging at once, and seconds they drag, for the server CPU per drag update.
+CPU_TABS = 5
+CPU_SECONDS = 5.0
 BROWSER_EVENTS = 60
 #: (hide the 3D view, seconds between updates, label): a drag with the 3D view drawn and hidden, and
 #: updates far enough apart that the page has stopped drawing (a field edit).
@@ -59,12 +68,39 @@ _OBSERVER_JS = """() => {
 }"""
 
 
+def _four_cameras() -> Any:
+    """The default pair, a third pin-hole and a unified camera; cam1 & cam2 drawn."""
+    from ..scene import SceneModel, default_scene
+
+    model = SceneModel(default_scene())
+    model.add_camera("pinhole")
+    model.add_camera("unified")
+    return model.scene
+
+
+def _unified_pair() -> Any:
+    """cam1 of the default scene and a unified camera, drawn as the pair."""
+    from ..scene import SceneModel, default_scene
+
+    model = SceneModel(default_scene())
+    uni = model.add_camera("unified")
+    model.set_pair("cam1", uni)
+    model.remove_camera("cam2")
+    return model.scene
+
+
+#: The viewer bench's scenes: label -> factory. The first two are the servers' targets.
+SCENES = (("pin-hole", "default_scene"), ("panoramic", "panoramic_scene"), ("4 cameras", _four_cameras),
+          ("unified", _unified_pair))
+
+
 def _scenes(n_points: int) -> dict[str, Any]:
-    from ..scene import SceneModel, default_scene, panoramic_scene
+    from .. import scene as scenes
+    from ..scene import SceneModel
 
     out = {}
-    for label, factory in (("pin-hole", default_scene), ("panoramic", panoramic_scene)):
-        model = SceneModel(factory())
+    for label, factory in SCENES:
+        model = SceneModel(getattr(scenes, factory)() if isinstance(factory, str) else factory())
         X = model.scene.points_array()
         model.randomize_points(n_points, seed=0, center=tuple(X.mean(axis=0)), extent=2.0)
         out[label] = model.scene
@@ -101,7 +137,7 @@ def server_latency(scene: Any, n: int = EVENTS, *, spacing: float = 0.005) -> di
     """
     from ..viewer.headless import start_headless
 
-    server, app, fakes, views = start_headless(scene)
+    server, _app, fakes, views = start_headless(scene)
     try:
         view = views[0]
         breakdown = [b for _, _, b in _drive(view, scene.cameras[0].name, n, spacing)]
@@ -156,21 +192,50 @@ def browser_latency(scene: Any, n: int = BROWSER_EVENTS, *, width: int = 1600, h
         server.stop()
 
 
-def run_viewer_bench(events: int = EVENTS, browser: bool = True) -> list[dict]:
-    """Rows ``{case, ours_ms, opencv_ms: None, ratio: None, note}`` for the pin-hole and panoramic pairs."""
+def server_cpu_rows(*, tabs: int = CPU_TABS, seconds: float = CPU_SECONDS) -> list[dict]:
+    """Server CPU per drag update of the default pin-hole and panoramic pairs (:mod:`egtviz.bench.classroom`)."""
+    from .classroom import RATE_HZ, run_classroom
+
+    rows = []
+    for label, scene in (("pin-hole", "default"), ("panoramic", "panoramic")):
+        case = f"viewer server CPU per drag update, {label} pair ({scene} scene), {tabs} tabs at {RATE_HZ:g} Hz"
+        try:
+            run, _ = run_classroom(tabs, seconds=seconds, scene=scene)
+        except Exception as exc:  # noqa: BLE001 - report, do not hide the other rows
+            rows.append({"case": case, "ours_ms": float("nan"), "opencv_ms": None, "ratio": None,
+                         "note": f"failed: {type(exc).__name__}: {exc}"})
+            continue
+        parts = ", ".join(f"{k} {v:.2f}" for k, v in run.parts_ms.items())
+        rows.append({"case": case, "ours_ms": run.cpu_ms_per_update, "opencv_ms": None, "ratio": None,
+                     "note": f"{run.applied} updates applied of {run.sent} sent; CPU ms per update: {parts}"})
+    return rows
+
+
+def _case(label: str) -> str:
+    return label if label == "4 cameras" else f"{label} pair"
+
+
+def run_viewer_bench(events: int = EVENTS, browser: bool = True, *, cpu_seconds: float = CPU_SECONDS) -> list[dict]:
+    """Rows ``{case, ours_ms, opencv_ms: None, ratio: None, note}`` for the scenes of :data:`SCENES`.
+
+    The server's latency rows, then (``cpu_seconds > 0``) its CPU per drag update with :data:`CPU_TABS` tabs
+    dragging for ``cpu_seconds``, then (``browser``) the browser's rows.
+    """
     rows: list[dict] = []
+    if cpu_seconds > 0:
+        rows += server_cpu_rows(seconds=cpu_seconds)
     for n_points in (8, 200):
         for label, scene in _scenes(n_points).items():
             try:
                 s = server_latency(scene, events)
             except Exception as exc:  # noqa: BLE001 - report, do not hide the other rows
-                rows.append({"case": f"viewer server, {label} pair, {n_points} points", "ours_ms": float("nan"),
+                rows.append({"case": f"viewer server, {_case(label)}, {n_points} points", "ours_ms": float("nan"),
                              "opencv_ms": None, "ratio": None, "note": f"failed: {type(exc).__name__}: {exc}"})
                 continue
             note = (f"median parts (ms): model {s['model']:.2f}, derived {s['derived']:.2f}, SVG {s['svg']:.2f}, "
                     f"fields {s['fields']:.2f}, 3D {s['scene3d']:.2f}, flush {s['flush']:.2f}")
             for q in ("p50", "p99"):
-                rows.append({"case": f"viewer server, {label} pair, {n_points} points, gizmo event ({q})",
+                rows.append({"case": f"viewer server, {_case(label)}, {n_points} points, gizmo event ({q})",
                              "ours_ms": s[q], "opencv_ms": None, "ratio": None, "note": note})
             if browser:
                 for hide_3d, spacing, what in BROWSER_MODES:
@@ -181,7 +246,7 @@ def run_viewer_bench(events: int = EVENTS, browser: bool = True) -> list[dict]:
                     except Exception as exc:  # noqa: BLE001
                         b, note = float("nan"), f"failed: {type(exc).__name__}: {exc}"
                     if b is not None:
-                        rows.append({"case": f"viewer browser, {label} pair, {n_points} points, {what} (median)",
+                        rows.append({"case": f"viewer browser, {_case(label)}, {n_points} points, {what} (median)",
                                      "ours_ms": b, "opencv_ms": None, "ratio": None, "note": note})
     return rows
 

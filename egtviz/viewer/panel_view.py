@@ -220,19 +220,30 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
     n = len(A)
     if n == 0:
         return np.empty((0, 4))
-    # Only obstacles within reach of a label's farthest candidate can cost it anything: one numpy pass finds
-    # them, then each label walks its candidates in plain Python and stops at the first free one.
-    reach = (R + gap) * _RINGS[-1] + S.max(axis=1)
+    # A candidate box lies within (r + gap) * the last ring plus the label's width (height) of its anchor along x
+    # (y): only obstacles and earlier labels reaching into that rectangle can cost it anything. One numpy pass
+    # finds the obstacles; then each label walks its candidates in plain Python, stops adding up a candidate's
+    # cost once it cannot beat the best so far (costs only grow), and stops at the first free box.
+    far = (R + gap) * _RINGS[-1]
+    reach_x, reach_y = far + S[:, 0], far + S[:, 1]
     if len(O):
-        near = ((O[None, :, 0] <= A[:, None, 0] + reach[:, None]) & (O[None, :, 2] >= A[:, None, 0] - reach[:, None])
-                & (O[None, :, 1] <= A[:, None, 1] + reach[:, None]) & (O[None, :, 3] >= A[:, None, 1] - reach[:, None]))
+        ax_, ay_ = A[:, None, 0], A[:, None, 1]
+        near = ((O[None, :, 0] <= ax_ + reach_x[:, None]) & (O[None, :, 2] >= ax_ - reach_x[:, None])
+                & (O[None, :, 1] <= ay_ + reach_y[:, None]) & (O[None, :, 3] >= ay_ - reach_y[:, None]))
         near_boxes = [O[m].tolist() for m in near]
     else:
         near_boxes = [[] for _ in range(n)]
     bx0, by0, bx1, by1 = (float(b) for b in bounds)
     placed: list[tuple[float, float, float, float]] = []
-    for (ax, ay), r, (w, h), others in zip(A.tolist(), R.tolist(), S.tolist(), near_boxes):
+    for (ax, ay), r, (w, h), others, rx, ry in zip(A.tolist(), R.tolist(), S.tolist(), near_boxes,
+                                                  reach_x.tolist(), reach_y.tolist()):
+        lo_x, hi_x, lo_y, hi_y = ax - rx, ax + rx, ay - ry, ay + ry
+        # The obstacles, then the earlier labels, in the order given: the same sums as over all of them.
+        boxes = others + [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
         best, best_cost = None, math.inf
+        area = w * h
+        tiny = 1e-6 * area  # rounding, not an overlap
+        # Conditional expressions, not min()/max(): here the builtin calls cost more than the comparisons.
         for ring in _RINGS:
             d = (r + gap) * ring
             for dx, dy in _DIRECTIONS:
@@ -240,21 +251,18 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
                 x0 = ax + d if dx > 0 else ax - d - w if dx < 0 else ax - w / 2
                 y0 = ay + d if dy > 0 else ay - d - h if dy < 0 else ay - h / 2
                 x1, y1 = x0 + w, y0 + h
-                area = w * h
-                c = area - max(min(x1, bx1) - max(x0, bx0), 0.0) * max(min(y1, by1) - max(y0, by0), 0.0)
-                for o in others:
-                    ow = min(x1, o[2]) - max(x0, o[0])
+                iw = (x1 if x1 < bx1 else bx1) - (x0 if x0 > bx0 else bx0)
+                ih = (y1 if y1 < by1 else by1) - (y0 if y0 > by0 else by0)
+                c = area - (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)
+                for o in boxes:
+                    ow = (x1 if x1 < o[2] else o[2]) - (x0 if x0 > o[0] else o[0])
                     if ow > 0:
-                        oh = min(y1, o[3]) - max(y0, o[1])
+                        oh = (y1 if y1 < o[3] else o[3]) - (y0 if y0 > o[1] else o[1])
                         if oh > 0:
                             c += ow * oh
-                for o in placed:
-                    ow = min(x1, o[2]) - max(x0, o[0])
-                    if ow > 0:
-                        oh = min(y1, o[3]) - max(y0, o[1])
-                        if oh > 0:
-                            c += ow * oh
-                if c <= 1e-6 * area:  # rounding, not an overlap: take the first free box
+                            if c >= best_cost and c > tiny:
+                                break  # this box cannot win
+                if c <= tiny:  # take the first free box
                     c = 0.0
                 if c < best_cost:
                     best, best_cost = (x0, y0, x1, y1), c
