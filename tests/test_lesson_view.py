@@ -17,6 +17,7 @@ from scipy.optimize import least_squares
 from egtviz.lessons import ProgressStore, load
 from egtviz.scene import SceneError
 from egtviz.viewer.app import EgtvizApp
+from egtviz.viewer.fields import format_number
 from egtviz.viewer.headless import FakeTab
 from egtviz.viewer.lesson_view import (
     CHOOSE,
@@ -254,7 +255,7 @@ def test_the_workbench_is_one_click_from_the_start_page_and_back(store):
         assert back is view
 
 
-def test_a_set_range_limit_is_enforced_when_a_task_is_checked(store):
+def test_a_set_range_limit_refuses_the_field_and_is_enforced_when_a_task_is_checked(store):
     with course(store, lesson="03-intrinsics") as (app, open_tab):
         open_tab()
         (panel,) = app.course.wait_for_tab(LessonPanel)
@@ -264,7 +265,12 @@ def test_a_set_range_limit_is_enforced_when_a_task_is_checked(store):
         assert ("cam1", "focal_length") in panel.run.ranges
         assert "focal length 0.002 to 0.05" in panel.ranges.content
         assert range_refusal(panel.run) is None
+        before = panel.view.model.scene.camera("cam1").focal_length
         panel.view._cam_fields["cam1"]["focal"].value = "60"  # mm: above the step's 50 mm
+        assert panel.view.model.scene.camera("cam1").focal_length == before  # refused, not committed
+        assert panel.view._cam_fields["cam1"]["focal"].value == format_number(before * 1e3)  # the field reverts
+        # A change from elsewhere (a script, another control) that leaves the range blocks the step's tasks.
+        panel.view.model.update_camera("cam1", focal_length=0.06)
         refusal = range_refusal(panel.run)
         assert refusal is not None and "between 0.002 and 0.05" in refusal
         task = panel.rows[0]

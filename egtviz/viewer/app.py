@@ -318,6 +318,9 @@ class ClientView:
         #: or estimation lab): ``panel_filter(scene, derived) -> (derived for the panels, point indices to ring)``.
         #: None: the model's. The 3D view and the read-out always show the model's.
         self.panel_filter: Callable[[Scene, Any], tuple[Any, frozenset[int]]] | None = None
+        #: A lesson's narrower ranges for camera fields: ``field_guard(camera, spec_fields) -> refusal or None``
+        #: is asked before a field's new value is committed; a refusal reverts the field with that message.
+        self.field_guard: Callable[[str, dict[str, Any]], str | None] | None = None
 
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event,
@@ -546,6 +549,9 @@ class ClientView:
         name = spec.name
         if all(getattr(spec, k) == v for k, v in fields.items()):
             return
+        refusal = self.field_guard(name, fields) if self.field_guard is not None else None
+        if refusal is not None:
+            raise FieldError(refusal)
         try:
             self.model.update_camera(name, merge_key=merge_key, **fields)
         except OutOfRangeError as exc:  # a limit across fields (e.g. focal length in pixels): say it in UI terms

@@ -16,9 +16,9 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
 * when the step has a servo run (an ``open_demo`` change), its settings and a button that opens that demo
   with them in this tab (the demo's *Back* button returns to the lesson, at the same step).
 
-A ``set_range`` change of a step limits a camera field: the camera fields have no per-field range to set, so
-the limit is enforced when a task is checked (a value outside it is refused with the range) and listed in the
-panel. Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
+A ``set_range`` change of a step limits a camera field: the tab's ``field_guard`` refuses a typed value
+outside it (the field reverts, with the range in the message), the panel lists it, and a task is not checked
+while the scene breaks it (a gizmo drag can still move a camera out of a position range). Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
 notification in this tab.
 """
 
@@ -35,7 +35,9 @@ from ..lessons.runner import ResolvedTask
 from ..scene import SceneError
 from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, format_number, on_event
 
-__all__ = ["CHOOSE", "LessonPanel", "StepNav", "TaskRow", "lesson_instruments", "range_refusal"]
+__all__ = [
+    "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "range_refusal",
+]
 
 #: The choice field's value before the learner picks an option.
 CHOOSE = "(choose an answer)"
@@ -65,16 +67,26 @@ def lesson_instruments(lesson: Lesson) -> tuple[bool, bool]:
 def range_refusal(run: LessonRun) -> str | None:
     """Why the scene breaks the step's ``set_range`` limits (a camera field outside its range), or None."""
     scene = run.model.scene
-    for (camera, field), limit in sorted(run.ranges.items()):
-        if camera not in scene.camera_names:
+    for camera in scene.camera_names:
+        spec = scene.camera(camera)
+        refusal = field_range_refusal(run, camera, {f: getattr(spec, f, None) for c, f in run.ranges if c == camera})
+        if refusal is not None:
+            return refusal + "; bring it back into that range and check again."
+    return None
+
+
+def field_range_refusal(run: LessonRun, camera: str, fields: dict[str, Any]) -> str | None:
+    """Why new values of ``camera``'s spec ``fields`` break the step's ``set_range`` limits, or None (the tab's
+    ``field_guard``: the field is refused and reverts)."""
+    for field, value in sorted(fields.items()):
+        limit = run.ranges.get((camera, field))
+        if limit is None:
             continue
-        value = getattr(scene.camera(camera), field, None)
         values = value if isinstance(value, tuple) else (value,)
         if any(not isinstance(v, (int, float)) or not limit.low <= float(v) <= limit.high for v in values):
             shown = ", ".join(format_number(float(v)) for v in values if isinstance(v, (int, float)))
             return (f"In this step {camera}'s {field.replace('_', ' ')} must stay between "
-                    f"{format_number(limit.low)} and {format_number(limit.high)} (it is {shown}); "
-                    "bring it back into that range and check again.")
+                    f"{format_number(limit.low)} and {format_number(limit.high)} (it is {shown})")
     return None
 
 
@@ -195,6 +207,7 @@ class LessonPanel:
 
                 self.lens = LensPanel(gui, run, redraw=view.redraw, report=view.report, order=LENS_ORDER)
                 view.panel_filter = self.lens.panel_filter
+            view.field_guard = lambda camera, fields: field_range_refusal(self.run, camera, fields)
             self._show_step()
             view.redraw()
         self._on(self.nav.buttons.on_click, lambda e: self._navigate(e.target.value))
