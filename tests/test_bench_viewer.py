@@ -126,10 +126,12 @@ def test_profile_areas_give_c_functions_to_their_callers():
 
     stats = pstats.Stats(prof)
     areas = dict(classroom.profile_areas(stats))
-    min_max = ("<built-in method builtins.min>", "<built-in method builtins.max>")
-    builtin_min_max = sum(v[2] for (path, _l, name), v in stats.stats.items() if path == "~" and name in min_max)
-    assert builtin_min_max > 0
-    assert areas["SVG: label placement (egtviz.viewer.panel_view)"] >= builtin_min_max
+    # C functions (numpy methods, list building) that only place_labels called: their time is the caller's.
+    c_time = sum(v[2] for (path, _l, _name), v in stats.stats.items()
+                 if path == "~" and v[4] and all(c[0].endswith("egtviz/viewer/panel_view.py") for c in v[4]))
+    assert c_time > 0
+    own = sum(v[2] for (path, _l, _name), v in stats.stats.items() if path.endswith("egtviz/viewer/panel_view.py"))
+    assert areas["SVG: label placement (egtviz.viewer.panel_view)"] > own  # its own time and its C calls' time
     assert sum(areas.values()) == pytest.approx(sum(v[2] for v in stats.stats.values()), rel=1e-9)
 
 

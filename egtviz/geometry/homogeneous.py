@@ -79,7 +79,11 @@ def normalize_lines(lines: npt.ArrayLike) -> np.ndarray:
     Raises:
         GeometryError: ``lines`` is not (3,) or (N, 3) finite numbers, or a line is zero.
     """
-    lines = as_up_to_scale_rows(lines, "lines", 3)
+    return _normalized_lines(as_up_to_scale_rows(lines, "lines", 3))
+
+
+def _normalized_lines(lines: np.ndarray) -> np.ndarray:
+    """:func:`normalize_lines` of float64 (N, 3) rows already divided by their largest absolute entry; unchecked."""
     n = np.hypot(lines[:, 0], lines[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         out = lines / n[:, None]
@@ -87,7 +91,8 @@ def normalize_lines(lines: npt.ArrayLike) -> np.ndarray:
     return out
 
 
-def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
+def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float, *,
+                       check: bool = True) -> tuple[np.ndarray, np.ndarray]:
     r"""Clip infinite lines :math:`a u + b v + c = 0` (N, 3) to the rectangle ``[0, w] x [0, h]``.
 
     Returns ``(segments (N, 2, 2), hit (N,) bool)``; rows that miss the
@@ -99,10 +104,26 @@ def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float) -> tup
     and of the candidates inside the rectangle (up to ``eps``) the two extreme
     ones along the line direction :math:`(-b, a)` are kept.
 
+    Args:
+        lines: (N, 3) line coefficients.
+        width, height: the rectangle's size (> 0).
+        check: validate the arguments (default). ``check=False`` is the fast path for lines that are already a
+            float64 (N, 3) array and a positive finite ``width`` and ``height`` (e.g. computed by the core from
+            validated cameras): nothing is checked, and a row that is not finite or is zero
+            (which the checked call refuses) gives a NaN segment and ``hit = False``. Valid rows give exactly the
+            checked call's segments.
+
     Raises:
-        GeometryError: ``lines`` is not (N, 3) finite numbers or a line is zero; ``width`` or ``height`` is
-            not a positive number.
+        GeometryError: (``check=True``) ``lines`` is not (N, 3) finite numbers or a line is zero; ``width`` or
+            ``height`` is not a positive number.
     """
+    if not check:
+        # The checked call's arithmetic without its checks: each row divided by its largest entry, then
+        # normalised (a row that is not finite or is zero becomes NaN on the way).
+        lines = np.asarray(lines)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            L = _normalized_lines(lines / np.abs(lines).max(axis=1, initial=0.0)[:, None])
+        return _clip_lines(np.ascontiguousarray(L.T), float(width), float(height))
     L = normalize_lines(lines)
     return _clip_lines(np.ascontiguousarray(L.T), as_positive(width, "width"), as_positive(height, "height"))
 

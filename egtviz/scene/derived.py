@@ -21,7 +21,6 @@ from ..geometry import GeometryError, Pose
 from ..geometry.camera_model import (
     CAMERA_MODELS,
     CameraModel,
-    finite_nonzero_rows,
     rectangle_rim,
 )
 from ..geometry.epipolar import essential_from_poses, fundamental_from_essential
@@ -272,10 +271,9 @@ def _clipped_lines(sides: list[tuple[EpipolarCurves, ImagePlane]]) -> list[np.nd
         groups.setdefault((sides[k][1].width, sides[k][1].height), []).append(k)
     for (w, h), members in groups.items():
         lines = np.concatenate([sides[k][0].lines for k in members])
-        seg = np.full((len(lines), 2, 2), np.nan)
-        good = finite_nonzero_rows(lines)
-        if len(good):
-            seg[good] = clip_lines_to_rect(lines[good], w, h)[0]  # NaN rows where a line misses the image
+        # The core computed these lines from validated cameras: its unchecked path, which also gives NaN rows for
+        # a point with no line (NaN or zero), as for a line that misses the image.
+        seg = clip_lines_to_rect(lines, w, h, check=False)[0]
         for k, part in zip(members, np.split(seg, len(members)), strict=True):
             out[k] = _frozen(part)
     return out
@@ -301,7 +299,8 @@ def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | 
     if lines is not None:
         return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(np.array(curves.lines, float))}
     arcs = cam.plane_image_arcs(normals, n_samples)
-    return {"epipoles": epipoles, "conics": tuple(a if type(a) is tuple else tuple(a) for a in arcs)}
+    # tuple() of a tuple is that tuple: the models' tuples are kept, any other sequence becomes one.
+    return {"epipoles": epipoles, "conics": tuple(map(tuple, arcs))}
 
 
 def _readout(names: tuple[str, str], c1: CameraModel, c2: CameraModel, first: EpipolarCurves,

@@ -230,7 +230,8 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
         ax_, ay_ = A[:, None, 0], A[:, None, 1]
         near = ((O[None, :, 0] <= ax_ + reach_x[:, None]) & (O[None, :, 2] >= ax_ - reach_x[:, None])
                 & (O[None, :, 1] <= ay_ + reach_y[:, None]) & (O[None, :, 3] >= ay_ - reach_y[:, None]))
-        near_boxes = [O[m].tolist() for m in near]
+        rows = O.tolist()  # once: a list per label's near rows would copy the crowded ones again for each label
+        near_boxes = [[rows[j] for j in np.flatnonzero(m).tolist()] for m in near]
     else:
         near_boxes = [[] for _ in range(n)]
     bx0, by0, bx1, by1 = (float(b) for b in bounds)
@@ -246,22 +247,30 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
         # Conditional expressions, not min()/max(): here the builtin calls cost more than the comparisons.
         for ring in _RINGS:
             d = (r + gap) * ring
+            # The boxes overlapping each column of candidates (a ring's candidates share three columns, left,
+            # centred and right), with their overlap width, in the given order: a candidate then tests only its
+            # column's boxes, and adds up the same overlaps in the same order as over all of them.
+            columns: dict[int, list[tuple[float, float, float]]] = {}
             for dx, dy in _DIRECTIONS:
                 # The box touches the square of half-side d around the anchor; above/below it is centred.
                 x0 = ax + d if dx > 0 else ax - d - w if dx < 0 else ax - w / 2
                 y0 = ay + d if dy > 0 else ay - d - h if dy < 0 else ay - h / 2
                 x1, y1 = x0 + w, y0 + h
+                column = columns.get(dx)
+                if column is None:
+                    column = columns[dx] = [
+                        (ow, o[1], o[3]) for o in boxes
+                        if (ow := (x1 if x1 < o[2] else o[2]) - (x0 if x0 > o[0] else o[0])) > 0
+                    ]
                 iw = (x1 if x1 < bx1 else bx1) - (x0 if x0 > bx0 else bx0)
                 ih = (y1 if y1 < by1 else by1) - (y0 if y0 > by0 else by0)
                 c = area - (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)
-                for o in boxes:
-                    ow = (x1 if x1 < o[2] else o[2]) - (x0 if x0 > o[0] else o[0])
-                    if ow > 0:
-                        oh = (y1 if y1 < o[3] else o[3]) - (y0 if y0 > o[1] else o[1])
-                        if oh > 0:
-                            c += ow * oh
-                            if c >= best_cost and c > tiny:
-                                break  # this box cannot win
+                for ow, oy0, oy1 in column:
+                    oh = (y1 if y1 < oy1 else oy1) - (y0 if y0 > oy0 else oy0)
+                    if oh > 0:
+                        c += ow * oh
+                        if c >= best_cost and c > tiny:
+                            break  # this box cannot win
                 if c <= tiny:  # take the first free box
                     c = 0.0
                 if c < best_cost:

@@ -389,9 +389,7 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
         keep = (local % stride == 0) | (local == np.repeat(lengths - 1, lengths))
         V = V[keep]
         lengths = np.add.reduceat(keep, ends - lengths)
-    thick = f' stroke-width="{_f(lw * 3.0)}"'
-    prefixes = [f'<polyline data-kind="epipolar-conic" data-index="{i}" points="' for i in idx]
-    suffixes = [f'" stroke="{colours[i % len(colours)]}"{thick if i == selected_point else ""}/>' for i in idx]
+    prefixes, suffixes = _conic_tags(tuple(idx), selected_point, f' stroke-width="{_f(lw * 3.0)}"', colours)
     Q = np.rint(V).astype(np.int64) if integer else None
     if Q is None or Q.min() < _INT_LO or Q.max() >= _INT_HI:
         ends = np.cumsum(lengths)
@@ -411,6 +409,20 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
     tokens[vertex + 1] = space[Q[:, 1]]
     tokens[vertex[last] + 1] = bare[Q[last, 1]]
     return "".join(tokens.tolist())
+
+
+@lru_cache(maxsize=16)
+def _conic_tags(idx: tuple[int, ...], selected_point: int | None, thick: str,
+                colours: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The text before and after the vertices of each ``epipolar-conic`` run, as read-only object arrays (the same
+    from one drag step to the next)."""
+    prefixes = np.empty(len(idx), dtype=object)
+    prefixes[:] = [f'<polyline data-kind="epipolar-conic" data-index="{i}" points="' for i in idx]
+    suffixes = np.empty(len(idx), dtype=object)
+    suffixes[:] = [f'" stroke="{colours[i % len(colours)]}"{thick if i == selected_point else ""}/>' for i in idx]
+    prefixes.setflags(write=False)
+    suffixes.setflags(write=False)
+    return prefixes, suffixes
 
 
 @lru_cache(maxsize=16)
