@@ -126,3 +126,17 @@ def test_the_lab_needs_a_pinhole_pair_and_eight_points():
         run_lab(SCENES["example3"]())
     with pytest.raises(SceneError, match="methods"):
         run_lab(cube_pair(), methods=("magic",))
+
+
+def test_each_fit_carries_the_epipolar_lines_of_the_measured_pixels():
+    """``l2 = F m1`` and ``l1 = F^T m2`` of the measured pixels: each measured pixel of the other image lies on its
+    line when the data are exact (no noise, no outliers)."""
+    result = run_lab(cube_pair(40), LabSettings(noise_px=0.0, outlier_percent=0.0))
+    h = np.ones((len(result.data.measured1), 1))
+    for fit in result.fits:
+        assert fit.F is not None, fit.message
+        m1 = np.hstack([result.data.measured1, h])
+        m2 = np.hstack([result.data.measured2, h])
+        d2 = np.abs(np.sum(fit.lines2 * m2, axis=1)) / np.hypot(fit.lines2[:, 0], fit.lines2[:, 1])
+        d1 = np.abs(np.sum(fit.lines1 * m1, axis=1)) / np.hypot(fit.lines1[:, 0], fit.lines1[:, 1])
+        assert d1.max() < 1e-6 and d2.max() < 1e-6, fit.method

@@ -319,3 +319,43 @@ def _readout(names: tuple[str, str], c1: CameraModel, c2: CameraModel, first: Ep
 def shown_value(value: float, matrix_norm: float) -> float:
     """``value``, or 0.0 when its magnitude is below ``ZERO_FRACTION`` of the matrix's norm (rounding, shown as 0)."""
     return 0.0 if abs(value) < ZERO_FRACTION * matrix_norm else value
+
+
+def with_pair_lines(derived: Derived, names: tuple[str, str], *, lines1: np.ndarray, lines2: np.ndarray,
+                    e1: np.ndarray, e2: np.ndarray, points: tuple[np.ndarray, np.ndarray] | None = None,
+                    no_image: str = "") -> Derived:
+    """``derived`` with the drawn pair's panels showing other epipolar lines and epipoles (and pixels): what a
+    lesson's estimation lab or convention lens draws instead of the true geometry.
+
+    Args:
+        derived: the model's derived quantities.
+        names: the drawn pair (image 1, image 2).
+        lines1, lines2: (N, 3) lines in image 1 and image 2, one per point (NaN rows: none drawn).
+        e1, e2: homogeneous epipoles of image 1 and image 2 (last coordinate 1, or 0 at infinity).
+        points: (N, 2) pixels to draw instead of the true images (NaN: not drawn), for image 1 and image 2.
+        no_image: why a point of ``points`` is not drawn, in a few words (the panels' status line).
+    """
+    planes = dict(derived.image_planes)
+    for name, lines, e, label, k in ((names[0], lines1, e1, "e1", 0), (names[1], lines2, e2, "e2", 1)):
+        plane = planes[name]
+        extra: dict = {}
+        if points is not None:
+            px = np.asarray(points[k], float)
+            seen = np.isfinite(px).all(axis=1)
+            inside = seen & (px[:, 0] >= 0) & (px[:, 0] <= plane.width) & (px[:, 1] >= 0) & (px[:, 1] <= plane.height)
+            extra = {"points": px, "visible": seen, "in_image": inside, "n_hidden": int((~seen).sum()),
+                     "no_image": no_image or plane.no_image}
+        lines = np.asarray(lines, float)
+        planes[name] = replace(plane, lines=_segments_in_image(lines, plane.width, plane.height),
+                               line_coefficients=lines, epipoles=(_epipole(label, np.asarray(e, float), plane.width,
+                                                                           plane.height),),
+                               conics=None, **extra)
+    return replace(derived, image_planes=planes)
+
+
+def _segments_in_image(lines: np.ndarray, width: float, height: float) -> np.ndarray:
+    """(N, 2, 2) lines clipped to the image for drawing; NaN rows for missing lines (NaN, or the line at infinity)
+    and for lines that miss it."""
+    if not len(lines):
+        return np.full((0, 2, 2), np.nan)
+    return clip_lines_to_rect(lines, width, height, check=False)[0]

@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 
 from ..geometry import GeometryError, PinholeCamera, normalize_homogeneous
-from ..geometry.epipolar import epipoles_from_fundamental
+from ..geometry.epipolar import epipolar_lines, epipolar_lines_in_first, epipoles_from_fundamental
 from ..geometry.estimation import (
     fundamental_8point,
     fundamental_lmeds,
@@ -144,6 +144,11 @@ class FitResult:
     threshold_px: float
     """Inlier threshold in pixels (NaN for the least-squares fits)."""
     message: str | None = None
+    lines1: np.ndarray | None = None
+    """(M, 3) epipolar lines in image 1 of the measured pixels of image 2, :math:`l_1 = F^T m_2` (what a panel
+    drawing this fit shows)."""
+    lines2: np.ndarray | None = None
+    """(M, 3) epipolar lines in image 2 of the measured pixels of image 1, :math:`l_2 = F m_1`."""
 
     @property
     def title(self) -> str:
@@ -262,6 +267,7 @@ def _fit(method: Method, data: Correspondences, settings: LabSettings, e_true: t
     return FitResult(
         method, F, e1, e2, noisy, true, sym,
         (_epipole_distance(e1, e_true[0]), _epipole_distance(e2, e_true[1])), inliers, recall, threshold,
+        lines1=epipolar_lines_in_first(F, data.measured2), lines2=epipolar_lines(F, data.measured1),
     )
 
 

@@ -26,9 +26,9 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.epipolar import epipolar_lines, epipolar_lines_in_first
 from ..lessons.changes import SetLab
 from ..scene import Derived, Scene, SceneError
+from ..scene.derived import with_pair_lines
 from ..scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_THRESHOLD_PX
 from ..scene.lab import (
     METHOD_TITLES,
@@ -38,7 +38,7 @@ from ..scene.lab import (
     run_lab,
 )
 from .fields import FieldError, format_number, on_event
-from .lens_view import LessonInstruments, pair_planes
+from .lens_view import LessonInstruments
 
 __all__ = ["LabPanel", "fits_table_html", "threshold_text"]
 
@@ -247,11 +247,11 @@ class LabPanel:
         points[0][data.point_indices] = data.measured1
         points[1][data.point_indices] = data.measured2
         lines1, lines2 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
-        lines2[data.point_indices] = epipolar_lines(fit.F, data.measured1)
-        lines1[data.point_indices] = epipolar_lines_in_first(fit.F, data.measured2)
+        lines1[data.point_indices] = fit.lines1
+        lines2[data.point_indices] = fit.lines2
         ringed: frozenset[int] = frozenset()
         if fit.inliers is not None and np.count_nonzero(~fit.inliers) <= MAX_RINGS:
             ringed = frozenset(int(i) for i in data.point_indices[~fit.inliers])
-        planes = pair_planes(derived, result.names, lines1=lines1, lines2=lines2, e1=fit.e1, e2=fit.e2,
+        planes = with_pair_lines(derived, result.names, lines1=lines1, lines2=lines2, e1=fit.e1, e2=fit.e2,
                              points=(points[0], points[1]), no_image="not used by the lab")
         return planes, ringed

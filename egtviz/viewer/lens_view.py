@@ -19,20 +19,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import fields, replace
+from dataclasses import fields
 from html import escape
 from typing import Any, Protocol
 
 import numpy as np
 
-from ..geometry import GeometryError
-from ..geometry.epipolar import clipped_epipolar_lines
 from ..lessons.changes import SetLens
-from ..scene import Derived, Epipole, ImagePlane, Scene, SceneError
+from ..scene import Derived, Scene, SceneError
+from ..scene.derived import with_pair_lines
 from ..scene.lens import LensToggles, LensView, lens_view
 from .fields import on_event
 
-__all__ = ["LENS_LABELS", "LensPanel", "LessonInstruments", "epipole_mark", "pair_planes", "residual_table_html"]
+__all__ = ["LENS_LABELS", "LensPanel", "LessonInstruments", "residual_table_html"]
 
 #: Each toggle of :class:`~egtviz.scene.lens.LensToggles` as the GUI names it (the mistake it applies).
 LENS_LABELS: dict[str, str] = {
@@ -53,58 +52,6 @@ class LessonInstruments(Protocol):
     lens: LensToggles
 
     def apply(self, change: Any) -> None: ...
-
-
-def epipole_mark(label: str, e: np.ndarray, width: float, height: float) -> Epipole:
-    """An epipole as the panels draw it, from a homogeneous 3-vector (last coordinate 1, or 0 at infinity)."""
-    x, y, z = (float(c) for c in e)
-    if z == 0.0:
-        n = max(math.hypot(x, y), 1e-300)
-        return Epipole(label, None, np.array([x / n, y / n]), True, False)
-    u, v = x / z, y / z
-    return Epipole(label, np.array([u, v]), None, False, bool(0.0 <= u <= width and 0.0 <= v <= height))
-
-
-def _segments(lines: np.ndarray, width: float, height: float) -> np.ndarray:
-    """(N, 2, 2) lines clipped to the image for drawing; NaN rows for missing lines or lines that miss it."""
-    out = np.full((len(lines), 2, 2), np.nan)
-    ok = np.isfinite(lines).all(axis=1) & (np.abs(lines[:, :2]).sum(axis=1) > 0)
-    if ok.any():
-        try:
-            seg, _ = clipped_epipolar_lines(lines[ok], width, height)
-        except GeometryError:  # a line at infinity: nothing to draw
-            return out
-        out[ok] = seg
-    return out
-
-
-def pair_planes(derived: Derived, names: tuple[str, str], *, lines1: np.ndarray, lines2: np.ndarray,
-                e1: np.ndarray, e2: np.ndarray, points: tuple[np.ndarray, np.ndarray] | None = None,
-                no_image: str = "") -> Derived:
-    """``derived`` with the drawn pair's panels showing other epipolar lines and epipoles (and pixels).
-
-    Args:
-        derived: the model's derived quantities.
-        names: the drawn pair (image 1, image 2).
-        lines1, lines2: (N, 3) lines in image 1 and image 2, one per point (NaN rows: none drawn).
-        e1, e2: homogeneous epipoles of image 1 and image 2.
-        points: (N, 2) pixels to draw instead of the true images (NaN: not drawn), for image 1 and image 2.
-        no_image: why a point of ``points`` is not drawn, in a few words (the panels' status line).
-    """
-    planes = dict(derived.image_planes)
-    for name, lines, e, label, k in ((names[0], lines1, e1, "e1", 0), (names[1], lines2, e2, "e2", 1)):
-        plane: ImagePlane = planes[name]
-        extra: dict[str, Any] = {}
-        if points is not None:
-            px = np.asarray(points[k], float)
-            seen = np.isfinite(px).all(axis=1)
-            inside = seen & (px[:, 0] >= 0) & (px[:, 0] <= plane.width) & (px[:, 1] >= 0) & (px[:, 1] <= plane.height)
-            extra = {"points": px, "visible": seen, "in_image": inside, "n_hidden": int((~seen).sum()),
-                     "no_image": no_image or plane.no_image}
-        lines = np.asarray(lines, float)
-        planes[name] = replace(plane, lines=_segments(lines, plane.width, plane.height), line_coefficients=lines,
-                               epipoles=(epipole_mark(label, e, plane.width, plane.height),), conics=None, **extra)
-    return replace(derived, image_planes=planes)
 
 
 def _num(x: float, digits: int = 3) -> str:
@@ -191,5 +138,5 @@ class LensPanel:
             return derived, frozenset()
         self.view = view
         self.readout.content = residual_table_html(view, scene.selected_point)
-        return pair_planes(derived, view.names, lines1=view.lines1, lines2=view.lines2, e1=view.e1, e2=view.e2), \
+        return with_pair_lines(derived, view.names, lines1=view.lines1, lines2=view.lines2, e1=view.e1, e2=view.e2), \
             frozenset()
