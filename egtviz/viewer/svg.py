@@ -490,10 +490,13 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     r_pt = style.mark_px * k
     ring_r = r_pt * 2.0
     lw = style.line_px * k
-    idx = np.flatnonzero(in_image).tolist()
-    outside = np.flatnonzero(in_view & ~in_image).tolist()
+    inside_idx = np.flatnonzero(in_image)
+    outside_idx = np.flatnonzero(in_view & ~in_image)
+    idx, outside = inside_idx.tolist(), outside_idx.tolist()
     number_all = numbered_points(len(idx), show_labels)
-    marked = {i for i in idx + outside if i == selected_point or i in highlighted}
+    drawn = in_image | in_view
+    candidates = set(highlighted) | ({selected_point} if selected_point is not None else set())
+    marked = {i for i in candidates if isinstance(i, (int, np.integer)) and 0 <= i < len(P) and drawn[i]}
     # Points outside the view (zoomed in) keep their disc for the contract, clipped, but get no number. Only the
     # marked ones are numbered above MAX_NUMBERED_POINTS (the sort below fixes the order).
     numbered = [i for i in (idx + outside if number_all else marked) if show_labels and in_view[i]
@@ -501,9 +504,9 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     # Placement order: epipole labels, then the selected, the highlighted, the others by index.
     numbered.sort(key=lambda i: (i != selected_point, i not in marked, i))
     size = style.label_px * k
-    shown = np.flatnonzero(in_view).tolist()
     halo = 0.25 * style.label_px * k
-    obstacles = [np.column_stack([P[shown] - r_pt - lw, P[shown] + r_pt + lw])] if shown else []
+    shown = P[in_view]
+    obstacles = [np.column_stack([shown - r_pt - lw, shown + r_pt + lw])] if len(shown) else []
     if marked:
         M = P[sorted(marked)]
         obstacles.append(np.column_stack([M - ring_r - lw, M + ring_r + lw]))
@@ -518,63 +521,80 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     label_of = dict(zip(numbered, boxes[len(epipoles):]))
     disc = f'" r="{_f(r_pt)}" fill="'
     halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}"'
-    plain = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
-    rows = []
-    members = iter(plain)
-    for kind, kind_members in (("point", idx), ("point-outside", outside)):
-        for i in kind_members:
-            row = next(members)
-            if i not in label_of and i not in marked:
-                rows.append(row)
-                continue
-            x, y = P[i]
-            col = colours[i % nc]
-            hollow = kind == "point-outside"
-            fill = "#fff" if hollow else col
-            stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
-            ring = ""
-            if i in marked:
-                ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(ring_r)}" fill="none" stroke="{style.ink}" '
-                        f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if i == selected_point else "false"}"/>')
-            label = ""
-            if i in label_of:
-                label = _label_text(label_of[i], size, str(i + 1), halo_attr, x)
-            rows.append(f'<g data-kind="{kind}" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
-                        f'{stroke}/>{label}</g>')
+    rows = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
+    special = sorted(set(label_of) | marked)
+    if special:
+        rows = rows.copy()
+    for i in special:  # a ring or a number: the disc's row becomes its group
+        if in_image[i]:
+            kind, row = "point", int(np.searchsorted(inside_idx, i))
+        else:
+            kind, row = "point-outside", len(idx) + int(np.searchsorted(outside_idx, i))
+        x, y = P[i]
+        col = colours[i % nc]
+        hollow = kind == "point-outside"
+        fill = "#fff" if hollow else col
+        stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
+        ring = ""
+        if i in marked:
+            ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(ring_r)}" fill="none" stroke="{style.ink}" '
+                    f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if i == selected_point else "false"}"/>')
+        label = ""
+        if i in label_of:
+            label = _label_text(label_of[i], size, str(i + 1), halo_attr, x)
+        rows[row] = (f'<g data-kind="{kind}" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
+                     f'{stroke}/>{label}</g>', "", "", "", "", "", "")
     body = (f'<g stroke="{style.ink}" stroke-width="{_f(lw * 0.5)}" font-size="{_f(size)}" font-weight="bold" '
-            f'fill="{style.ink}" paint-order="stroke">{"".join(rows)}</g>')
+            f'fill="{style.ink}" paint-order="stroke">{"".join(rows.ravel().tolist())}</g>')
     return body, ep_boxes
 
 
 @lru_cache(maxsize=16)
 def _plain_point_rows(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, style: PanelStyle, k: float,
-                      dp: int) -> tuple[str, ...]:
+                      dp: int) -> np.ndarray:
     """Every drawn point as a bare disc (no ring, no number), in :func:`_marks`'s order: the points in the image,
-    then those in the view outside it. Cached apart from the labels: a panel whose points stay put (the camera
-    that does not move during a drag) keeps these rows while its epipoles, and so its labels, move."""
+    then those in the view outside it. One row of strings per disc, whose concatenation is its ``<circle>``
+    (read-only object array, (M, 7)). Cached apart from the labels: a panel whose points stay put (the camera that
+    does not move during a drag) keeps these rows while its epipoles, and so its labels, move."""
     P = np.frombuffer(P_bytes).reshape(-1, 2)
     in_image = np.frombuffer(in_image_bytes, dtype=bool)
     in_view = np.frombuffer(in_view_bytes, dtype=bool)
-    colours = style.point_colours
-    nc = len(colours)
-    disc = f'" r="{_f(style.mark_px * k)}" fill="'
-    hollow = f' stroke-width="{_f(style.line_px * k * 1.6)}"/>'
-    rows = []
-    for kind, members in (("point", np.flatnonzero(in_image)), ("point-outside", np.flatnonzero(in_view & ~in_image))):
-        if not len(members):
-            continue
-        if dp >= 1:  # the exact "%.{dp}f" text from the tables (their integer part needs dp >= 1)
-            xy = _fixed_strs(P[members], dp).tolist()
-        else:
-            xy = [[f"{x:.0f}", f"{y:.0f}"] for x, y in P[members].tolist()]
-        for i, (sx, sy) in zip(members.tolist(), xy):
-            col = colours[i % nc]
-            if kind == "point":
-                rows.append(f'<circle data-kind="point" data-index="{i}" cx="{sx}" cy="{sy}{disc}{col}"/>')
-            else:
-                rows.append(f'<circle data-kind="point-outside" data-index="{i}" cx="{sx}" cy="{sy}{disc}#fff" '
-                            f'stroke="{col}"{hollow}')
-    return tuple(rows)
+    inside = np.flatnonzero(in_image)
+    outside = np.flatnonzero(in_view & ~in_image)
+    members = np.concatenate([inside, outside])
+    rows = np.empty((len(members), 7), dtype=object)
+    if not len(members):
+        return rows
+    if dp >= 1:  # the exact "%.{dp}f" text from the tables (their integer part needs dp >= 1)
+        xy = _fixed_strs(P[members], dp)
+    else:
+        xy = np.empty((len(members), 2), dtype=object)
+        xy[:] = [[f"{x:.0f}", f"{y:.0f}"] for x, y in P[members].tolist()]
+    (head_in, fill_in), (head_out, fill_out) = _disc_tags(len(P), style.point_colours)
+    n_in = len(inside)
+    rows[:n_in, 0], rows[:n_in, 5], rows[:n_in, 6] = head_in[inside], fill_in[inside], ""
+    rows[n_in:, 0], rows[n_in:, 5] = head_out[outside], fill_out[outside]
+    rows[n_in:, 6] = f' stroke-width="{_f(style.line_px * k * 1.6)}"/>'
+    rows[:, 1] = xy[:, 0]
+    rows[:, 2] = '" cy="'
+    rows[:, 3] = xy[:, 1]
+    rows[:, 4] = f'" r="{_f(style.mark_px * k)}" fill="'
+    rows.setflags(write=False)
+    return rows
+
+
+@lru_cache(maxsize=16)
+def _disc_tags(n: int, colours: tuple[str, ...]) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """Per index, the text before ``cx`` and the fill after ``r`` of each point's bare disc: ``(heads, fills)`` of the
+    ``point`` variant and of the ``point-outside`` one (the same from one drag step to the next)."""
+    h_in, f_in, h_out, f_out = (np.empty(n, dtype=object) for _ in range(4))
+    h_in[:] = [f'<circle data-kind="point" data-index="{i}" cx="' for i in range(n)]
+    h_out[:] = [f'<circle data-kind="point-outside" data-index="{i}" cx="' for i in range(n)]
+    f_in[:] = [f'{colours[i % len(colours)]}"/>' for i in range(n)]
+    f_out[:] = [f'#fff" stroke="{colours[i % len(colours)]}"' for i in range(n)]
+    for a in (h_in, f_in, h_out, f_out):
+        a.setflags(write=False)
+    return (h_in, f_in), (h_out, f_out)
 
 
 def empty_svg(camera: str, width: int = 640, height: int = 480, message: str = "") -> str:
