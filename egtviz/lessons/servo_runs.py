@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..scene.limits import Range
+from ..scene.limits import SERVO_DEMO_STEPS, Range
 from ..servo import ServoResult, simulate_panoramic, simulate_pinhole
 from ..servo.pinhole_arm import ESTIMATOR_NAMES
 from . import fields
@@ -46,7 +46,7 @@ ESTIMATORS = {name: algorithm for algorithm, name in ESTIMATOR_NAMES.items()}
 
 _SEED = Range(0, 2**32 - 1, "", integer=True)
 _NOISE = Range(0.0, 50.0, "px")
-_STEPS = Range(1, 10_000, "", integer=True)
+_STEPS = SERVO_DEMO_STEPS
 _BETA = Range(0.0, 100.0, "")
 RUN_FIELDS: dict[str, tuple[str, ...]] = {
     "pinhole": ("seed", "noise_px", "steps", "beta", "estimator"),

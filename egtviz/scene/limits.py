@@ -42,6 +42,8 @@ __all__ = [
     "PIXELS_PER_METRE",
     "PIXEL_SIZE",
     "PRINCIPAL_POINT",
+    "SERVO_DEMO_STEPS",
+    "SERVO_HEADLESS_STEPS",
     "SKEW",
     "SKEW_OVER_FOCAL",
     "SURFACE_SAMPLES",
@@ -187,6 +189,18 @@ LAB_THRESHOLD_PX = Range(0.05, 100.0, "px")
 """RANSAC's inlier threshold on the Sampson distance."""
 LAB_SEED = Range(0, 2**31 - 1, "", integer=True)
 """Seed of the noise and the outliers."""
+
+# -- visual-servoing runs (egtviz.servo, the demos in the browser) ---------------------------------------
+
+SERVO_HEADLESS_STEPS = Range(1, 100_000, "", integer=True)
+"""Steps of a headless servo run (``egtviz servo --steps``). The run keeps only its samples (poses, features,
+velocities: under a kilobyte a step) in the command's own process; the demos' default runs converge in a
+few hundred steps."""
+SERVO_DEMO_STEPS = Range(1, 10_000, "", integer=True)
+"""Steps of a servo run in the browser (a demo's *max steps* field, a lesson's ``open_demo`` ``steps``): ten
+times fewer than :data:`SERVO_HEADLESS_STEPS` because the server derives every frame's geometry and keeps it
+for playback, per tab, in the one process every tab shares (about 17 kB a frame for the panoramic demo's sampled
+bi-conics: 170 MB at this bound)."""
 
 # -- lesson files (egtviz.lessons) --------------------------------------------------------------------
 

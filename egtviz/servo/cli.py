@@ -14,13 +14,12 @@ import sys
 from typing import Any
 
 from ..files import FileSafetyError, check_write_target, printable, write_atomic
+from ..scene.limits import SERVO_HEADLESS_STEPS
 from .result import ServoResult
 
 ESTIMATOR_CHOICES = {"true": None, "linear": 1, "normalized": 2, "sampson": 3}
 
 
-MAX_STEPS = 100_000
-"""Most steps a headless run may take (a run at the default settings takes at most 1500)."""
 MAX_NOISE_PX = 100.0
 MAX_BETA = 1e3
 MAX_SEED = 2**63 - 1
@@ -66,8 +65,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default=None,
         help="pin-hole: F from the true poses or estimated each step (default true)",
     )
-    p.add_argument("--steps", type=whole_number_in(1, MAX_STEPS), default=None,
-                   help=f"maximum number of steps, 1..{MAX_STEPS} (default: the demo's own)")
+    steps = SERVO_HEADLESS_STEPS
+    p.add_argument("--steps", type=whole_number_in(int(steps.low), int(steps.high)), default=None,
+                   help=f"maximum number of steps, {steps.describe()} (default: the demo's own)")
     p.add_argument("--json", metavar="FILE", default=None,
                    help="write the full result as JSON (atomically; an existing regular file is replaced)")
     p.add_argument("--plot", metavar="FILE.png", default=None,

@@ -321,6 +321,10 @@ class ClientView:
         #: A lesson's narrower ranges for camera fields: ``field_guard(camera, spec_fields) -> refusal or None``
         #: is asked before a field's new value is committed; a refusal reverts the field with that message.
         self.field_guard: Callable[[str, dict[str, Any]], str | None] | None = None
+        #: A lesson's narrower ranges for a camera's pose under a gizmo drag:
+        #: ``pose_guard(camera, position, R_world) -> (position, R_world)`` turns the pose the gizmo sent into the
+        #: pose to apply (one inside the ranges); the gizmo shows the applied pose when the drag ends.
+        self.pose_guard: Callable[[str, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self._camera_gizmo_event, self._point_gizmo_event,
@@ -606,6 +610,8 @@ class ClientView:
                 position = np.asarray(target.position, float)
                 if position.shape != (3,) or not np.isfinite(position).all():
                     raise SceneError(f"{name}: the gizmo sent a position that is not 3 finite numbers")
+                if self.pose_guard is not None:  # whatever the browser sent: the pose the lesson allows
+                    position, R = self.pose_guard(name, position, R)
                 pose = self.model.scene.camera(name).camera().pose  # the spec's cached camera: no new Pose
                 if _allclose(pose.t, position, 1e-9) and _allclose(pose.R, R, 1e-9):
                     if phase == "end":  # nothing moved since the last update: just resync the fields

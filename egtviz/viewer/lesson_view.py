@@ -18,7 +18,15 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
 
 A ``set_range`` change of a step limits a camera field: the tab's ``field_guard`` refuses a typed value
 outside it (the field reverts, with the range in the message), the panel lists it, and a task is not checked
-while the scene breaks it (a gizmo drag can still move a camera out of a position range). Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
+while the scene breaks it (a script may still move a camera out of a range). A gizmo drag cannot
+(:func:`pose_within_ranges`, the tab's ``pose_guard``): a ``position`` range stops the camera at its edge,
+each coordinate clamped like a mechanical stop; under a ``ypr_deg`` range the camera keeps the last
+orientation that respected it. The gizmo follows the pointer while it is held and shows the applied pose when
+the drag ends. The browser's own gizmo limits (viser's ``translation_limits``, ``rotation_limits``) are not
+used: they bound the offset along each of the gizmo's own, rotated, axes accumulated since the gizmo was
+drawn, not the camera centre's world coordinates, and a pose the server sets does not reset them.
+
+Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
 notification in this tab.
 """
 
@@ -28,15 +36,18 @@ from collections.abc import Callable
 from html import escape
 from typing import Any
 
+import numpy as np
+
 from ..lessons import Lesson, LessonRun, ProgressStore
-from ..lessons.changes import SetLab, SetLens
+from ..lessons.changes import SetLab, SetLens, SetRange
 from ..lessons.progress import LearnerNameError, learner_key
 from ..lessons.runner import ResolvedTask
 from ..scene import SceneError
 from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, format_number, on_event
 
 __all__ = [
-    "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "range_refusal",
+    "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "pose_within_ranges",
+    "range_refusal",
 ]
 
 #: The choice field's value before the learner picks an option.
@@ -53,6 +64,9 @@ MATH_CSS = ('<style>math[display="block"]{max-width:100%;overflow-x:auto;overflo
 DEMO_TITLES = {"pinhole": "the pin-hole demo (Puma 560)", "panoramic": "the panoramic demo (mobile robot)"}
 LAB_TASKS = frozenset({"sampson_below", "inliers_recall"})
 LENS_TASKS = frozenset({"point_on_line"})
+#: A value this close to a range (relative to the larger of 1 and the bounds' magnitudes) counts as inside it: a
+#: pose's angles come back from its rotation matrix up to ~1e-14 off (a camera left at yaw 30 reads 30.000000000000004).
+RANGE_SLACK = 1e-9
 
 
 def lesson_instruments(lesson: Lesson) -> tuple[bool, bool]:
@@ -83,11 +97,45 @@ def field_range_refusal(run: LessonRun, camera: str, fields: dict[str, Any]) -> 
         if limit is None:
             continue
         values = value if isinstance(value, tuple) else (value,)
-        if any(not isinstance(v, (int, float)) or not limit.low <= float(v) <= limit.high for v in values):
+        if any(not isinstance(v, (int, float)) or not _inside(limit, float(v)) for v in values):
             shown = ", ".join(format_number(float(v)) for v in values if isinstance(v, (int, float)))
             return (f"In this step {camera}'s {field.replace('_', ' ')} must stay between "
                     f"{format_number(limit.low)} and {format_number(limit.high)} (it is {shown})")
     return None
+
+
+def _inside(limit: SetRange, value: float) -> bool:
+    """Whether ``value`` is in ``limit.low..limit.high``, up to :data:`RANGE_SLACK`."""
+    slack = RANGE_SLACK * max(1.0, abs(limit.low), abs(limit.high))
+    return limit.low - slack <= value <= limit.high + slack
+
+
+def pose_within_ranges(run: LessonRun, camera: str, position: np.ndarray,
+                       R_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""The pose a gizmo drag gives ``camera`` under the step's ``set_range`` limits (the tab's ``pose_guard``).
+
+    Args:
+        run: the lesson run (its ``ranges`` and its model's scene).
+        camera: a camera of the run's scene.
+        position: ``(3,)`` the camera centre the gizmo sent, world coordinates.
+        R_world: ``(3, 3)`` the pose rotation the gizmo sent.
+
+    Returns:
+        ``(position, R_world)`` to apply. Under a ``position`` range ``[low, high]`` each coordinate is clamped,
+        :math:`t_i \leftarrow \min(\max(t_i, \mathrm{low}), \mathrm{high})`: the nearest point of the
+        allowed box, so the camera stops at its edge and still slides along it. Under a ``ypr_deg`` range the
+        sent rotation is kept if its yaw, pitch and roll are all in the range, else the camera's current one
+        (during a drag, the last sent rotation that respected the range). Clamping each angle on its own would not stop the camera: an angle
+        wraps at 180 degrees, so a yaw dragged past 180 in a range ``-30..30`` would jump from 30 to -30.
+    """
+    spec = run.model.scene.camera(camera)
+    limit = run.ranges.get((camera, "position"))
+    if limit is not None:
+        position = np.clip(np.asarray(position, float), limit.low, limit.high)
+    limit = run.ranges.get((camera, "ypr_deg"))
+    if limit is not None and not all(_inside(limit, a) for a in spec.ypr_from_world_rotation(R_world)):
+        R_world = spec.camera().pose.R
+    return position, R_world
 
 
 def _feedback_markdown(passed: bool, feedback: str, hint: str | None) -> str:
@@ -208,6 +256,7 @@ class LessonPanel:
                 self.lens = LensPanel(gui, run, redraw=view.redraw, report=view.report, order=LENS_ORDER)
                 view.panel_filter = self.lens.panel_filter
             view.field_guard = lambda camera, fields: field_range_refusal(self.run, camera, fields)
+            view.pose_guard = lambda camera, position, R: pose_within_ranges(self.run, camera, position, R)
             self._show_step()
             view.redraw()
         self._on(self.nav.buttons.on_click, lambda e: self._navigate(e.target.value))

@@ -37,6 +37,7 @@ import numpy as np
 import viser
 
 from egtviz.geometry.poses import quat_wxyz_from_matrix
+from egtviz.scene.limits import SERVO_DEMO_STEPS
 from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames, trail_indices
 
@@ -52,7 +53,7 @@ from .fields import (
 from .palette import hex_to_rgb, point_colour
 from .servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
 
-__all__ = ["FIELD_DELAY", "MAX_STEPS", "PANEL_WIDTH", "RUN_RULES", "SPEEDS", "ServoPlayer"]
+__all__ = ["FIELD_DELAY", "PANEL_WIDTH", "RUN_RULES", "SPEEDS", "ServoPlayer"]
 
 SPEEDS = ("0.25x", "0.5x", "1x", "2x", "4x")
 PANEL_WIDTH = 470
@@ -61,14 +62,12 @@ FPS = 15.0
 PLOT_SAMPLES = 300
 #: Top of the errors plot's axis (%): above 100 by enough that the "100" tick label is not cut by the frame.
 ERRORS_TOP_PERCENT = 115.0
-#: Most simulation steps a run may take (the demos converge in a few hundred).
-MAX_STEPS = 10_000
 #: What the run fields of every demo accept; a refused value gets a notification and the field shows the last
 #: valid one. A demo adds its own (``ServoPlayer.RULES``).
 RUN_RULES = {
     "seed": NumberRule("seed", "", 0, 2**32 - 1, integer=True),
     "noise_px": NumberRule("noise", "px", 0.0, 50.0),
-    "steps": NumberRule("max steps", "", 1, MAX_STEPS, integer=True),
+    "steps": NumberRule("max steps", "", SERVO_DEMO_STEPS.low, SERVO_DEMO_STEPS.high, integer=True),
 }
 #: Least distance between the y-axis ticks of the controls plot, CSS pixels.
 Y_TICK_SPACE = 16
@@ -287,7 +286,8 @@ class ServoPlayer(ABC):
             self._add_run_fields()
             self._add_number_field("noise_px", "noise (px)", "Standard deviation of the Gaussian pixel noise, >= 0.")
             self._add_number_field("steps", "max steps",
-                                   f"1 to {MAX_STEPS}; the run stops earlier once the features reach their goal.")
+                                   f"{SERVO_DEMO_STEPS.low:g} to {SERVO_DEMO_STEPS.high:g}; the run stops earlier "
+                                   "once the features reach their goal.")
             self.btn_run = gui.add_button("Run", icon=viser.Icon.PLAYER_PLAY)
             self._on(self.btn_run.on_click, lambda _: self.run())
             self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
