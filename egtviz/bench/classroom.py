@@ -527,10 +527,12 @@ def format_classroom(runs: Sequence[ClassroomRun]) -> str:
 def run_classroom_bench(tab_counts: Sequence[int] = TAB_COUNTS, *, seconds: float = DRAG_SECONDS,
                         scene: str | None = None, profile: bool = True) -> str:
     """``egtviz bench classroom``: a run per tab count, then (``profile``) one profiled run; the report as text."""
+    from .viser_floor import FLOOR_RATES_HZ, format_floor, viser_floor
+
     runs = [run_classroom(k, seconds=seconds, scene=scene)[0] for k in tab_counts]
     title = (f"{len(tab_counts)} runs, {RATE_HZ:g} Hz per tab, {seconds:g} s; CPU ms per applied update by part; "
              "lag ms from a send to its panel")
-    out = [title, format_classroom(runs)]
+    out = [title, format_classroom(runs), "", format_floor([viser_floor(r) for r in FLOOR_RATES_HZ])]
     if profile:
         prun, stats = profile_classroom(scene=scene)
         total = sum(t for _, t in profile_areas(stats))
