@@ -276,6 +276,10 @@ class ClientView:
         self.revision = 0
         self._syncing = False
         self._moving: str | None = None
+        #: Whether the update being drawn is a step of a gizmo drag (fitted panels then keep a steady view).
+        self._drag_step = False
+        #: Each panel's view as last drawn (a fitted panel's steady view during a drag).
+        self._shown_views: dict[str, Any] = {}
         self._gizmo_stamp: dict[str, float] = {}
         self._drag_seq: dict[str, int] = {}
         self._typing = Debouncer(field_delay)
@@ -596,6 +600,7 @@ class ClientView:
                 return
             self._t_event = t0
             self._moving = name if phase == "update" else None
+            self._drag_step = phase == "update"
             try:
                 if name not in self.model.scene.camera_names:
                     return
@@ -620,6 +625,7 @@ class ClientView:
                 self.model.set_camera_pose(name, tuple(position), R, drag_id=self._drag_seq.get(name))
             finally:
                 self._moving = None
+                self._drag_step = False
 
     def _point_gizmo_event(self, index: int, event: Any) -> None:
         t0 = time.perf_counter()
@@ -643,7 +649,11 @@ class ClientView:
                 position = np.asarray(target.position, float)
                 if position.shape != (3,) or not np.isfinite(position).all():
                     raise SceneError(f"point {index + 1}: the gizmo sent a position that is not 3 finite numbers")
-                self.model.set_point(index, tuple(position), drag_id=self._drag_seq.get(key))
+                self._drag_step = getattr(event, "phase", "update") == "update"
+                try:
+                    self.model.set_point(index, tuple(position), drag_id=self._drag_seq.get(key))
+                finally:
+                    self._drag_step = False
 
     def _set_pair(self) -> None:
         value = self.pair_dropdown.value
@@ -944,7 +954,10 @@ class ClientView:
         grid = self.grid
         panel_px = grid.column_px if grid is not None and grid.columns else None
         max_height = f"{grid.svg_max_height_px(name):.0f}px" if panel_px is not None else None
-        view = self._panel_view(name, plane).resolve(plane)
+        # During a drag a fitted panel holds its view while everything stays in it: still axes, a layout made once.
+        kept = self._shown_views.get(name) if self._drag_step else None
+        view = self._panel_view(name, plane).resolve(plane, kept=kept)
+        self._shown_views[name] = view
         inputs = (scene.selected_point, frozenset(highlighted), scene.options.show_labels, view, self._style, panel_px,
                   max_height)
         kept = self._drawn_panels.get(name)

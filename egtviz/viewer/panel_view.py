@@ -28,17 +28,25 @@ import numpy as np
 __all__ = [
     "FIT_MARGIN",
     "FIT_MAX_EXTENT",
+    "STEADY_FILL",
+    "STEADY_SLACK",
     "ViewBox",
     "fit_view",
     "image_view",
     "pan",
     "place_labels",
+    "steady_fit",
     "tick_values",
     "zoom",
 ]
 
 #: Fraction of the content's span added on each side by :func:`fit_view`.
 FIT_MARGIN = 0.06
+
+#: During a drag a fitted panel keeps its view while the fit still fills this fraction of its width, and a new
+#: view is the fit with this fraction of its size added on each side (:func:`steady_fit`).
+STEADY_FILL = 0.7
+STEADY_SLACK = 0.05
 
 #: Content further than this many image sizes from the image is left out of the fit (it is shown by an arrow):
 #: an epipole a million pixels away would otherwise shrink the image to a dot.
@@ -143,6 +151,27 @@ def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
         h = w / aspect
     cu, cv = (lo + hi) / 2.0
     return ViewBox(float(cu - w / 2.0), float(cv - h / 2.0), float(w), float(h))
+
+
+def steady_fit(fitted: ViewBox, kept: ViewBox | None, *, fill: float = STEADY_FILL,
+               slack: float = STEADY_SLACK) -> ViewBox:
+    """The view a fitted panel shows during a drag: ``kept`` while it still does the fit's job, else a new one.
+
+    ``kept`` (the view of the drag's previous step) stays as long as it
+    contains ``fitted`` (all the content, with its margin) and ``fitted`` is
+    at least ``fill`` of its width (the content has not shrunk to a corner).
+    Otherwise the view becomes ``fitted`` grown by ``slack`` of its size on
+    each side, so that the next steps' small moves stay inside it. The axes
+    then hold still while the points move, and the panel's layout is not made
+    again at every step. Without ``kept`` (no drag) the fit is exact.
+    """
+    if kept is None:
+        return fitted
+    inside = fitted.u0 >= kept.u0 and fitted.v0 >= kept.v0 and fitted.u1 <= kept.u1 and fitted.v1 <= kept.v1
+    if inside and fitted.width >= fill * kept.width:
+        return kept
+    return ViewBox(fitted.u0 - slack * fitted.width, fitted.v0 - slack * fitted.height,
+                   (1.0 + 2.0 * slack) * fitted.width, (1.0 + 2.0 * slack) * fitted.height)
 
 
 def zoom(view: ViewBox, factor: float, about: tuple[float, float] | None = None) -> ViewBox:

@@ -29,7 +29,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .panel_view import ViewBox, fit_view, image_view, pan, zoom
+from .panel_view import ViewBox, fit_view, image_view, pan, steady_fit, zoom
 from .svg import NORMAL, PanelStyle, panel_layout
 
 __all__ = [
@@ -318,7 +318,8 @@ def initial_view(plane: Any) -> ViewMode:
 
 @dataclass(frozen=True)
 class PanelView:
-    """What one panel shows: ``fit`` (all content, refitted at every update), ``image``, or a fixed ``box``."""
+    """What one panel shows: ``fit`` (all content, refitted at every update; during a drag held still while it
+    still shows everything), ``image``, or a fixed ``box``."""
 
     mode: ViewMode = "image"
     box: ViewBox | None = None
@@ -330,10 +331,14 @@ class PanelView:
         if (self.mode == "custom") != (self.box is not None):
             raise ValueError("PanelView: a box is given exactly when mode is 'custom'")
 
-    def resolve(self, plane: Any) -> ViewBox | None:
-        """The view box to draw ``plane`` with (None: the image rectangle)."""
+    def resolve(self, plane: Any, *, kept: ViewBox | None = None) -> ViewBox | None:
+        """The view box to draw ``plane`` with (None: the image rectangle).
+
+        ``kept``: during a drag, the view of its previous step; a ``fit`` panel keeps it while it still shows all
+        the content (:func:`~egtviz.viewer.panel_view.steady_fit`).
+        """
         if self.mode == "fit":
-            return fit_view(plane)
+            return steady_fit(fit_view(plane), kept)
         return self.box
 
     def after(self, action: str, plane: Any) -> PanelView:

@@ -325,7 +325,7 @@ def _fixed_strs(X: Any, dp: int) -> np.ndarray:
         strs = []
         for r in range(_FIX_LO, _FIX_HI):
             a = abs(r)
-            t = f"{a // sc}.{a % sc:0{dp}d}"
+            t = f"{a // sc}.{a % sc:0{dp}d}" if dp else str(a)
             strs.append("-" + t if r < 0 else t)
         table = np.empty(len(strs), dtype=object)
         table[:] = strs
@@ -346,6 +346,7 @@ def _fixed_strs(X: Any, dp: int) -> np.ndarray:
 def warm_up() -> None:
     """Build the number tables of images 100 px and larger now, not in the first drag step that needs them."""
     _int_tables()
+    _fixed_strs(np.zeros(1), 0)
     _fixed_strs(np.zeros(1), 1)
 
 
@@ -565,11 +566,7 @@ def _plain_point_rows(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: byte
     rows = np.empty((len(members), 7), dtype=object)
     if not len(members):
         return rows
-    if dp >= 1:  # the exact "%.{dp}f" text from the tables (their integer part needs dp >= 1)
-        xy = _fixed_strs(P[members], dp)
-    else:
-        xy = np.empty((len(members), 2), dtype=object)
-        xy[:] = [[f"{x:.0f}", f"{y:.0f}"] for x, y in P[members].tolist()]
+    xy = _fixed_strs(P[members], dp)  # the exact "%.{dp}f" text
     (head_in, fill_in), (head_out, fill_out) = _disc_tags(len(P), style.point_colours)
     n_in = len(inside)
     rows[:n_in, 0], rows[:n_in, 5], rows[:n_in, 6] = head_in[inside], fill_in[inside], ""
