@@ -15,7 +15,8 @@ Method (also in ``docs/viewer.md``):
   drawn pair) and a pin-hole / unified pair; 8 and 200 points.
 * **Server CPU per drag update.** :mod:`egtviz.bench.classroom` with :data:`CPU_TABS` raw websocket tabs
   dragging camera 1 of the default pin-hole and panoramic scenes at 20 Hz: the server process's CPU time
-  over the drag divided by the updates it applied, with its parts.
+  over the drag divided by the updates it applied, with its parts; and the floor under it
+  (:mod:`egtviz.bench.viser_floor`: a bare viser server receiving the same number of updates a second).
 * **Browser.** The same with headless Chromium as the tab. Each update gives
   the SVGs a new ``data-rev``; a ``MutationObserver`` in the page records
   ``performance.timeOrigin + performance.now()`` when an SVG with a new
@@ -208,6 +209,17 @@ def server_cpu_rows(*, tabs: int = CPU_TABS, seconds: float = CPU_SECONDS) -> li
         parts = ", ".join(f"{k} {v:.2f}" for k, v in run.parts_ms.items())
         rows.append({"case": case, "ours_ms": run.cpu_ms_per_update, "opencv_ms": None, "ratio": None,
                      "note": f"{run.applied} updates applied of {run.sent} sent; CPU ms per update: {parts}"})
+    from .viser_floor import viser_floor
+
+    rate = tabs * RATE_HZ
+    case = f"viewer server CPU per drag update, the floor: bare viser, no-op gizmo callback, {rate:g} updates/s"
+    try:
+        floor = viser_floor(rate, seconds)
+        rows.append({"case": case, "ours_ms": floor.cpu_ms_per_update, "opencv_ms": None, "ratio": None,
+                     "note": f"{floor.callbacks} of {floor.sent} received; no egtviz code in the server"})
+    except Exception as exc:  # noqa: BLE001 - report, do not hide the other rows
+        rows.append({"case": case, "ours_ms": float("nan"), "opencv_ms": None, "ratio": None,
+                     "note": f"failed: {type(exc).__name__}: {exc}"})
     return rows
 
 
