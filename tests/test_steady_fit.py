@@ -6,7 +6,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from egtviz.viewer.panel_view import STEADY_FILL, STEADY_SLACK, ViewBox, steady_fit, zoom
+from egtviz.viewer.panel_view import (
+    STEADY_FILL,
+    STEADY_SLACK,
+    ViewBox,
+    steady_fit,
+    zoom,
+)
 from egtviz.viewer.panels import PanelView
 
 KEPT = ViewBox(-100.0, -50.0, 800.0, 600.0)

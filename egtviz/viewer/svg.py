@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import zlib
+from bisect import bisect_left
 from dataclasses import dataclass
 from functools import lru_cache
 from html import escape
@@ -491,9 +492,7 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     r_pt = style.mark_px * k
     ring_r = r_pt * 2.0
     lw = style.line_px * k
-    inside_idx = np.flatnonzero(in_image)
-    outside_idx = np.flatnonzero(in_view & ~in_image)
-    idx, outside = inside_idx.tolist(), outside_idx.tolist()
+    idx, outside = np.flatnonzero(in_image).tolist(), np.flatnonzero(in_view & ~in_image).tolist()
     number_all = numbered_points(len(idx), show_labels)
     drawn = in_image | in_view
     candidates = set(highlighted) | ({selected_point} if selected_point is not None else set())
@@ -528,9 +527,9 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
         rows = rows.copy()
     for i in special:  # a ring or a number: the disc's row becomes its group
         if in_image[i]:
-            kind, row = "point", int(np.searchsorted(inside_idx, i))
+            kind, row = "point", bisect_left(idx, i)
         else:
-            kind, row = "point-outside", len(idx) + int(np.searchsorted(outside_idx, i))
+            kind, row = "point-outside", len(idx) + bisect_left(outside, i)
         x, y = P[i]
         col = colours[i % nc]
         hollow = kind == "point-outside"
@@ -543,8 +542,9 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
         label = ""
         if i in label_of:
             label = _label_text(label_of[i], size, str(i + 1), halo_attr, x)
-        rows[row] = (f'<g data-kind="{kind}" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
-                     f'{stroke}/>{label}</g>', "", "", "", "", "", "")
+        group = (f'<g data-kind="{kind}" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
+                 f'{stroke}/>{label}</g>')
+        rows[row] = (group, "", "", "", "", "", "")
     body = (f'<g stroke="{style.ink}" stroke-width="{_f(lw * 0.5)}" font-size="{_f(size)}" font-weight="bold" '
             f'fill="{style.ink}" paint-order="stroke">{"".join(rows.ravel().tolist())}</g>')
     return body, ep_boxes
