@@ -32,6 +32,8 @@ from egtviz.viewer.fields import (
 )
 from egtviz.viewer.headless import start_headless
 
+from _waiting import wait_until  # noqa: E402
+
 FOCAL = NumberRule("focal length", "mm", 0.1, 10_000.0)
 
 
@@ -48,15 +50,6 @@ def tab():
     for f in fakes:
         f.close()
     server.stop()
-
-
-def wait_until(predicate, timeout: float = 5.0) -> bool:
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.01)
-    return predicate()
 
 
 def fire(handle, view, value) -> None:

@@ -20,6 +20,8 @@ from egtviz.lessons import LessonRun, parse_lesson
 from egtviz.viewer.headless import start_headless
 from egtviz.viewer.lesson_view import LessonPanel, pose_within_ranges, range_refusal
 
+from _waiting import wait_until  # noqa: E402
+
 # cam1 of the default scene is at (-3, -8, 1.5) with yaw 20.6, pitch -3.3, roll 0 (degrees).
 LESSON = """
 title = "Ranges under a drag"
@@ -69,15 +71,6 @@ component = 0
 low = 24
 high = 30
 """
-
-
-def wait_until(predicate, timeout: float = 5.0) -> bool:
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.01)
-    return predicate()
 
 
 @pytest.fixture

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -33,6 +32,8 @@ from egtviz.viewer.panels import (
     window_from_canvas,
 )
 from egtviz.viewer.svg import NORMAL, PRESENT, panel_layout
+
+from _waiting import wait_until  # noqa: E402
 
 
 def _cams(n, w=640, h=480):
@@ -275,15 +276,6 @@ def test_dock_plan_halves_the_column():
 # -- the app: a tab's panels, buttons, downloads and presentation mode (raw websocket tab, no browser) ------
 
 
-def _wait(predicate, timeout=5.0):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.02)
-    return False
-
-
 def _svg_root(svg):
     return ET.fromstring(svg)
 
@@ -323,18 +315,18 @@ def test_view_buttons_zoom_pan_and_fit(four_camera_tab):
     group = view.panel_buttons["cam1"]["panel view"]
     assert _view_box(view.svgs["cam1"]) == (0, 0, 640, 480)
     fake.send("GuiUpdateMessage", uuid=group._impl.uuid, updates={"value": "+"})
-    assert _wait(lambda: _view_box(view.svgs["cam1"])[2] == pytest.approx(512))
+    assert wait_until(lambda: _view_box(view.svgs["cam1"])[2] == pytest.approx(512))
     # The same button again: zoomed twice (viser fires a button group on every click).
     fake.send("GuiUpdateMessage", uuid=group._impl.uuid, updates={"value": "+"})
-    assert _wait(lambda: _view_box(view.svgs["cam1"])[2] == pytest.approx(409.6))
+    assert wait_until(lambda: _view_box(view.svgs["cam1"])[2] == pytest.approx(409.6))
     pan_group = view.panel_buttons["cam1"]["panel pan"]
     u0 = _view_box(view.svgs["cam1"])[0]
     fake.send("GuiUpdateMessage", uuid=pan_group._impl.uuid, updates={"value": "\u2192"})
-    assert _wait(lambda: _view_box(view.svgs["cam1"])[0] == pytest.approx(u0 + 0.2 * 409.6))
+    assert wait_until(lambda: _view_box(view.svgs["cam1"])[0] == pytest.approx(u0 + 0.2 * 409.6))
     fake.send("GuiUpdateMessage", uuid=group._impl.uuid, updates={"value": "fit"})
     plane = view.model.derived.image_planes["cam1"]
     fitted = fit_view(plane)
-    assert _wait(lambda: _view_box(view.svgs["cam1"]) == pytest.approx((fitted.u0, fitted.v0, fitted.width,
+    assert wait_until(lambda: _view_box(view.svgs["cam1"]) == pytest.approx((fitted.u0, fitted.v0, fitted.width,
                                                                         fitted.height), rel=1e-4))
     # Other panels keep their view.
     assert _view_box(view.svgs["cam2"]) == (0, 0, 640, 480)
@@ -346,7 +338,7 @@ def test_a_forged_view_button_is_refused(four_camera_tab):
     view.client.add_notification = lambda title, body, **kw: notes.append((title, body))
     fake.send("GuiUpdateMessage", uuid=view.panel_buttons["cam2"]["panel view"]._impl.uuid,
               updates={"value": "rotate"})
-    assert _wait(lambda: notes)
+    assert wait_until(lambda: notes)
     assert "cam2: no view button 'rotate'" in notes[0][1]
     assert _view_box(view.svgs["cam2"]) == (0, 0, 640, 480)
 
@@ -356,13 +348,13 @@ def test_downloads_send_the_panel_as_shown(four_camera_tab):
     sent = []
     view.client.send_file_download = lambda name, data, **kw: sent.append((name, data))
     fake.send("GuiUpdateMessage", uuid=view.panel_buttons["cam1"]["panel view"]._impl.uuid, updates={"value": "+"})
-    assert _wait(lambda: _view_box(view.svgs["cam1"])[2] == pytest.approx(512))
+    assert wait_until(lambda: _view_box(view.svgs["cam1"])[2] == pytest.approx(512))
     uuid = view.panel_buttons["cam1"]["download panel"]._impl.uuid
     # One click at a time: viser's event carries the handle, whose value a second click would already have changed.
     fake.send("GuiUpdateMessage", uuid=uuid, updates={"value": "SVG"})
-    assert _wait(lambda: len(sent) == 1, timeout=20)
+    assert wait_until(lambda: len(sent) == 1, timeout=20)
     fake.send("GuiUpdateMessage", uuid=uuid, updates={"value": "PNG"})
-    assert _wait(lambda: len(sent) == 2, timeout=20)
+    assert wait_until(lambda: len(sent) == 2, timeout=20)
     files = dict(sent)
     assert set(files) == {"cam1-image-plane.svg", "cam1-image-plane.png"}
     svg, png = files["cam1-image-plane.svg"], files["cam1-image-plane.png"]
@@ -379,7 +371,7 @@ def test_presentation_mode_toggle(four_camera_tab):
     view, fake = four_camera_tab
     normal_grid = view.grid
     fake.send("GuiUpdateMessage", uuid=view.present_checkbox._impl.uuid, updates={"value": True})
-    assert _wait(lambda: all(_svg_root(s).get("data-style") == "present" for s in view.svgs.values()))
+    assert wait_until(lambda: all(_svg_root(s).get("data-style") == "present" for s in view.svgs.values()))
     assert view.present and view.grid.control_px == CONTROL_PX["present"] and view.grid != normal_grid
     assert "--mantine-scale" in view._gui_style.content
     # The 3D view's labels grow too: every camera name and point number.
@@ -387,7 +379,7 @@ def test_presentation_mode_toggle(four_camera_tab):
     assert len(labels) >= 4 + 8 and all(h.font_screen_scale == pytest.approx(size * PRESENT_LABEL_SCALE)
                                         for h, size in labels.values())
     fake.send("GuiUpdateMessage", uuid=view.present_checkbox._impl.uuid, updates={"value": False})
-    assert _wait(lambda: all(_svg_root(s).get("data-style") == "normal" for s in view.svgs.values()))
+    assert wait_until(lambda: all(_svg_root(s).get("data-style") == "normal" for s in view.svgs.values()))
     assert view.grid == normal_grid and view._gui_style.content == ""
     assert all(h.font_screen_scale == pytest.approx(size) for h, size in labels.values())
 
@@ -453,9 +445,9 @@ def test_fit_panels_to_the_window_uses_the_canvas_and_the_docks(four_camera_tab)
     # The window grew: the tab now reports a 1400 x 1000 canvas beside the docks.
     fake.send("ViewerCameraMessage", wxyz=[1.0, 0.0, 0.0, 0.0], position=[0.0, -10.0, 3.0], fov=1.0, near=0.01,
               far=1000.0, image_height=1000, image_width=1400, look_at=[0.0, 0.0, 0.0], up_direction=[0.0, 0.0, 1.0])
-    assert _wait(lambda: view.client.camera.image_width == 1400)
+    assert wait_until(lambda: view.client.camera.image_width == 1400)
     fake.send("GuiUpdateMessage", uuid=view.btn_relayout._impl.uuid, updates={"value": True})
-    assert _wait(lambda: view.grid.window == WindowSize(1400 + docked, 1000))
+    assert wait_until(lambda: view.grid.window == WindowSize(1400 + docked, 1000))
     assert view.grid == plan_grid([(c.name, c.width, c.height) for c in view.model.scene.cameras],
                                   WindowSize(1400 + docked, 1000))
     assert [len(col) for col in view.grid.columns] == [2, 2]  # room for a grid now
