@@ -63,7 +63,9 @@ class PinholeDrawing(CameraDrawing):
             L = plane.lines
             seg = point = ()
             if L is not None and len(L):
-                hit = np.flatnonzero(np.isfinite(L).all(axis=(1, 2)))
+                # Only the drawn rows (above MAX_RAY_POINTS points, the selected point's) go to the image plane in 3D.
+                rows = np.arange(len(L)) if ctx.line_rows is None else np.asarray(ctx.line_rows, np.intp)
+                hit = rows[np.isfinite(L[rows]).all(axis=(1, 2))]
                 lines3 = np.full((len(L), 2, 3), np.nan)
                 if len(hit):
                     lines3[hit] = camera.image_to_world(L[hit].reshape(-1, 2), IMAGE_PLANE_DEPTH).reshape(-1, 2, 3)
