@@ -66,6 +66,16 @@ def test_the_view_shown_always_contains_the_fit(u, v, w, ku, kv, kw, fill):
     assert fitted.width >= fill * shown.width - 1e-9
 
 
+def test_the_content_box_decides_when_given():
+    # The exact fit of the moved content pokes out of the kept view by its margin, but the content itself is
+    # inside: the view stays (no jump at a drag's first step).
+    fitted, content = ViewBox(-110.0, -40.0, 780.0, 585.0), ViewBox(-50.0, 5.0, 660.0, 495.0)
+    assert steady_fit(fitted, KEPT) == _grown(fitted)
+    assert steady_fit(fitted, KEPT, content=content) == KEPT
+    # The content itself leaving the view does move it.
+    assert steady_fit(fitted, KEPT, content=ViewBox(-120.0, 5.0, 660.0, 495.0)) == _grown(fitted)
+
+
 def test_only_fit_panels_hold_their_view():
     from egtviz.scene import compute_derived, default_scene
 
@@ -103,25 +113,33 @@ def test_a_fitted_panel_holds_its_axes_during_a_drag_and_fits_exactly_at_its_end
         gizmo = view.scene3d._cams["cam1"]["gizmo"]
         start = np.array(gizmo.position, float)
 
-        def drag(dx, phase):
-            gizmo._impl.position = start + np.array([dx, 0.0, 0.0])
+        def drag(dx, phase, dy=0.0):
+            gizmo._impl.position = start + np.array([dx, dy, 0.0])
             gizmo._impl_aux.last_updated += 1.0
             view._camera_gizmo_event("cam1", types.SimpleNamespace(target=gizmo, phase=phase, client=None,
                                                                    client_id=None))
 
-        drag(0.002, "update")  # the first step: the fit with room to move
-        first = _shown_view(view, "cam2")
+        first = _shown_view(view, "cam2")  # the exact fit before the drag
         seen = set()
-        for k in range(2, 12):  # 2 mm steps: the fit moves a little at each one
+        for k in range(1, 11):  # 2 mm steps: the fit moves a little at each one, the content stays in view
             drag(0.002 * k, "update")
-            fitted = fit_view(view.model.derived.image_planes["cam2"])
+            plane = view.model.derived.image_planes["cam2"]
+            fitted, content = fit_view(plane), fit_view(plane, margin=0.0)
             seen.add((fitted.u0, fitted.width))
             shown = _shown_view(view, "cam2")
             assert shown == first  # the axes hold still ...
-            # ... and still show everything the exact fit would.
-            assert shown[0] <= fitted.u0 and shown[1] <= fitted.v0
-            assert shown[0] + shown[2] >= fitted.u1 and shown[1] + shown[3] >= fitted.v1
+            # ... and still show all the content (every point, the epipole).
+            assert shown[0] <= content.u0 and shown[1] <= content.v0
+            assert shown[0] + shown[2] >= content.u1 and shown[1] + shown[3] >= content.v1
+            assert plane.points[plane.visible].min(axis=0)[0] >= shown[0]
         assert len(seen) > 1  # the exact fit did change during the drag
+        # A long move takes the content out of the view: a new one, with room, holds the next steps.
+        drag(0.02, "update", dy=-1.0)  # e2 moves from u = -1683 px to about -2900 px
+        assert fit_view(view.model.derived.image_planes["cam2"], margin=0.0).u0 < first[0]
+        moved = _shown_view(view, "cam2")
+        assert moved[0] < first[0]
+        drag(0.02, "update", dy=-1.002)
+        assert _shown_view(view, "cam2") == moved
         drag(0.02, "end")
         fitted = fit_view(view.model.derived.image_planes["cam2"])
         assert _shown_view(view, "cam2") == pytest.approx((fitted.u0, fitted.v0, fitted.width, fitted.height),

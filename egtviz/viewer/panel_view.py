@@ -32,6 +32,7 @@ __all__ = [
     "STEADY_SLACK",
     "ViewBox",
     "fit_view",
+    "fit_with_content",
     "image_view",
     "pan",
     "place_labels",
@@ -139,11 +140,21 @@ def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
     """
     if not margin >= 0:
         raise ValueError(f"margin must be >= 0, got {margin}")
+    return _fit_box(_content(plane), float(plane.width) / float(plane.height), margin)
+
+
+def fit_with_content(plane: Any) -> tuple[ViewBox, ViewBox]:
+    """``(fit_view(plane), fit_view(plane, margin=0))``: the fitted view and the content's own box, in one pass."""
     P = _content(plane)
+    aspect = float(plane.width) / float(plane.height)
+    return _fit_box(P, aspect, FIT_MARGIN), _fit_box(P, aspect, 0.0)
+
+
+def _fit_box(P: np.ndarray, aspect: float, margin: float) -> ViewBox:
+    """:func:`fit_view` of the content pixels ``P`` (n, 2) for an image of aspect ``aspect``."""
     lo, hi = P.min(axis=0), P.max(axis=0)
     span = hi - lo
     lo, hi = lo - margin * span, hi + margin * span
-    aspect = float(plane.width) / float(plane.height)
     w, h = hi - lo
     if w / h < aspect:
         w = h * aspect
@@ -153,22 +164,23 @@ def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
     return ViewBox(float(cu - w / 2.0), float(cv - h / 2.0), float(w), float(h))
 
 
-def steady_fit(fitted: ViewBox, kept: ViewBox | None, *, fill: float = STEADY_FILL,
-               slack: float = STEADY_SLACK) -> ViewBox:
+def steady_fit(fitted: ViewBox, kept: ViewBox | None, *, content: ViewBox | None = None,
+               fill: float = STEADY_FILL, slack: float = STEADY_SLACK) -> ViewBox:
     """The view a fitted panel shows during a drag: ``kept`` while it still does the fit's job, else a new one.
 
     ``kept`` (the view of the drag's previous step) stays as long as it
-    contains ``fitted`` (all the content, with its margin) and ``fitted`` is
-    at least ``fill`` of its width (the content has not shrunk to a corner).
-    Otherwise the view becomes ``fitted`` grown by ``slack`` of its size on
-    each side, so that the next steps' small moves stay inside it. The axes
-    then hold still while the points move, and the panel's layout is not made
-    again at every step. Without ``kept`` (no drag) the fit is exact.
+    contains ``content`` (the content's own box, default ``fitted``) and that
+    box is at least ``fill`` of its width (the content has not shrunk to a
+    corner). Otherwise the view becomes ``fitted`` grown by ``slack`` of its
+    size on each side, so that the next steps' small moves stay inside it. The
+    axes then hold still while the points move, and the panel's layout is not
+    made again at every step. Without ``kept`` (no drag) the fit is exact.
     """
     if kept is None:
         return fitted
-    inside = fitted.u0 >= kept.u0 and fitted.v0 >= kept.v0 and fitted.u1 <= kept.u1 and fitted.v1 <= kept.v1
-    if inside and fitted.width >= fill * kept.width:
+    box = fitted if content is None else content
+    inside = box.u0 >= kept.u0 and box.v0 >= kept.v0 and box.u1 <= kept.u1 and box.v1 <= kept.v1
+    if inside and box.width >= fill * kept.width:
         return kept
     return ViewBox(fitted.u0 - slack * fitted.width, fitted.v0 - slack * fitted.height,
                    (1.0 + 2.0 * slack) * fitted.width, (1.0 + 2.0 * slack) * fitted.height)

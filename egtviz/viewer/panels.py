@@ -29,7 +29,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .panel_view import ViewBox, fit_view, image_view, pan, steady_fit, zoom
+from .panel_view import ViewBox, fit_view, fit_with_content, image_view, pan, steady_fit, zoom
 from .svg import NORMAL, PanelStyle, panel_layout
 
 __all__ = [
@@ -337,9 +337,12 @@ class PanelView:
         ``kept``: during a drag, the view of its previous step; a ``fit`` panel keeps it while it still shows all
         the content (:func:`~egtviz.viewer.panel_view.steady_fit`).
         """
-        if self.mode == "fit":
-            return steady_fit(fit_view(plane), kept)
-        return self.box
+        if self.mode != "fit":
+            return self.box
+        if kept is None:
+            return fit_view(plane)
+        fitted, content = fit_with_content(plane)
+        return steady_fit(fitted, kept, content=content)
 
     def after(self, action: str, plane: Any) -> PanelView:
         """The view after a button press (one of :data:`VIEW_ACTIONS`), starting from what ``plane`` shows now.
