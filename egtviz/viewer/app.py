@@ -66,6 +66,7 @@ from .fields import (
     describe_error,
     format_number,
     format_numbers,
+    notify_error,
     on_event,
     parse_numbers,
 )
@@ -504,14 +505,10 @@ class ClientView:
 
     def report(self, exc: BaseException) -> None:
         """Tell this tab what went wrong and put every field and gizmo back to the model's values."""
-        title, body = describe_error(exc)
         with self.lock:
             if self.closed:
                 return
-            try:
-                self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
-            except Exception:  # noqa: BLE001 - the client may be gone
-                pass
+            notify_error(self.client, exc)
             self._resync()
 
     def _resync(self) -> None:
@@ -811,8 +808,7 @@ class ClientView:
             import traceback
 
             traceback.print_exception(exc)
-            title, body = describe_error(exc)
-            self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
+            notify_error(self.client, exc)
             return derived, frozenset()
 
     def redraw(self) -> None:
@@ -827,8 +823,7 @@ class ClientView:
 
         traceback.print_exception(exc)
         self.revision += 1
-        title, body = describe_error(exc)
-        msg = f"cannot draw this scene: {body}"
+        msg = f"cannot draw this scene: {describe_error(exc)[1]}"
         with self.client.atomic():
             self._sync_panels(scene)
             for spec in scene.cameras:
@@ -838,10 +833,7 @@ class ClientView:
             self.readout = f"<b>{escape(msg)}</b>"
             self.readout_md.content = self.readout
             self._sync_fields(scene)
-        try:
-            self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
-        except Exception:  # noqa: BLE001 - the client may be gone
-            pass
+        notify_error(self.client, exc)
 
     def _sync_panels(self, scene: Scene) -> None:
         """(Re)build the camera folders when the set of cameras changes, and the panels when their grid does."""
@@ -1359,8 +1351,7 @@ class EgtvizApp:
 
             traceback.print_exception(exc)
             self.close_demo(client)
-            client.add_notification("Could not open the demo", describe_error(exc)[1], color="red",
-                                    auto_close_seconds=8.0)
+            notify_error(client, exc, title="Could not open the demo")
             return None
         with self._lock:
             if cid in self._gone:

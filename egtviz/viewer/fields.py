@@ -224,6 +224,16 @@ def describe_error(exc: BaseException) -> tuple[str, str]:
     return "Something went wrong", f"{type(exc).__name__} (the details are in the server's log); the tab carries on."
 
 
+def notify_error(client: Any, exc: BaseException, *, title: str | None = None) -> None:
+    """Show ``exc`` in ``client``'s tab as a red notification (:func:`describe_error`; ``title`` replaces its
+    title). A tab that is already gone is left alone."""
+    default_title, body = describe_error(exc)
+    try:
+        client.add_notification(title or default_title, body, color="red", auto_close_seconds=8.0)
+    except Exception:  # noqa: BLE001 - the client may be gone
+        pass
+
+
 def _short(message: str, limit: int = 500) -> str:
     clean = "".join(c if c.isprintable() or c == "\n" else "?" for c in message)
     return clean if len(clean) <= limit else clean[:limit] + " ..."

@@ -47,7 +47,7 @@ from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, format_number, on_ev
 
 __all__ = [
     "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "pose_within_ranges",
-    "range_refusal",
+    "range_refusal", "typed_learner_key",
 ]
 
 #: The choice field's value before the learner picks an option.
@@ -136,6 +136,22 @@ def pose_within_ranges(run: LessonRun, camera: str, position: np.ndarray,
     if limit is not None and not all(_inside(limit, a) for a in spec.ypr_from_world_rotation(R_world)):
         R_world = spec.camera().pose.R
     return position, R_world
+
+
+def typed_learner_key(name: Any) -> str:
+    """The progress key of the name typed in a *your name* field; ``""`` for a blank field (no learner yet).
+
+    Raises:
+        FieldError: the name cannot be used (the field reverts, with the reason).
+    """
+    if not isinstance(name, str):
+        raise FieldError(f"your name: expected text, got {type(name).__name__}")
+    if not name.strip():
+        return ""
+    try:
+        return learner_key(name)
+    except LearnerNameError as exc:
+        raise FieldError(str(exc)) from exc
 
 
 def _feedback_markdown(passed: bool, feedback: str, hint: str | None) -> str:
@@ -385,12 +401,7 @@ class LessonPanel:
 
     def _set_learner(self, name: Any) -> None:
         """A name typed: the run is keyed by it from now on, and resumes where that learner was."""
-        if not isinstance(name, str):
-            raise FieldError(f"your name: expected text, got {type(name).__name__}")
-        try:
-            key = learner_key(name) if name.strip() else ""
-        except LearnerNameError as exc:
-            raise FieldError(str(exc)) from exc
+        key = typed_learner_key(name)
         if key == self.run.learner:
             return
         with self.view.client.atomic():

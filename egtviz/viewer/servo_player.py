@@ -45,8 +45,8 @@ from .fields import (
     Debouncer,
     FieldError,
     NumberRule,
-    describe_error,
     format_number,
+    notify_error,
     on_event,
     parse_numbers,
 )
@@ -352,14 +352,10 @@ class ServoPlayer(ABC):
 
     def report(self, exc: BaseException) -> None:
         """Tell this tab what went wrong and show the last valid value in every run field."""
-        title, body = describe_error(exc)
         with self.lock:
             if self._closed.is_set():
                 return
-            try:
-                self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
-            except Exception:  # noqa: BLE001 - the client may be gone
-                pass
+            notify_error(self.client, exc)
             self._sync_fields()
 
     def _sync_fields(self) -> None:

@@ -17,10 +17,9 @@ from html import escape
 from typing import Any
 
 from ..lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
-from ..lessons.progress import LearnerNameError, learner_key
 from ..scene import SceneModel
 from .fields import FieldError, on_event
-from .lesson_view import LESSON_ORDER, LessonPanel
+from .lesson_view import LESSON_ORDER, LessonPanel, typed_learner_key
 
 __all__ = ["Course", "LessonStatus", "StartPage", "lesson_status"]
 
@@ -110,13 +109,9 @@ class StartPage:
 
     def report(self, exc: BaseException) -> None:
         """Show what went wrong in this tab."""
-        from .fields import describe_error
+        from .fields import notify_error
 
-        title, body = describe_error(exc)
-        try:
-            self.client.add_notification(title, body, color="red", auto_close_seconds=8.0)
-        except Exception:  # noqa: BLE001 - the tab may be gone
-            pass
+        notify_error(self.client, exc)
 
     def _on(self, register: Any, callback: Any) -> None:
         def guarded(event: Any) -> None:
@@ -128,12 +123,7 @@ class StartPage:
         on_event(register, guarded, self.report)
 
     def _set_name(self, name: Any) -> None:
-        if not isinstance(name, str):
-            raise FieldError(f"your name: expected text, got {type(name).__name__}")
-        try:
-            key = learner_key(name) if name.strip() else ""
-        except LearnerNameError as exc:
-            raise FieldError(str(exc)) from exc
+        key = typed_learner_key(name)
         if key != self.learner:
             self.learner = key
             self.course.remember(self.client.client_id, key)
