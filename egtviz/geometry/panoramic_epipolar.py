@@ -37,6 +37,7 @@ from ._validate import DegenerateConfigurationError, GeometryError, as_count, as
 from .catadioptric import UNIFIED_FLIP, CatadioptricCamera
 from .mirrors import Mirror
 from .poses import skew
+from .unified_sphere import _great_circle_conics
 
 __all__ = [
     "PanoramicEpipoles",
@@ -179,25 +180,8 @@ def panoramic_epipoles(cam1: CatadioptricCamera, cam2: CatadioptricCamera) -> Pa
 
 def _conics_from_normals(camera: CatadioptricCamera, n_mirror: np.ndarray) -> np.ndarray:
     """Vectorised conics (N, 3, 3) of planes through the focus; NaN rows for zero normals."""
-    n = n_mirror @ UNIFIED_FLIP.T
-    norm = np.linalg.norm(n, axis=1, keepdims=True)
-    bad = norm[:, 0] <= 1e-300
-    with np.errstate(divide="ignore", invalid="ignore"):
-        n = n / norm
-    xi2 = camera.mirror.xi ** 2
-    nz = n[:, 2]
-    omega = (1.0 - xi2) * n[:, :, None] * n[:, None, :]
-    omega[:, 2, :] += xi2 * nz[:, None] * n
-    omega[:, :, 2] += xi2 * nz[:, None] * n
-    idx = np.arange(3)
-    omega[:, idx, idx] -= (xi2 * nz * nz)[:, None]
-    Kinv = np.linalg.inv(camera.unified_calibration)
-    C = Kinv.T @ omega @ Kinv
-    C = 0.5 * (C + np.swapaxes(C, 1, 2))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        C = C / np.linalg.norm(C, axis=(1, 2), keepdims=True)
-    C[bad] = np.nan
-    return C
+    return _great_circle_conics(n_mirror @ UNIFIED_FLIP.T, camera.mirror.xi,
+                                np.linalg.inv(camera.unified_calibration))
 
 
 def conic_from_plane(camera: CatadioptricCamera, n_mirror: npt.ArrayLike) -> np.ndarray:

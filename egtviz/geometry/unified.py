@@ -77,6 +77,7 @@ from .camera_model import (
 )
 from .homogeneous import normalize_homogeneous
 from .poses import Pose
+from .unified_sphere import _great_circle_conics
 
 __all__ = ["UnifiedCamera"]
 
@@ -288,23 +289,7 @@ class UnifiedCamera:
         ``C`` is the image of the whole great circle; where :math:`\xi > 0` and the circle dips below
         :math:`s_z = -\xi`, part of it (a branch to infinity) belongs to rays that are not seen.
         """
-        n = as_normals(normals_world) @ self.pose.R
-        norm = np.linalg.norm(n, axis=1, keepdims=True)
-        bad = ~(norm[:, 0] > 0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            n = n / norm
-        xi2 = self.xi * self.xi
-        nz = n[:, 2]
-        omega = (1.0 - xi2) * n[:, :, None] * n[:, None, :]
-        omega[:, 2, :] += xi2 * nz[:, None] * n
-        omega[:, :, 2] += xi2 * nz[:, None] * n
-        idx = np.arange(3)
-        omega[:, idx, idx] -= (xi2 * nz * nz)[:, None]
-        C = self._K_inv.T @ omega @ self._K_inv
-        with np.errstate(divide="ignore", invalid="ignore"):
-            C = C / np.linalg.norm(C, axis=(1, 2), keepdims=True)
-        C[bad] = np.nan
-        return C
+        return _great_circle_conics(as_normals(normals_world) @ self.pose.R, self.xi, self._K_inv)
 
     def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray | None:
         r"""For :math:`\xi = 0` (a pin-hole) the image lines :math:`l = K^{-T} R^T n` (N, 3), NaN rows for zero or NaN

@@ -64,10 +64,11 @@ def sphere_project(X: npt.ArrayLike, ell: float, m: float, K: npt.ArrayLike) -> 
         raise GeometryError(f"X: point {int(np.flatnonzero(norm == 0.0)[0])} is the sphere centre; it has no ray")
     s = P / norm[:, None]
     lam = (ell - s[:, 2]) / (ell + m)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # A ray grazing the blind edge (lam -> 0+) goes to infinity: inf or NaN pixels, not warnings.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         plane = np.where(lam[:, None] > 0.0, (s - [0.0, 0.0, ell]) / lam[:, None], np.nan)
-    q = np.column_stack([plane[:, :2], np.ones(len(P))]) @ Kc.T
-    pixels = q / q[:, 2:3]
+        q = np.column_stack([plane[:, :2], np.ones(len(P))]) @ Kc.T
+        pixels = q / q[:, 2:3]
     return SphereProjection(s, plane, pixels)
 
 
@@ -105,3 +106,34 @@ def sphere_back_project(pixels: npt.ArrayLike, ell: float, m: float, K: npt.Arra
     with np.errstate(invalid="ignore"):
         lam = (ell * g + np.sqrt(g * g + (1.0 - ell * ell) * r2)) / (r2 + g * g)
     return np.column_stack([lam * x, lam * y, ell - lam * g])
+
+
+def _great_circle_conics(normals: np.ndarray, xi: float, K_inv: np.ndarray) -> np.ndarray:
+    r"""Image conics (N, 3, 3) of great circles of the unit sphere, seen from the projection centre on its axis.
+
+    A plane through the sphere's centre with unit normal :math:`n` (sphere frame, ``normals`` (N, 3) of any
+    length) cuts the sphere in a great circle whose image is
+
+    .. math:: C = K^{-T} \Omega K^{-1}, \qquad
+        \Omega = (1 - \xi^2)\, n n^T + \xi^2 n_z (e_z n^T + n e_z^T) - \xi^2 n_z^2 I,
+
+    returned symmetric with unit Frobenius norm (sign arbitrary); NaN rows for zero or non-finite normals.
+    Internal and unchecked: the callers pass validated cameras' arrays.
+    """
+    norm = np.linalg.norm(normals, axis=1, keepdims=True)
+    bad = ~(norm[:, 0] > 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n = normals / norm
+    xi2 = xi * xi
+    nz = n[:, 2]
+    omega = (1.0 - xi2) * n[:, :, None] * n[:, None, :]
+    omega[:, 2, :] += xi2 * nz[:, None] * n
+    omega[:, :, 2] += xi2 * nz[:, None] * n
+    idx = np.arange(3)
+    omega[:, idx, idx] -= (xi2 * nz * nz)[:, None]
+    C = K_inv.T @ omega @ K_inv
+    C = 0.5 * (C + np.swapaxes(C, 1, 2))  # exactly symmetric, whatever the rounding
+    with np.errstate(divide="ignore", invalid="ignore"):
+        C = C / np.linalg.norm(C, axis=(1, 2), keepdims=True)
+    C[bad] = np.nan
+    return C
