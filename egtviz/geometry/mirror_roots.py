@@ -54,7 +54,7 @@ def line_quadric_roots(v: npt.ArrayLike, a: float, b: float | None = None) -> tu
     x, y, z = d.T
     rho2 = x * x + y * y
     norm = np.linalg.norm(d, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         if b is None:
             h = as_positive(a, "a")
             l1 = h * (z + norm) / rho2
