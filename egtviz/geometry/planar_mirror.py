@@ -34,6 +34,7 @@ import numpy.typing as npt
 
 from ._validate import DegenerateConfigurationError, GeometryError, as_matrix, as_points, as_scalar, as_vector
 from .epipolar import unit_frobenius
+from .matrices import hartley_normalization
 from .pinhole import PinholeCamera
 from .poses import Pose, skew
 
@@ -173,13 +174,10 @@ def fundamental_from_reflections(U: npt.ArrayLike, Ur: npt.ArrayLike, *, normali
         raise GeometryError(f"Ur: expected as many points as U ({len(u)}), got {len(ur)}")
     T = np.eye(3)
     if normalize:
-        both = np.vstack([u, ur])
-        c = both.mean(axis=0)
-        rms = float(np.sqrt(np.mean(np.sum((both - c) ** 2, axis=1))))
-        if not rms > 0.0:
-            raise DegenerateConfigurationError("U, Ur: all points coincide")
-        s = np.sqrt(2.0) / rms
-        T = np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
+        try:
+            T = hartley_normalization(np.vstack([u, ur]))[1]
+        except DegenerateConfigurationError:
+            raise DegenerateConfigurationError("U, Ur: all points coincide") from None
     h = np.column_stack([u, np.ones(len(u))]) @ T.T
     hr = np.column_stack([ur, np.ones(len(ur))]) @ T.T
     L = np.cross(h, hr)
