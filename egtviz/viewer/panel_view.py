@@ -31,6 +31,7 @@ __all__ = [
     "STEADY_FILL",
     "STEADY_SLACK",
     "ViewBox",
+    "aspect_box",
     "fit_view",
     "fit_with_content",
     "image_view",
@@ -154,7 +155,12 @@ def _fit_box(P: np.ndarray, aspect: float, margin: float) -> ViewBox:
     """:func:`fit_view` of the content pixels ``P`` (n, 2) for an image of aspect ``aspect``."""
     lo, hi = P.min(axis=0), P.max(axis=0)
     span = hi - lo
-    lo, hi = lo - margin * span, hi + margin * span
+    return aspect_box(lo - margin * span, hi + margin * span, aspect)
+
+
+def aspect_box(lo: np.ndarray, hi: np.ndarray, aspect: float) -> ViewBox:
+    """The box ``[lo, hi]`` (corners (2,)) with its shorter side widened about its centre until
+    ``width / height == aspect``."""
     w, h = hi - lo
     if w / h < aspect:
         w = h * aspect

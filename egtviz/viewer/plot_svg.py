@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..scene import Epipole, ImagePlane
-from .panel_view import FIT_MARGIN, FIT_MAX_EXTENT, ViewBox
+from .panel_view import FIT_MARGIN, FIT_MAX_EXTENT, ViewBox, aspect_box
 from .svg import NORMAL, PanelStyle, image_plane_svg, panel_layout
 
 __all__ = ["PLOT_ASPECT", "plot_image_plane", "plot_svg", "plot_view"]
@@ -66,14 +66,7 @@ def plot_view(plot: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
     lo, hi = P.min(axis=0), P.max(axis=0)
     span = hi - lo
     pad = np.maximum(margin * span, 1e-3 * max(1.0, float(np.abs(P).max())))  # one point: a small square
-    lo, hi = lo - pad, hi + pad
-    w, h = hi - lo
-    if w / h < PLOT_ASPECT:
-        w = h * PLOT_ASPECT
-    else:
-        h = w / PLOT_ASPECT
-    cu, cv = (lo + hi) / 2.0
-    return ViewBox(float(cu - w / 2.0), float(cv - h / 2.0), float(w), float(h))
+    return aspect_box(lo - pad, hi + pad, PLOT_ASPECT)
 
 
 def _epipole(label: str, e: Any, size: tuple[int, int] | None) -> Epipole:
