@@ -6,7 +6,6 @@ They skip only when /usr/bin/chromium is missing on a developer machine; with
 
 from __future__ import annotations
 
-import os
 import time
 
 import numpy as np
@@ -14,21 +13,15 @@ import pytest
 
 from egtviz.scene import compute_derived, default_scene, panoramic_scene
 from egtviz.viewer.browser import (
-    CHROMIUM,
     COUNT_JS,
     LINES_JS,
     chromium,
-    chromium_available,
     folder_field,
     open_viewer,
 )
 
 pytestmark = pytest.mark.browser
 
-if not chromium_available():
-    if os.environ.get("CI"):
-        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests (bash .ci/run installs both)")
-    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing (bash .ci/run installs both)", allow_module_level=True)
 
 
 def _serve(scene):

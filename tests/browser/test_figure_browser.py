@@ -7,7 +7,6 @@ epipole, counted in the page by ``data-kind``.
 
 from __future__ import annotations
 
-import os
 import runpy
 from pathlib import Path
 
@@ -16,14 +15,10 @@ import pytest
 import egtviz.egt_figure as ef
 from egtviz.egt_figure import _server
 from egtviz.scene import compute_derived
-from egtviz.viewer.browser import CHROMIUM, COUNT_JS, chromium, chromium_available, close_notifications, open_viewer
+from egtviz.viewer.browser import COUNT_JS, chromium, close_notifications, open_viewer
 
 pytestmark = pytest.mark.browser
 
-if not chromium_available():
-    if os.environ.get("CI"):
-        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests")
-    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing", allow_module_level=True)
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -21,9 +21,7 @@ import pytest
 
 from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
 from egtviz.viewer.browser import (
-    CHROMIUM,
     chromium,
-    chromium_available,
     close_notifications,
     folder_field,
     open_viewer,
@@ -33,10 +31,6 @@ from egtviz.viewer.svg import NORMAL, PRESENT
 
 pytestmark = pytest.mark.browser
 
-if not chromium_available():
-    if os.environ.get("CI"):
-        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests (bash .ci/run installs both)")
-    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing (bash .ci/run installs both)", allow_module_level=True)
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 WINDOWS = [(1366, 768), (1920, 1080)]

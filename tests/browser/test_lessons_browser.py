@@ -5,7 +5,6 @@ answer refused with its hint, and the screenshots of a lesson (1366 x 768, and i
 from __future__ import annotations
 
 import math
-import os
 import time
 from pathlib import Path
 
@@ -15,20 +14,14 @@ from scipy.optimize import least_squares
 
 from egtviz.lessons import ProgressStore
 from egtviz.viewer.browser import (
-    CHROMIUM,
     PANEL_SELECTOR,
     chromium,
-    chromium_available,
     close_notifications,
     folder_field,
 )
 
 pytestmark = pytest.mark.browser
 
-if not chromium_available():
-    if os.environ.get("CI"):
-        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests (bash .ci/run installs both)")
-    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing (bash .ci/run installs both)", allow_module_level=True)
 
 LESSON6 = "06-pinhole-epipolar"
 ASSETS = Path(__file__).resolve().parents[2] / "assets"

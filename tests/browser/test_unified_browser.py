@@ -3,21 +3,16 @@ conics in its panel. Skipped only when Chromium is missing on a developer machin
 
 from __future__ import annotations
 
-import os
 import time
 
 import numpy as np
 import pytest
 
 from egtviz.scene import Scene, UnifiedSpec, default_scene
-from egtviz.viewer.browser import CHROMIUM, COUNT_JS, chromium, chromium_available, open_viewer
+from egtviz.viewer.browser import COUNT_JS, chromium, open_viewer
 
 pytestmark = pytest.mark.browser
 
-if not chromium_available():
-    if os.environ.get("CI"):
-        raise RuntimeError(f"CI: {CHROMIUM} and the playwright package are required for the browser tests")
-    pytest.skip(f"headless Chromium ({CHROMIUM}) or the playwright package is missing", allow_module_level=True)
 
 CONICS_JS = """(camera) => [...document.querySelectorAll(
   `svg[data-egtviz="image-plane"][data-camera="${camera}"] [data-kind="epipolar-conic"]`)].map(e => e.getAttribute('points'))"""
