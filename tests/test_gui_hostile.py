@@ -27,6 +27,7 @@ from egtviz.viewer.fields import (
     FieldError,
     NumberRule,
     format_number,
+    format_numbers,
     parse_numbers,
     safe_callback,
 )
@@ -99,6 +100,16 @@ def test_a_field_text_is_quoted_short_and_printable():
     with pytest.raises(FieldError) as info:
         parse_numbers("\x1b[31m" + "x" * 5000, (FOCAL,))
     assert "\x1b" not in str(info.value) and len(str(info.value)) < 150
+
+
+def test_a_vector_field_shows_rounding_as_zero():
+    # A gizmo's turn about a vertical axis comes back from the rotation matrix with a roll of ~4e-15 degrees.
+    assert format_numbers((20.556, -3.34916, 3.98412e-15)) == "20.556, -3.34916, 0"
+    assert format_numbers((-2.7, -8.0, 1.5)) == "-2.7, -8, 1.5"
+    # Small is not rounding when nothing larger stands beside it, nor at 1e-12 of the largest and above.
+    assert format_numbers((1e-13, 0.0)) == "1e-13, 0"
+    assert format_numbers((1.0, 2e-12)) == "1, 2e-12"
+    assert format_numbers((5.0, -4e-13)) == "5, 0"
 
 
 @settings(max_examples=200, deadline=None)
