@@ -64,6 +64,21 @@ def _cameras(P1: npt.ArrayLike, P2: npt.ArrayLike) -> tuple[np.ndarray, np.ndarr
     return P1, P2, C1, C2
 
 
+def _common_scale(P1: npt.ArrayLike, P2: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Both camera matrices divided by ONE factor, the largest absolute entry of the two.
+
+    The linear method weighs the two images' equations by the scales of ``P1`` and ``P2``: a common
+    factor keeps the DLT answer for the matrices as given (that of OpenCV and kornia) and makes it
+    independent of the overall scale; separate factors would reweigh the images under noise.
+    """
+    _cameras(P1, P2)  # validation, rank and baseline checks
+    A1 = np.asarray(P1, dtype=np.float64)
+    A2 = np.asarray(P2, dtype=np.float64)
+    t1, t2 = float(np.abs(A1).max()), float(np.abs(A2).max())
+    top = max(t1, t2)
+    return (A1 / t1) * (t1 / top), (A2 / t2) * (t2 / top)
+
+
 def fundamental_from_projections(P1: npt.ArrayLike, P2: npt.ArrayLike) -> np.ndarray:
     r"""Fundamental matrix of two cameras (H&Z 2nd ed., section 9.2.2, Result 9.1).
 
@@ -135,10 +150,13 @@ def triangulate_linear(
 
     :math:`\hat X` is the right singular vector of the smallest singular
     value, computed for all points at once by one batched SVD, exact for
-    every conditioning (low parallax included). ``P1`` and ``P2`` are defined
-    up to scale; each is first scaled to unit Frobenius norm, so the result
-    does not depend on their scales (the relative weight of the two images'
-    equations is fixed by that choice).
+    every conditioning (low parallax included). ``P1`` and ``P2`` are divided
+    by one common factor (the largest absolute entry of the two), so the
+    answer for ``(c P1, c P2)`` is the answer for ``(P1, P2)``, and it is the
+    DLT of the matrices as given (``cv2.triangulatePoints``, kornia's
+    ``triangulate_points``). Scaling one camera alone reweighs its equations
+    against the other's: under noise that moves the points (for exact
+    correspondences it does not).
 
     Args:
         P1: ``(3, 4)`` camera matrix of image 1 (any nonzero scale).
@@ -157,7 +175,7 @@ def triangulate_linear(
             ``MAX_MAGNITUDE``.
         DegenerateConfigurationError: coincident camera centres.
     """
-    P1, P2, _, _ = _cameras(P1, P2)
+    P1, P2 = _common_scale(P1, P2)
     u1, u2 = _pair(U1, U2)
     return _dehomogenize(_dlt(P1, P2, u1, u2))
 
