@@ -6,7 +6,7 @@ import pytest
 
 from egtviz import __version__
 from egtviz.cli import main
-from egtviz.scene import Scene
+from egtviz.scene import load_scene_file
 from egtviz.scene import scene_from_argument
 
 
@@ -18,7 +18,7 @@ def test_version(capsys):
 def test_scene_save_then_check_round_trip(tmp_path, capsys):
     path = tmp_path / "pano.json"
     assert main(["scene", "save", "panoramic", str(path)]) == 0
-    assert Scene.load(path).camera_names == ("pano1", "pano2")
+    assert load_scene_file(path).camera_names == ("pano1", "pano2")
     assert main(["scene", "check", str(path)]) == 0
     assert "pano1 (panoramic), pano2 (panoramic); 8 points" in capsys.readouterr().out
 
@@ -152,7 +152,7 @@ def test_scene_save_refuses_non_regular_targets(tmp_path, capsys):
         assert why in err and "Traceback" not in err, err
     assert real.read_text() == "keep"
     assert main(["scene", "save", "default", str(real)]) == 0  # a regular file is replaced
-    assert Scene.load(real).camera_names == ("cam1", "cam2")
+    assert load_scene_file(real).camera_names == ("cam1", "cam2")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo.json", "link.json", "real.json"]
 
 

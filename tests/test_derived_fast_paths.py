@@ -26,6 +26,7 @@ from egtviz.geometry.pinhole import Intrinsics
 from egtviz.geometry.poses import look_at
 from egtviz.scene import PanoramicSpec, PinholeSpec, Scene, compute_derived, default_scene, panoramic_scene
 from egtviz.scene.derived import COINCIDENT_MESSAGE
+from egtviz.scene.io import scene_from_dict
 
 from _mirrors import K_EGT, kinds, random_mirror, seeds  # noqa: E402
 
@@ -387,7 +388,7 @@ def test_a_drag_gives_what_a_fresh_computation_gives():
         for _ in range(6):
             scene = moved(scene, rng, 0.3)
             a = compute_derived(scene)
-            fresh = Scene.from_dict(scene.to_dict())  # new points tuple, new specs and cameras
+            fresh = scene_from_dict(scene.to_dict())  # new points tuple, new specs and cameras
             b = compute_derived(fresh)
             for name in a.image_planes:
                 pa, pb = a.image_planes[name], b.image_planes[name]

@@ -143,6 +143,9 @@ REFUSED = [
     ("kind-missing", mutated(lambda d: d["cameras"][0].pop("kind")), r"cameras\[0\]\.kind: expected one of"),
     ("unknown-camera-field", mutated(cam("zoom", 2)), r"cameras\[0\]\.zoom: unknown field for a pinhole camera"),
     ("duplicate-names", mutated(cam("name", "cam2")), r"cameras: names must be unique"),
+    ("name-missing", mutated(lambda d: d["cameras"][0].pop("name")), r"cameras\[0\]: name: missing; expected a non-empty string"),
+    ("name-missing-panoramic", mutated(lambda d: d["cameras"].__setitem__(1, {"kind": "panoramic"})), r"cameras\[1\]: name: missing"),
+    ("name-missing-unified", mutated(lambda d: d["cameras"].__setitem__(0, {"kind": "unified", "xi": 0.5})), r"cameras\[0\]: name: missing"),
     ("name-number", mutated(cam("name", 5)), r"cameras\[0\]: name: expected a non-empty string"),
     ("name-list", mutated(cam("name", ["cam"])), r"cameras\[0\]: name: expected a non-empty string"),
     ("name-empty", mutated(cam("name", "  ")), r"cameras\[0\]: name: expected a non-empty string"),
@@ -346,10 +349,10 @@ def test_mesh_symlink_out_of_the_assets_is_refused(tmp_path, monkeypatch):
     try:
         assert surfaces_module.mesh_names() == ("broken.obj", "house.obj")
         with pytest.raises(SceneError, match="no mesh named 'escape.obj'"):
-            SurfaceSpec("mesh", path="escape.obj")
+            surfaces_module.check_surface(SurfaceSpec("mesh", path="escape.obj"))
         with pytest.raises(SceneError, match="mesh 'broken.obj'"):
-            SurfaceSpec("mesh", path="broken.obj")
-        assert SurfaceSpec("mesh", path="house.obj", samples=20).path == "house.obj"
+            surfaces_module.check_surface(SurfaceSpec("mesh", path="broken.obj"))
+        assert surfaces_module.check_surface(SurfaceSpec("mesh", path="house.obj", samples=20)).path == "house.obj"
     finally:
         surfaces_module._load_mesh.cache_clear()
         surfaces_module.mesh_samples.cache_clear()

@@ -11,12 +11,13 @@ import pytest
 from egtviz.geometry import GeometryError, Pose
 from egtviz.geometry.poses import egt_rotation_from_ypr, ypr_from_egt_rotation
 from egtviz.scene import PanoramicSpec, PinholeSpec, Scene, SceneError, SceneModel, default_scene, panoramic_scene
+from egtviz.scene.io import scene_from_dict
 from egtviz.scene.specs import panoramic_rotation_from_ypr
 
 
 def rebuilt(scene: Scene) -> Scene:
     """The same scene made from scratch (plain tuples, fresh specs): what the caches must agree with."""
-    return Scene.from_dict(scene.to_dict())
+    return scene_from_dict(scene.to_dict())
 
 
 def random_rotation(rng) -> np.ndarray:

@@ -27,6 +27,7 @@ from egtviz.scene import (
     panoramic_scene,
 )
 from egtviz.scene.derived import ZERO_FRACTION, shown_value
+from egtviz.scene.io import scene_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -129,7 +130,7 @@ def test_add_camera_of_every_registered_kind(kind):
 
 def test_a_unified_camera_survives_the_file_format_and_its_ranges_are_the_models():
     scene = every_kind_scene()
-    again = Scene.from_dict(scene.to_dict())
+    again = scene_from_dict(scene.to_dict())
     assert again == scene
     entry = scene.to_dict()["cameras"][3]
     assert entry["kind"] == "unified" and entry["xi"] == 0.6

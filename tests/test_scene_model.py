@@ -184,8 +184,10 @@ def test_malformed_scene_file_names_file_and_entry(tmp_path, mutate, match):
 def test_not_json_reports_the_line(tmp_path):
     path = tmp_path / "broken.json"
     path.write_text('{"cameras": [\n  oops\n]}')
+    from egtviz.scene import load_scene_file
+
     with pytest.raises(SceneFileError, match=r"broken.json: line 2"):
-        Scene.load(path)
+        load_scene_file(path)
 
 
 def test_specs_convert_to_core_cameras():
@@ -217,7 +219,7 @@ def test_one_drag_is_one_undo_step_and_no_op_changes_are_silent():
 
 
 def test_mesh_surface_from_assets_is_sampled_with_unit_normals():
-    from egtviz.scene.surfaces import sample_surface
+    from egtviz.scene.surfaces import check_surface, sample_surface
 
     pts, normals = sample_surface(SurfaceSpec("mesh", (1.0, 2.0, 0.0), 2.0, samples=200, path="house.obj"))
     assert 100 <= len(pts) <= 200 and pts.shape == normals.shape
@@ -226,10 +228,15 @@ def test_mesh_surface_from_assets_is_sampled_with_unit_normals():
     assert pts[:, 2].min() >= -1e-9 and pts[:, 2].max() <= 2.4 + 1e-9
     assert np.all(np.abs(pts[:, :2] - [1.0, 2.0]) <= 1.0 + 1e-9)
     with pytest.raises(SceneError, match=r"no mesh named 'no-such-mesh.obj' in the assets \(have house.obj\)"):
-        SurfaceSpec("mesh", path="no-such-mesh.obj")
+        check_surface(SurfaceSpec("mesh", path="no-such-mesh.obj"))
     for forged in ("/etc/passwd", "../assets/house.obj", "mesh: /any/path.obj", str(ASSETS / "house.obj")):
+        spec = SurfaceSpec("mesh", path=forged)  # a spec holds the name only: nothing is read
         with pytest.raises(SceneError, match="expected the name of a mesh in the assets"):
-            SurfaceSpec("mesh", path=forged)
+            check_surface(spec)
+        with pytest.raises(SceneError, match="expected the name of a mesh in the assets"):
+            SceneModel().add_surface(spec)
+        with pytest.raises(SceneError, match="expected the name of a mesh in the assets"):
+            sample_surface(spec)
     assert mesh_names() == ("house.obj",)
 
 

@@ -49,7 +49,8 @@ from .limits import (
     SURFACE_SIZE,
     Range,
 )
-from .specs import PinholeSpec, SceneError, _pair, _ranged, _short, _triple, has_control_characters
+from ._values import SceneError, as_pair, as_ranged, as_triple, has_control_characters, required_fields, short_text
+from .specs import PinholeSpec
 
 __all__ = [
     "ANNOTATION_KINDS",
@@ -80,7 +81,7 @@ _COLOUR = re.compile(r"#[0-9a-fA-F]{6}")
 
 def _colour(value: Any, name: str) -> str:
     if type(value) is not str or _COLOUR.fullmatch(value) is None:
-        raise SceneError(f"{name}: expected a colour '#rrggbb', got {_short(value)}")
+        raise SceneError(f"{name}: expected a colour '#rrggbb', got {short_text(value)}")
     return value.lower()
 
 
@@ -89,7 +90,7 @@ def _text(value: Any, name: str, *, empty: bool = True) -> str:
         not empty and not value.strip()
     ):
         raise SceneError(f"{name}: expected text of at most {MAX_TEXT_LENGTH} characters without control "
-                         f"characters, got {_short(value)}")
+                         f"characters, got {short_text(value)}")
     return value
 
 
@@ -97,7 +98,7 @@ def _tuple_of(value: Any, name: str, limit: int, minimum: int = 0) -> tuple:
     if isinstance(value, np.ndarray):
         value = value.tolist()
     if not isinstance(value, (tuple, list)):
-        raise SceneError(f"{name}: expected a list, got {_short(value)}")
+        raise SceneError(f"{name}: expected a list, got {short_text(value)}")
     if not minimum <= len(value) <= limit:
         raise SceneError(f"{name}: expected {minimum} to {limit} entries, got {len(value)}")
     return tuple(value)
@@ -105,11 +106,11 @@ def _tuple_of(value: Any, name: str, limit: int, minimum: int = 0) -> tuple:
 
 def _triples(value: Any, name: str, limit: int, minimum: int = 0,
              bound: Range = COORDINATE) -> tuple[tuple[float, float, float], ...]:
-    return tuple(_triple(p, f"{name}[{i}]", bound) for i, p in enumerate(_tuple_of(value, name, limit, minimum)))
+    return tuple(as_triple(p, f"{name}[{i}]", bound) for i, p in enumerate(_tuple_of(value, name, limit, minimum)))
 
 
 def _pairs(value: Any, name: str, limit: int) -> tuple[tuple[float, float], ...]:
-    return tuple(_pair(p, f"{name}[{i}]", PLOT_COORDINATE) for i, p in enumerate(_tuple_of(value, name, limit)))
+    return tuple(as_pair(p, f"{name}[{i}]", PLOT_COORDINATE) for i, p in enumerate(_tuple_of(value, name, limit)))
 
 
 def _homogeneous(value: Any, name: str, limit: int) -> tuple[tuple[float, float, float], ...]:
@@ -140,13 +141,13 @@ class Frame:
     """Subscript of the axis names: ``X<label>``, ``Y<label>``, ``Z<label>``."""
 
     def __post_init__(self) -> None:
-        _set(self, "origin", _triple(self.origin, "frame origin"))
+        _set(self, "origin", as_triple(self.origin, "frame origin"))
         axes = _triples(self.axes, "frame axes", 3, 3, Range(-1.0 - 1e-9, 1.0 + 1e-9))
         A = np.array(axes)
         if np.abs(A @ A.T - np.eye(3)).max() > 1e-6:
             raise SceneError("frame axes: expected three orthonormal directions")
         _set(self, "axes", axes)
-        _set(self, "length", _ranged(self.length, FRAME_AXIS_LENGTH, "frame length"))
+        _set(self, "length", as_ranged(self.length, FRAME_AXIS_LENGTH, "frame length"))
         _set(self, "colour", _colour(self.colour, "frame colour"))
         _set(self, "label", _text(self.label, "frame label"))
 
@@ -174,7 +175,7 @@ class Polyline:
         _set(self, "points", _triples(self.points, "polyline points", MAX_POLYLINE_VERTICES, 2))
         _set(self, "colour", _colour(self.colour, "polyline colour"))
         if self.kind not in POLYLINE_KINDS:
-            raise SceneError(f"polyline kind: expected one of {list(POLYLINE_KINDS)}, got {_short(self.kind)}")
+            raise SceneError(f"polyline kind: expected one of {list(POLYLINE_KINDS)}, got {short_text(self.kind)}")
 
 
 @dataclass(frozen=True)
@@ -186,7 +187,7 @@ class Label:
     colour: str = "#333333"
 
     def __post_init__(self) -> None:
-        _set(self, "position", _triple(self.position, "label position"))
+        _set(self, "position", as_triple(self.position, "label position"))
         _set(self, "text", _text(self.text, "label text", empty=False))
         _set(self, "colour", _colour(self.colour, "label colour"))
 
@@ -206,13 +207,13 @@ class PointSet:
         _set(self, "points", _triples(self.points, "point set points", MAX_POLYLINE_VERTICES, 1))
         _set(self, "colour", _colour(self.colour, "point set colour"))
         if type(self.numbered) is not bool:
-            raise SceneError(f"point set numbered: expected true or false, got {_short(self.numbered)}")
+            raise SceneError(f"point set numbered: expected true or false, got {short_text(self.numbered)}")
         numbers = _tuple_of(self.numbers, "point set numbers", MAX_POLYLINE_VERTICES)
         if numbers and (len(numbers) != len(self.points) or not all(
             type(k) is int and 0 <= k < 10**9 for k in numbers
         )):
             raise SceneError(f"point set numbers: expected {len(self.points)} whole numbers 0..1e9, "
-                             f"got {_short(self.numbers)}")
+                             f"got {short_text(self.numbers)}")
         _set(self, "numbers", numbers)
 
     @property
@@ -238,11 +239,11 @@ class Mesh:
         for i, f in enumerate(faces):
             f = tuple(f) if isinstance(f, (list, tuple)) else f
             if type(f) is not tuple or len(f) != 3 or not all(type(k) is int and 0 <= k < n for k in f):
-                raise SceneError(f"mesh faces[{i}]: expected three vertex indices below {n}, got {_short(f)}")
+                raise SceneError(f"mesh faces[{i}]: expected three vertex indices below {n}, got {short_text(f)}")
             checked.append(f)
         _set(self, "faces", tuple(checked))
         _set(self, "colour", _colour(self.colour, "mesh colour"))
-        _set(self, "opacity", _ranged(self.opacity, MESH_OPACITY, "mesh opacity"))
+        _set(self, "opacity", as_ranged(self.opacity, MESH_OPACITY, "mesh opacity"))
 
 
 @dataclass(frozen=True)
@@ -264,21 +265,21 @@ class PlanarMirror:
     virtual: str = ""
 
     def __post_init__(self) -> None:
-        n = np.array(_triple(self.normal, "mirror normal"))
+        n = np.array(as_triple(self.normal, "mirror normal"))
         norm = float(np.linalg.norm(n))
         if not norm > 1e-9:
-            raise SceneError(f"mirror normal: expected a non-zero vector, got {_short(self.normal)}")
+            raise SceneError(f"mirror normal: expected a non-zero vector, got {short_text(self.normal)}")
         _set(self, "normal", tuple(float(v) for v in n / norm))
-        _set(self, "distance", _ranged(self.distance, COORDINATE, "mirror distance"))
-        c = np.array(_triple(self.centre, "mirror centre"))
+        _set(self, "distance", as_ranged(self.distance, COORDINATE, "mirror distance"))
+        c = np.array(as_triple(self.centre, "mirror centre"))
         nn = np.array(self.normal)
         c = c - (c @ nn - self.distance) * nn
-        _set(self, "centre", _triple(tuple(float(v) for v in c), "mirror centre"))
-        _set(self, "size", _ranged(self.size, SURFACE_SIZE, "mirror size"))
+        _set(self, "centre", as_triple(tuple(float(v) for v in c), "mirror centre"))
+        _set(self, "size", as_ranged(self.size, SURFACE_SIZE, "mirror size"))
         for key in ("reflects", "virtual"):
             value = getattr(self, key)
             if type(value) is not str or len(value) > MAX_NAME_LENGTH or has_control_characters(value):
-                raise SceneError(f"mirror {key}: expected a camera name, got {_short(value)}")
+                raise SceneError(f"mirror {key}: expected a camera name, got {short_text(value)}")
         if bool(self.reflects) != bool(self.virtual) or (self.reflects and self.reflects == self.virtual):
             raise SceneError("mirror reflects, virtual: expected both camera names (different) or neither, "
                              f"got {self.reflects!r} and {self.virtual!r}")
@@ -306,8 +307,8 @@ class PlotCircle:
     colour: str = "#333333"
 
     def __post_init__(self) -> None:
-        _set(self, "centre", _pair(self.centre, "circle centre", PLOT_COORDINATE))
-        _set(self, "radius", _ranged(self.radius, Range(0.0, PLOT_COORDINATE.high, "px"), "circle radius"))
+        _set(self, "centre", as_pair(self.centre, "circle centre", PLOT_COORDINATE))
+        _set(self, "radius", as_ranged(self.radius, Range(0.0, PLOT_COORDINATE.high, "px"), "circle radius"))
         _set(self, "colour", _colour(self.colour, "circle colour"))
 
 
@@ -331,7 +332,7 @@ class Plot:
 
     def __post_init__(self) -> None:
         if type(self.number) is not int or not 1 <= self.number <= 10**6:
-            raise SceneError(f"plot number: expected a whole number 1..1000000, got {_short(self.number)}")
+            raise SceneError(f"plot number: expected a whole number 1..1000000, got {short_text(self.number)}")
         _set(self, "points", _pairs(self.points, "plot points", MAX_PLOT_ITEMS))
         _set(self, "lines", _homogeneous(self.lines, "plot lines", MAX_PLOT_ITEMS))
         _set(self, "line_points", _pairs(self.line_points, "plot line_points", MAX_PLOT_ITEMS))
@@ -345,11 +346,11 @@ class Plot:
         circles = _tuple_of(self.circles, "plot circles", MAX_PLOT_ITEMS)
         for i, c in enumerate(circles):
             if type(c) is not PlotCircle:
-                raise SceneError(f"plot circles[{i}]: expected a circle, got {_short(c)}")
+                raise SceneError(f"plot circles[{i}]: expected a circle, got {short_text(c)}")
         _set(self, "circles", circles)
         if self.image_size is not None:
             size = _tuple_of(self.image_size, "plot image_size", 2, 2)
-            _set(self, "image_size", tuple(int(_ranged(v, IMAGE_SIZE, "plot image_size")) for v in size))
+            _set(self, "image_size", tuple(int(as_ranged(v, IMAGE_SIZE, "plot image_size")) for v in size))
 
     @property
     def title(self) -> str:
@@ -388,7 +389,7 @@ class Annotations:
             items = _tuple_of(getattr(self, key), key, limit)
             for i, item in enumerate(items):
                 if type(item) is not cls:
-                    raise SceneError(f"{key}[{i}]: expected a {cls.__name__}, got {_short(item)}")
+                    raise SceneError(f"{key}[{i}]: expected a {cls.__name__}, got {short_text(item)}")
             _set(self, key, items)
         numbers = [p.number for p in self.plots]
         if len(set(numbers)) != len(numbers):
@@ -473,11 +474,14 @@ def annotations_to_dict(annotations: Annotations) -> dict[str, Any]:
 
 def _item(cls: type, entry: Any, where: str) -> Any:
     if not isinstance(entry, dict):
-        raise SceneError(f"{where}: expected an object, got {_short(entry)}")
+        raise SceneError(f"{where}: expected an object, got {short_text(entry)}")
     known = {f.name for f in dataclasses.fields(cls)}
     for key in entry:
         if key not in known:
-            raise SceneError(f"{where}.{_short(key)}: unknown field")
+            raise SceneError(f"{where}.{short_text(key)}: unknown field")
+    for key in required_fields(cls):
+        if key not in entry:
+            raise SceneError(f"{where}: {key}: missing")
     fields = dict(entry)
     if cls is Plot and "circles" in fields:
         circles = _tuple_of(fields["circles"], f"{where}.circles", MAX_PLOT_ITEMS)
@@ -495,7 +499,7 @@ def annotations_from_dict(data: Any) -> Annotations:
         SceneError: ``"annotations.<list>[<i>]: <reason>"``.
     """
     if not isinstance(data, dict):
-        raise SceneError(f"annotations: expected an object, got {_short(data)}")
+        raise SceneError(f"annotations: expected an object, got {short_text(data)}")
     fields: dict[str, Any] = {}
     for key, value in data.items():
         if key == "messages":
@@ -503,7 +507,7 @@ def annotations_from_dict(data: Any) -> Annotations:
             continue
         cls = ANNOTATION_KINDS.get(key)
         if cls is None:
-            raise SceneError(f"annotations.{_short(key)}: unknown entry (expected {sorted(ANNOTATION_KINDS)})")
+            raise SceneError(f"annotations.{short_text(key)}: unknown entry (expected {sorted(ANNOTATION_KINDS)})")
         limit = MAX_PLOTS if key == "plots" else MAX_ANNOTATION_ITEMS
         items = _tuple_of(value, f"annotations.{key}", limit)
         fields[key] = tuple(_item(cls, e, f"annotations.{key}[{i}]") for i, e in enumerate(items))

@@ -26,9 +26,11 @@ from .limits import (
     MAX_SCENE_FILE_BYTES,
     MAX_SURFACES,
 )
-from .annotations import annotations_from_dict, annotations_to_dict
-from .scene import FILE_FORMAT, FILE_VERSION, Scene, SceneFileError
-from .specs import CAMERA_KINDS, DisplayOptions, SceneError, SurfaceSpec, _short, spec_to_dict
+from .annotations import annotations_from_dict
+from .scene import FILE_FORMAT, FILE_VERSION, Scene, SceneFileError, scene_to_bytes, scene_to_dict
+from ._values import SceneError, required_fields, short_text
+from .specs import CAMERA_KINDS, DisplayOptions, SurfaceSpec
+from .surfaces import check_surface
 
 __all__ = [
     "load_scene_file",
@@ -54,7 +56,7 @@ def _object_without_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in pairs:
         if key in out:
-            raise _Refused(f"duplicate key {_short(key)}")
+            raise _Refused(f"duplicate key {short_text(key)}")
         out[key] = value
     return out
 
@@ -134,20 +136,28 @@ def _entry(source: str, where: str, exc: Exception) -> SceneFileError:
 def _list(data: dict, key: str, source: str, limit: int) -> list:
     value = data.get(key, [])
     if not isinstance(value, list):
-        raise SceneFileError(f"{source}: {key}: expected a list, got {_short(value)}")
+        raise SceneFileError(f"{source}: {key}: expected a list, got {short_text(value)}")
     if len(value) > limit:
         raise SceneFileError(f"{source}: {key}: at most {limit} entries, got {len(value)}")
     return value
 
 
+#: What a missing required field holds, for the message.
+_REQUIRED_WHAT = {"name": "a non-empty string"}
+
+
 def _fields(entry: Any, where: str, source: str, cls: type, what: str) -> dict[str, Any]:
     """A JSON object's entries as keyword arguments of ``cls`` (lists become tuples); unknown keys refused."""
     if not isinstance(entry, dict):
-        raise SceneFileError(f"{source}: {where}: expected an object, got {_short(entry)}")
+        raise SceneFileError(f"{source}: {where}: expected an object, got {short_text(entry)}")
     known = {f.name for f in dataclasses.fields(cls)}
     for key in entry:
         if key not in known:
             raise SceneFileError(f"{source}: {where}.{printable(key)}: unknown field for {what}")
+    for name in required_fields(cls):
+        if name not in entry:
+            # Caught here: the constructor would raise a TypeError, not an error naming the entry.
+            raise SceneFileError(f"{source}: {where}: {name}: missing; expected {_REQUIRED_WHAT.get(name, 'a value')}")
     return {k: tuple(v) if isinstance(v, list) else v for k, v in entry.items()}
 
 
@@ -159,21 +169,21 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     """
     source = printable(source)
     if not isinstance(data, dict):
-        raise SceneFileError(f"{source}: top level: expected a JSON object, got {_short(data)}")
+        raise SceneFileError(f"{source}: top level: expected a JSON object, got {short_text(data)}")
     for key in data:
         if key not in _TOP_LEVEL:
             raise SceneFileError(f"{source}: {printable(key)}: unknown entry")
     if "format" in data and data["format"] != FILE_FORMAT:
-        raise SceneFileError(f"{source}: format: expected {FILE_FORMAT!r}, got {_short(data['format'])}")
+        raise SceneFileError(f"{source}: format: expected {FILE_FORMAT!r}, got {short_text(data['format'])}")
     if "version" in data and (type(data["version"]) is not int or data["version"] != FILE_VERSION):
-        raise SceneFileError(f"{source}: version: this egtviz reads version {FILE_VERSION}, got {_short(data['version'])}")
+        raise SceneFileError(f"{source}: version: this egtviz reads version {FILE_VERSION}, got {short_text(data['version'])}")
 
     cameras = []
     for i, entry in enumerate(_list(data, "cameras", source, MAX_CAMERAS)):
         where = f"cameras[{i}]"
         kind = entry.get("kind") if isinstance(entry, dict) else None
         if type(kind) is not str or kind not in CAMERA_KINDS:
-            raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(CAMERA_KINDS)}, got {_short(kind)}")
+            raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(CAMERA_KINDS)}, got {short_text(kind)}")
         entry = {k: v for k, v in entry.items() if k != "kind"}
         spec_cls = CAMERA_KINDS[kind]
         try:
@@ -190,7 +200,7 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     for i, entry in enumerate(_list(data, "surfaces", source, MAX_SURFACES)):
         where = f"surfaces[{i}]"
         try:
-            surfaces.append(SurfaceSpec(**_fields(entry, where, source, SurfaceSpec, "a surface")))
+            surfaces.append(check_surface(SurfaceSpec(**_fields(entry, where, source, SurfaceSpec, "a surface"))))
         except SceneError as exc:
             if isinstance(exc, SceneFileError):
                 raise
@@ -208,7 +218,7 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     for key in ("locked", "highlighted"):
         value = data.get(key, [])
         if not isinstance(value, list) or not all(type(v) is str for v in value):
-            raise SceneFileError(f"{source}: {key}: expected a list of names, got {_short(value)}")
+            raise SceneFileError(f"{source}: {key}: expected a list of names, got {short_text(value)}")
         marks[key] = frozenset(value)
     try:
         annotations = annotations_from_dict(data.get("annotations", {}))
@@ -235,30 +245,6 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     except SceneError as exc:
         raise SceneFileError(f"{source}: scene: {exc}") from None
     return scene
-
-
-def scene_to_dict(scene: Scene) -> dict[str, Any]:
-    """The scene as plain JSON data (the file format, version ``FILE_VERSION``)."""
-    return {
-        "format": FILE_FORMAT,
-        "version": FILE_VERSION,
-        "title": scene.title,
-        "cameras": [spec_to_dict(c) for c in scene.cameras],
-        "points": [list(p) for p in scene.points],
-        "surfaces": [spec_to_dict(s) for s in scene.surfaces],
-        "pair": list(scene.pair) if scene.pair else None,
-        "selected_point": scene.selected_point,
-        "options": dataclasses.asdict(scene.options),
-        "locked": sorted(scene.locked),
-        "highlighted": sorted(scene.highlighted),
-        # Only a figure has annotations: other scene files stay as they were.
-        **({} if scene.annotations.empty else {"annotations": annotations_to_dict(scene.annotations)}),
-    }
-
-
-def scene_to_bytes(scene: Scene) -> bytes:
-    """The scene file's bytes: indented UTF-8 JSON ending with a newline."""
-    return (json.dumps(scene_to_dict(scene), indent=2, allow_nan=False) + "\n").encode("utf-8")
 
 
 def load_scene_file(path: str | os.PathLike) -> Scene:

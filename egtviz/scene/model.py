@@ -32,11 +32,10 @@ from .specs import (
     PinholeSpec,
     SceneError,
     SurfaceSpec,
-    _ranged,
-    _short,
-    _triple,
     spec_for_model,
 )
+from ._values import as_ranged as _ranged, as_triple as _triple, short_text as _short
+from .surfaces import check_surface
 
 UNDO_DEPTH = 100
 _POINT_COUNT = Range(0, MAX_POINTS, "", integer=True)
@@ -334,6 +333,7 @@ class SceneModel:
     def add_surface(self, spec: SurfaceSpec) -> None:
         if not isinstance(spec, SurfaceSpec):
             raise SceneError(f"spec: expected a SurfaceSpec, got {type(spec).__name__}")
+        check_surface(spec)  # a mesh surface's mesh: found in the assets, loaded, checked
         self._replace(Change("surfaces"), surfaces=self._scene.surfaces + (spec,))
 
     def remove_surface(self, index: int) -> None:

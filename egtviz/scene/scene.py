@@ -1,8 +1,9 @@
-"""The state of a scene (immutable) and its file format."""
+"""The state of a scene (immutable) and how it is written to a file (``egtviz.scene.io`` reads files)."""
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,7 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from .annotations import Annotations, resolve_reflections
+from ..files import write_atomic
+from .annotations import Annotations, annotations_to_dict, resolve_reflections
+from .surfaces import sample_surface
 from .limits import (
     COORDINATE,
     MAX_CAMERAS,
@@ -19,16 +22,8 @@ from .limits import (
     MAX_TITLE_LENGTH,
     MAX_TOTAL_SURFACE_SAMPLES,
 )
-from .specs import (
-    CAMERA_KINDS,
-    CameraSpec,
-    DisplayOptions,
-    SceneError,
-    SurfaceSpec,
-    _short,
-    _triple,
-    has_control_characters,
-)
+from ._values import SceneError, as_triple, has_control_characters, short_text
+from .specs import CAMERA_KINDS, CameraSpec, DisplayOptions, SurfaceSpec, spec_to_dict
 
 _CAMERA_TYPES = tuple(CAMERA_KINDS.values())
 _POINT_MARK = re.compile(r"point:(0|[1-9][0-9]{0,8})")
@@ -37,7 +32,7 @@ _POINT_MARK = re.compile(r"point:(0|[1-9][0-9]{0,8})")
 def _sequence(value: Any, name: str, limit: int) -> tuple:
     """A list or tuple of at most ``limit`` items as a tuple (counted before anything is converted)."""
     if not isinstance(value, (tuple, list)):
-        raise SceneError(f"{name}: expected a list, got {_short(value)}")
+        raise SceneError(f"{name}: expected a list, got {short_text(value)}")
     if len(value) > limit:
         raise SceneError(f"{name}: at most {limit}, got {len(value)}")
     return tuple(value)
@@ -46,13 +41,13 @@ def _sequence(value: Any, name: str, limit: int) -> tuple:
 def _marks(value: Any, name: str) -> frozenset[str]:
     """``locked`` / ``highlighted`` as a frozenset of strings."""
     if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, set, frozenset)):
-        raise SceneError(f"{name}: expected a list of camera names and 'point:<i>', got {_short(value)}")
+        raise SceneError(f"{name}: expected a list of camera names and 'point:<i>', got {short_text(value)}")
     if len(value) > MAX_CAMERAS + MAX_POINTS:
         raise SceneError(f"{name}: at most {MAX_CAMERAS + MAX_POINTS} entries, got {len(value)}")
     try:
         return frozenset(value)
     except TypeError:
-        raise SceneError(f"{name}: expected a list of camera names and 'point:<i>', got {_short(value)}") from None
+        raise SceneError(f"{name}: expected a list of camera names and 'point:<i>', got {short_text(value)}") from None
 
 
 def _check_mark(mark: Any, name: str, cameras: list[str], n_points: int) -> None:
@@ -64,7 +59,7 @@ def _check_mark(mark: Any, name: str, cameras: list[str], n_points: int) -> None
         if m is None and mark in cameras:
             return
     raise SceneError(
-        f"{name}: expected camera names of the scene and 'point:<i>' with i below {n_points}, got {_short(mark)}"
+        f"{name}: expected camera names of the scene and 'point:<i>' with i below {n_points}, got {short_text(mark)}"
     )
 
 FILE_FORMAT = "egtviz-scene"
@@ -105,9 +100,9 @@ class Scene:
             raise SceneError(f"cameras: at most {MAX_CAMERAS}, got {len(cameras)}")
         for c in cameras:
             if type(c) not in _CAMERA_TYPES:
-                raise SceneError(f"cameras: expected camera specs, got {_short(c)}")
+                raise SceneError(f"cameras: expected camera specs, got {short_text(c)}")
         if type(self.annotations) is not Annotations:
-            raise SceneError(f"annotations: expected Annotations, got {_short(self.annotations)}")
+            raise SceneError(f"annotations: expected Annotations, got {short_text(self.annotations)}")
         if self.annotations.mirrors:  # a reflected camera follows the camera it reflects
             cameras = resolve_reflections(cameras, self.annotations)
             if len(cameras) > MAX_CAMERAS:
@@ -136,15 +131,15 @@ class Scene:
             if not isinstance(pair, (tuple, list)) or len(pair) != 2 or pair[0] == pair[1] or any(
                 type(n) is not str or n not in names for n in pair
             ):
-                raise SceneError(f"pair: expected two different camera names from {names}, got {_short(self.pair)}")
+                raise SceneError(f"pair: expected two different camera names from {names}, got {short_text(self.pair)}")
             set_(self, "pair", tuple(pair))
         sel = self.selected_point
         if sel is not None:
             if isinstance(sel, (bool, np.bool_)) or not isinstance(sel, (int, np.integer)) or not 0 <= sel < n_points:
-                raise SceneError(f"selected_point: expected null or a whole number below {n_points}, got {_short(sel)}")
+                raise SceneError(f"selected_point: expected null or a whole number below {n_points}, got {short_text(sel)}")
             set_(self, "selected_point", int(sel))
         if type(self.options) is not DisplayOptions:
-            raise SceneError(f"options: expected DisplayOptions, got {_short(self.options)}")
+            raise SceneError(f"options: expected DisplayOptions, got {short_text(self.options)}")
         for name in ("locked", "highlighted"):
             value = getattr(self, name)
             if type(value) is not frozenset:
@@ -156,7 +151,7 @@ class Scene:
         if type(title) is not str or len(title) > MAX_TITLE_LENGTH or has_control_characters(title):
             raise SceneError(
                 f"title: expected text of at most {MAX_TITLE_LENGTH} characters without control characters, "
-                f"got {_short(title)}"
+                f"got {short_text(title)}"
             )
 
     @property
@@ -188,7 +183,7 @@ class Scene:
         points = self.points
         if not 0 <= index < len(points):
             raise SceneError(f"index: no point {index} (have {len(points)})")
-        p = _triple(xyz, f"point {index}")
+        p = as_triple(xyz, f"point {index}")
         arr = points.array.copy()  # type: ignore[attr-defined]
         arr[index] = p
         new = list(points)
@@ -196,9 +191,11 @@ class Scene:
         return self.replace(points=_Points.trusted(new, arr))
 
     def surface_points(self) -> tuple[np.ndarray, np.ndarray]:
-        """All surfaces sampled: ``(points (M, 3), normals (M, 3))``."""
-        from .surfaces import sample_surface
+        """All surfaces sampled: ``(points (M, 3), normals (M, 3))``.
 
+        Raises:
+            SceneError: a mesh surface names no mesh of the assets (a scene file or the model checks that first).
+        """
         if not self.surfaces:
             return np.zeros((0, 3)), np.zeros((0, 3))
         pts, nrm = zip(*(sample_surface(s) for s in self.surfaces))
@@ -210,33 +207,18 @@ class Scene:
             return dataclasses.replace(self, **changes)
         return Scene(**{**{name: getattr(self, name) for name in _SCENE_FIELDS}, **changes})
 
-    # -- file format (egtviz.scene.io) --------------------------------------------
+    # -- file format: writing (reading checks a file completely, ``egtviz.scene.io``) --------------------
 
     def to_dict(self) -> dict[str, Any]:
-        """The scene as plain JSON data (:func:`egtviz.scene.io.scene_to_dict`)."""
-        from .io import scene_to_dict
-
+        """The scene as plain JSON data (the file format, version ``FILE_VERSION``); :func:`scene_to_dict`."""
         return scene_to_dict(self)
 
-    @classmethod
-    def from_dict(cls, data: Any, source: str = "scene") -> Scene:
-        """A scene from JSON data, type-checked and drawable (:func:`egtviz.scene.io.scene_from_dict`)."""
-        from .io import scene_from_dict
-
-        return scene_from_dict(data, source)
-
     def save(self, path: str | Path) -> None:
-        """Write the scene file atomically (:func:`egtviz.scene.io.save_scene_file`)."""
-        from .io import save_scene_file
+        """Write the scene file atomically (``egtviz.files.write_atomic``: never a device, FIFO, folder or link).
 
-        save_scene_file(self, path)
-
-    @classmethod
-    def load(cls, path: str | Path) -> Scene:
-        """Read a scene file (:func:`egtviz.scene.io.load_scene_file`)."""
-        from .io import load_scene_file
-
-        return load_scene_file(path)
+        A file is read back with :func:`egtviz.scene.load_scene_file` (which checks it completely).
+        """
+        write_atomic(path, scene_to_bytes(self))
 
 
 _SCENE_FIELDS = tuple(f.name for f in dataclasses.fields(Scene))
@@ -286,6 +268,30 @@ def _points_tuple(points: Any) -> _Points:
         arr = np.array(seq, dtype=np.float64).reshape(-1, 3)
         if len(arr) == 0 or np.abs(arr).max() <= COORDINATE.high:  # NaN fails this too
             return _Points.trusted(seq, arr)
-    checked = [_triple(p, f"points[{i}]") for i, p in enumerate(seq)]
+    checked = [as_triple(p, f"points[{i}]") for i, p in enumerate(seq)]
     return _Points.trusted(checked, np.array(checked, dtype=np.float64).reshape(-1, 3))
 
+
+
+def scene_to_dict(scene: Scene) -> dict[str, Any]:
+    """The scene as plain JSON data (the file format, version ``FILE_VERSION``)."""
+    return {
+        "format": FILE_FORMAT,
+        "version": FILE_VERSION,
+        "title": scene.title,
+        "cameras": [spec_to_dict(c) for c in scene.cameras],
+        "points": [list(p) for p in scene.points],
+        "surfaces": [spec_to_dict(s) for s in scene.surfaces],
+        "pair": list(scene.pair) if scene.pair else None,
+        "selected_point": scene.selected_point,
+        "options": dataclasses.asdict(scene.options),
+        "locked": sorted(scene.locked),
+        "highlighted": sorted(scene.highlighted),
+        # Only a figure has annotations: other scene files stay as they were.
+        **({} if scene.annotations.empty else {"annotations": annotations_to_dict(scene.annotations)}),
+    }
+
+
+def scene_to_bytes(scene: Scene) -> bytes:
+    """The scene file's bytes: indented UTF-8 JSON ending with a newline."""
+    return (json.dumps(scene_to_dict(scene), indent=2, allow_nan=False) + "\n").encode("utf-8")

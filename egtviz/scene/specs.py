@@ -21,6 +21,17 @@ from ..geometry.camera_model import CAMERA_MODELS, CameraModel, CameraModelInfo
 from ..geometry.catadioptric import HYPERBOLIC, PARABOLIC
 from ..geometry.poses import EGT_CAMERA_BASE, rotx, roty, rotz, ypr_from_egt_rotation
 from ..geometry.unified import UnifiedCamera
+from ._values import (
+    NUMBER_TYPES,
+    OutOfRangeError,
+    SceneError,
+    as_numbers,
+    as_pair,
+    as_ranged,
+    as_triple,
+    has_control_characters,
+    short_text,
+)
 from .limits import (
     ANGLE_DEG,
     COORDINATE,
@@ -38,110 +49,6 @@ from .limits import (
 
 _isfinite = math.isfinite
 _BASE_T = EGT_CAMERA_BASE.T.tolist()
-
-
-class SceneError(ValueError):
-    """A change to a scene that cannot be applied (the scene is left unchanged)."""
-
-
-class OutOfRangeError(SceneError):
-    """A number outside its plausible range (``egtviz.scene.limits``).
-
-    The attributes let a GUI restate the refusal in its own units.
-    """
-
-    def __init__(self, camera: str | None, field: str, value: float, limit: Range) -> None:
-        self.camera = camera
-        """Name of the camera the value belongs to, or None (a point, a surface)."""
-        self.field = field
-        """The spec field (``"focal_length"``, ``"position"``, ...)."""
-        self.value = value
-        self.limit = limit
-        owner = f"camera {camera!r}: " if camera is not None else ""
-        kind = "a whole number in " if limit.integer else ""
-        super().__init__(f"{owner}{field}: expected {kind}{limit.describe()}, got {_short(value)}")
-
-
-def _short(value: Any) -> str:
-    """``repr(value)`` cut to a short prefix (a bad value may be a huge string or integer)."""
-    if isinstance(value, float):
-        return f"{value:g}"
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**30:
-        return "an integer with more than 30 digits"
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-_NUMBER_TYPES = (int, float, np.integer, np.floating)
-
-
-def _number(value: Any, name: str, owner: str = "") -> float:
-    """``value`` as a finite float; strings, booleans, None and containers are refused."""
-    if type(value) is float:
-        x = value
-    elif isinstance(value, (bool, np.bool_)) or not isinstance(value, _NUMBER_TYPES):
-        raise SceneError(f"{owner}{name}: expected a number, got {_short(value)}")
-    else:
-        try:
-            x = float(value)
-        except OverflowError:
-            raise SceneError(f"{owner}{name}: expected a finite number, got {_short(value)}") from None
-    if not _isfinite(x):
-        raise SceneError(f"{owner}{name}: expected a finite number, got {_short(value)}")
-    return x
-
-
-def _ranged(value: Any, limit: Range, name: str, camera: str | None = None) -> float:
-    """``value`` as a float inside ``limit`` (a whole number if ``limit.integer``), or an error naming it."""
-    owner = f"camera {camera!r}: " if camera is not None else ""
-    x = _number(value, name, owner)
-    if x not in limit or (limit.integer and not x.is_integer()):
-        raise OutOfRangeError(camera, name, x, limit)
-    return x
-
-
-def _numbers(value: Any, name: str, n: int, limit: Range = COORDINATE, camera: str | None = None) -> tuple[float, ...]:
-    """``value`` as ``n`` floats inside ``limit``, or a SceneError naming ``name``."""
-    lo, hi = limit.low, limit.high
-    if type(value) is tuple and len(value) == n and all(type(v) is float for v in value):
-        if all(lo <= v <= hi for v in value):  # the usual case (every drag): nothing to convert
-            return value
-        x = value
-    else:
-        owner = f"camera {camera!r}: " if camera is not None else ""
-        if isinstance(value, np.ndarray):
-            if value.ndim != 1:
-                raise SceneError(f"{owner}{name}: expected {_COUNT[n]} numbers, got an array of shape {value.shape}")
-            value = value.tolist()
-        if not isinstance(value, (tuple, list)):
-            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} numbers, got {_short(value)}")
-        if len(value) != n:
-            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} finite numbers, got {len(value)}")
-        for v in value:
-            if isinstance(v, (bool, np.bool_)) or not isinstance(v, _NUMBER_TYPES):
-                raise SceneError(f"{owner}{name}: expected {_COUNT[n]} numbers, got {_short(v)}")
-        try:
-            x = tuple(float(v) for v in value)
-        except OverflowError:
-            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} finite numbers, got {_short(value)}") from None
-    for v in x:
-        if not _isfinite(v):
-            owner = f"camera {camera!r}: " if camera is not None else ""
-            raise SceneError(f"{owner}{name}: expected {_COUNT[n]} finite numbers, got {_short(v)}")
-        if not lo <= v <= hi:
-            raise OutOfRangeError(camera, name, v, limit)
-    return x
-
-
-_COUNT = {2: "two", 3: "three"}
-
-
-def _triple(value: Any, name: str, limit: Range = COORDINATE, camera: str | None = None) -> tuple[float, float, float]:
-    return _numbers(value, name, 3, limit, camera)  # type: ignore[return-value]
-
-
-def _pair(value: Any, name: str, limit: Range, camera: str | None = None) -> tuple[float, float]:
-    return _numbers(value, name, 2, limit, camera)  # type: ignore[return-value]
 
 
 def _egt_rotation(yaw: float, pitch: float, roll: float) -> list[list[float]]:
@@ -177,22 +84,14 @@ def _is_rotation(m: list[list[float]], tol: float = 1e-6) -> bool:
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
 
 
-def has_control_characters(text: str) -> bool:
-    """True if ``text`` holds a control character (C0, DEL, C1): refused in names and titles."""
-    return _CONTROL.search(text) is not None
-
-
-_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
-
-
 def _check_name(name: Any) -> str:
     if not isinstance(name, str) or not name.strip():
-        raise SceneError(f"name: expected a non-empty string, got {_short(name)}")
+        raise SceneError(f"name: expected a non-empty string, got {short_text(name)}")
     name = name.strip()
     if len(name) > MAX_NAME_LENGTH or has_control_characters(name) or name.startswith("point:"):
         raise SceneError(
             f"name: expected at most {MAX_NAME_LENGTH} characters, no control characters and no 'point:' prefix, "
-            f"got {_short(name)}"
+            f"got {short_text(name)}"
         )
     return name
 
@@ -201,13 +100,13 @@ def _check_name(name: Any) -> str:
 def _parameter(value: Any, kind: str, parameter: str, field: str, camera: str) -> float:
     """``value`` checked against the range of ``parameter`` of the registered model ``kind`` (a SceneError naming
     ``field``: the spec's own name for it)."""
-    return _ranged(value, parameter_range(kind, parameter), field, camera)
+    return as_ranged(value, parameter_range(kind, parameter), field, camera)
 
 
 def _parameter_pair(value: Any, kind: str, parameters: tuple[str, str], field: str, camera: str) -> tuple[float, float]:
     limits = {parameter_range(kind, p) for p in parameters}
     (limit,) = limits  # both components of a pair share one range
-    return _pair(value, field, limit, camera)
+    return as_pair(value, field, limit, camera)
 
 
 def _egt_pose(ypr_deg: tuple[float, float, float], position: tuple[float, float, float]) -> Pose:
@@ -276,8 +175,8 @@ class _CameraSpecBase:
         name = _check_name(self.name)
         set_ = object.__setattr__
         set_(self, "name", name)
-        set_(self, "position", _triple(self.position, "position", COORDINATE, name))
-        set_(self, "ypr_deg", _triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
+        set_(self, "position", as_triple(self.position, "position", COORDINATE, name))
+        set_(self, "ypr_deg", as_triple(self.ypr_deg, "ypr_deg", ANGLE_DEG, name))
         return name
 
     @property
@@ -480,7 +379,7 @@ class PanoramicSpec(_CameraSpecBase):
         name = self._check_place()
         set_ = object.__setattr__
         if not isinstance(self.mirror, str) or self.mirror not in _MIRROR_KINDS:
-            raise SceneError(f"camera {name!r}: mirror: expected 'hyperbolic' or 'parabolic', got {_short(self.mirror)}")
+            raise SceneError(f"camera {name!r}: mirror: expected 'hyperbolic' or 'parabolic', got {short_text(self.mirror)}")
         k = self.mirror
         shape = _MIRROR_KINDS[k]
         set_(self, "a", _parameter(self.a, k, shape[0], "a", name))
@@ -641,7 +540,7 @@ def spec_for_model(model_kind: str) -> tuple[type, dict[str, Any]]:
     """
     found = _SPEC_FOR_MODEL.get(model_kind) if type(model_kind) is str else None
     if found is None:
-        raise SceneError(f"kind: expected one of {sorted(CAMERA_MODELS)}, got {_short(model_kind)}")
+        raise SceneError(f"kind: expected one of {sorted(CAMERA_MODELS)}, got {short_text(model_kind)}")
     cls, selection = found
     return cls, dict(selection)
 
@@ -677,27 +576,23 @@ class SurfaceSpec:
     samples: int = 100
     path: str = ""
     """For ``kind = "mesh"``: the name of a mesh in the package's assets (:func:`egtviz.scene.surfaces.mesh_names`).
-    Only a plain file name there is accepted; the mesh is loaded and checked when the spec is made."""
+    The spec holds the name only; :func:`egtviz.scene.surfaces.check_surface` loads and checks the mesh (a scene
+    file and ``SceneModel.add_surface`` call it), and only a plain file name in the assets is ever read."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, str) or self.kind not in ("plane", "sphere", "mesh"):
-            raise SceneError(f"surface kind: expected plane, sphere or mesh, got {_short(self.kind)}")
+            raise SceneError(f"surface kind: expected plane, sphere or mesh, got {short_text(self.kind)}")
         set_ = object.__setattr__
-        set_(self, "center", _triple(self.center, "center"))
-        set_(self, "normal", _triple(self.normal, "normal"))
+        set_(self, "center", as_triple(self.center, "center"))
+        set_(self, "normal", as_triple(self.normal, "normal"))
         if math.hypot(*self.normal) < 1e-6:
             raise SceneError(f"surface normal: must not be (nearly) zero, got {self.normal}")
-        set_(self, "size", _ranged(self.size, SURFACE_SIZE, "size"))
-        set_(self, "samples", int(_ranged(self.samples, SURFACE_SAMPLES, "samples")))
+        set_(self, "size", as_ranged(self.size, SURFACE_SIZE, "size"))
+        set_(self, "samples", int(as_ranged(self.samples, SURFACE_SAMPLES, "samples")))
         if not isinstance(self.path, str):
-            raise SceneError(f"surface path: expected a mesh name, got {_short(self.path)}")
-        if self.kind != "mesh":
-            if self.path:
-                raise SceneError(f"surface path: only a mesh surface has one, got {_short(self.path)}")
-            return
-        from .surfaces import mesh_samples
-
-        mesh_samples(self.path, self.samples)  # loads and checks the mesh (cached by name)
+            raise SceneError(f"surface path: expected a mesh name, got {short_text(self.path)}")
+        if self.kind != "mesh" and self.path:
+            raise SceneError(f"surface path: only a mesh surface has one, got {short_text(self.path)}")
 
 
 @dataclass(frozen=True)
@@ -713,7 +608,7 @@ class DisplayOptions:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             if type(getattr(self, f.name)) is not bool:
-                raise SceneError(f"options: {f.name}: expected true or false, got {_short(getattr(self, f.name))}")
+                raise SceneError(f"options: {f.name}: expected true or false, got {short_text(getattr(self, f.name))}")
 
 
 def spec_to_dict(spec: Any) -> dict[str, Any]:

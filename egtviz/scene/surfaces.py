@@ -12,7 +12,8 @@ import numpy as np
 from ..files import FileSafetyError, read_limited
 from ..resources import shipped_folder
 from .limits import MAX_MESH_FILE_BYTES
-from .specs import SceneError, SurfaceSpec
+from ._values import SceneError
+from .specs import SurfaceSpec
 
 ASSETS = shipped_folder("assets")
 """The folder meshes are read from; nothing outside it is ever read for a surface."""
@@ -95,6 +96,20 @@ def mesh_samples(name: str, samples: int) -> tuple[np.ndarray, np.ndarray]:
     pts.setflags(write=False)
     normals.setflags(write=False)
     return pts, normals
+
+
+def check_surface(spec: SurfaceSpec) -> SurfaceSpec:
+    """``spec``, once its mesh (for a mesh surface) is found in the assets, loaded and checked (cached by name).
+
+    Raises:
+        SceneError: ``"surface path: ..."``: not the plain name of a mesh of the assets, or a mesh that cannot be
+            loaded or is empty, degenerate or too large.
+    """
+    if not isinstance(spec, SurfaceSpec):
+        raise SceneError(f"spec: expected a SurfaceSpec, got {type(spec).__name__}")
+    if spec.kind == "mesh":
+        mesh_samples(spec.path, spec.samples)
+    return spec
 
 
 def _plane_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -123,7 +123,7 @@ def _fail(message: str) -> int:
 def run(args: argparse.Namespace) -> int:
     """Write the figure; 0 on success, 2 (with one line on stderr) for a bad scene, camera, extension or output."""
     from ..files import FileSafetyError, printable, write_atomic
-    from ..scene import SCENES, Scene, SceneError
+    from ..scene import SCENES, SceneError, load_scene_file
 
     out = Path(args.out)
     ext = out.suffix.lower()
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
         return _fail(f"--scale must be in (0, 16], got {args.scale}")
     if args.scene is not None:
         try:
-            scene = Scene.load(args.scene)
+            scene = load_scene_file(args.scene)
         except (SceneError, OSError) as exc:
             return _fail(printable(exc))
     elif args.name in SCENES:
