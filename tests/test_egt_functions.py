@@ -533,8 +533,23 @@ def test_quantities_up_to_scale_give_the_same_result_at_any_scale(scale):
     _, _, F = f_epipole(H1, H2, np.eye(3), np.eye(3))
     m = np.array([[0.1, -0.3], [0.2, 0.5]])
     for a, b in zip(f_epipline(m, m, F), f_epipline(m, m, scale * F)):
-        np.testing.assert_allclose(a / np.linalg.norm(a, axis=0), b / np.linalg.norm(b, axis=0), atol=1e-12)
+        # The lines come in F's scale (EGT's): the same lines, scale times longer.
+        np.testing.assert_allclose(b / scale, a, rtol=1e-12, atol=1e-14)
     E = f_panE(np.eye(4), pose(rotoz(0.3), [1.0, 2.0, 0.5]))
     sol, sol_scaled = f_E2Motion(E), f_E2Motion(scale * E)
     np.testing.assert_allclose(sol_scaled[:, :3], sol[:, :3], atol=1e-12)
     np.testing.assert_allclose(sol_scaled[:, 3] / scale, sol[:, 3], rtol=1e-12)
+
+
+def test_epipline_returns_egts_lines_in_the_scale_of_the_given_f():
+    # EGT's f_epipline: lp = F * [U; 1] and l = F' * [Up; 1], with F as given (no rescaling).
+    F = np.array([[0.0, -2.5, 40.0], [3.0, 0.5, -75.0], [-30.0, 60.0, 7.5]])  # |F| is about 106, max 75
+    m1 = np.array([[10.0, 250.0, -4.0], [20.0, 3.5, 100.0]])
+    m2 = np.array([[12.0, 240.0, 0.0], [18.0, 7.0, 90.0]])
+    l, lp = f_epipline(m1, m2, F)
+    l_egt = F.T @ np.vstack([m2, np.ones(3)])
+    lp_egt = F @ np.vstack([m1, np.ones(3)])
+    np.testing.assert_allclose(l, l_egt, rtol=1e-14, atol=1e-12)
+    np.testing.assert_allclose(lp, lp_egt, rtol=1e-14, atol=1e-12)
+    # A written-out entry: lp[:, 0] = F (10, 20, 1) = (-50 + 40, 30 + 10 - 75, -300 + 1200 + 7.5).
+    np.testing.assert_allclose(lp[:, 0], [-10.0, -35.0, 907.5], rtol=1e-15)

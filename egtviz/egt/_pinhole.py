@@ -99,12 +99,18 @@ def f_epipline(
         *plot: EGT's ``flag, figa, figd, car``: a true ``flag`` draws the lines
             from each point to its image's epipole, in figures ``figa`` and
             ``figd``, with the MATLAB style ``car`` (e.g. ``'b:'``).
+
+    Returns:
+        ``(l1, l2)`` in the scale of the ``F`` given, as EGT returns them (``F`` is divided by its
+        largest entry for the arithmetic and the lines multiplied back).
     """
     Fn = as_up_to_scale(F, "F", (3, 3))
+    top = float(np.abs(np.asarray(F, dtype=np.float64)).max())  # finite and non-zero: checked above
     p1, p2 = pixels(m1, "m1"), pixels(m2, "m2")
     if len(p1) != len(p2):
         raise GeometryError(f"m2: expected as many points as m1 ({len(p1)}), got {len(p2)}")
-    l1, l2 = epipolar_lines_in_first(Fn, p2).T, epipolar_lines(Fn, p1).T
+    with np.errstate(over="ignore"):  # beyond the float range EGT's product overflows to inf too
+        l1, l2 = epipolar_lines_in_first(Fn, p2).T * top, epipolar_lines(Fn, p1).T * top
     if plot and flag(plot[0]):
         figs = [p if isinstance(p, (int, np.integer)) and not isinstance(p, bool) else None for p in plot[1:3]]
         figs += [None] * (2 - len(figs))
