@@ -505,16 +505,21 @@ def test_the_server_starts_once_prints_its_url_once_and_tabs_show_the_current_fi
         server = ef.figure_server()
         tab = FakeTab(server.server.get_port())
         (view,) = server.app.wait_for_view()
+        assert ef.flush()
         assert view.model.scene.title == "Figure 1" and len(view.model.scene.cameras) == 1
         f_scenepnt(np.array([[0.0, 0.0, 1.0]]).T)
+        assert ef.flush()
         assert len(view.model.scene.points) == 1  # pushed to the open tab
         f_perspproj(np.array([[0.0, 0.0, 1.0]]).T, f_Rt2H(eye(3), [0, -5, 0]), eye(3), 1)
+        assert ef.flush()
         plots = [svg for svg in view.svgs.values() if 'data-plot="1"' in svg]
         assert len(plots) == 1 and _kinds(plots[0])["point"] == 1  # the plot has its panel in the tab
         with pytest.warns(RuntimeWarning):
             ef.draw("hologram")
+        assert ef.flush()
         assert view.title.content.count('data-egtviz="figure-message"') == 1  # the reason, under the title
         figure(2)
+        assert ef.flush()
         assert view.model.scene.title == "Figure 2" and not view.model.scene.cameras
         tab.close()
     finally:

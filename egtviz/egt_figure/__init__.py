@@ -14,10 +14,18 @@ As MATLAB with ``hold on``: every call adds to the current figure;
 the current one. The browser shows the current figure: each tab switches to
 it when it changes (one scene per figure).
 
+A drawing call returns at once, whatever the number of open tabs: it records
+the figure's state, and one background thread shows the latest state in the
+tabs (a loop of drawings becomes a few updates, :mod:`._publisher`). The tabs
+are brought up to date (:func:`flush`) by :func:`show`, :func:`stop_server`,
+at the end of each notebook cell and when the interpreter exits; in between
+they follow within a fraction of a second.
+
 The first drawing starts a local egtviz server (``127.0.0.1``, port 8080 or
 the next free one; viser serves from a daemon thread) and prints its URL once;
 later drawings reuse it. In a Jupyter kernel the page is also shown inline
-(an ``IPython.display.IFrame``) when a figure is first drawn. With the
+(an ``IPython.display.IFrame``, once the tabs show the figure) when a figure
+is first drawn. With the
 environment variable ``EGTVIZ_FIGURE=off`` no server starts: figures are kept
 in memory only (headless scripts, tests), readable with :func:`current_figure`.
 
@@ -39,13 +47,15 @@ functions in ``egtviz.egt``: ``frame`` (``H``, ``style``, ``length``,
 
 from __future__ import annotations
 
+import atexit
 import sys
 import threading
 import time
 from typing import Any
 
 from ._builder import KINDS, Figure
-from ._server import FigureServer, figures_enabled, in_jupyter, show_inline
+from ._publisher import Publisher
+from ._server import FigureServer, figures_enabled, in_jupyter, on_cell_end, show_inline
 
 __all__ = [
     "KINDS",
@@ -56,6 +66,7 @@ __all__ = [
     "figure",
     "figure_server",
     "figures",
+    "flush",
     "hold_on",
     "reset",
     "server_url",
@@ -67,6 +78,9 @@ _lock = threading.RLock()
 _figures: dict[int, Figure] = {}
 _current: int | None = None
 _running: FigureServer | None = None
+_publisher: Publisher | None = None
+#: Seconds the interpreter's exit waits for the tabs to show the last drawing.
+EXIT_FLUSH_SECONDS = 10.0
 
 
 def _current_figure() -> Figure:
@@ -80,17 +94,34 @@ def _current_figure() -> Figure:
 
 
 def _publish(fig: Figure) -> None:
-    """Show ``fig`` in the browser (starting the server on first use), unless figures are off."""
-    global _running
+    """Record ``fig`` for the browser's tabs (starting the server on first use), unless figures are off."""
+    global _running, _publisher
     if not figures_enabled():
         return
     if _running is None:
         _running = FigureServer()
+        _publisher = Publisher(_running.show)
+        if in_jupyter():
+            on_cell_end(lambda *_: flush())
         print(f"egtviz figure: {_running.url}", flush=True)
-    _running.show(fig.scene())
+    assert _publisher is not None
+    _publisher.submit(fig.scene())
     if not fig.displayed and in_jupyter():
+        _publisher.flush()  # the inline frame opens on the figure, as the tabs show it
         show_inline(_running.url)
     fig.displayed = True
+
+
+def flush(timeout: float | None = 30.0) -> bool:
+    """Wait until every open tab shows the last drawing; True if it did within ``timeout`` seconds (or no
+    server runs)."""
+    publisher = _publisher
+    return True if publisher is None else publisher.flush(timeout)
+
+
+@atexit.register
+def _flush_at_exit() -> None:
+    flush(EXIT_FLUSH_SECONDS)
 
 
 def draw(kind: str, **data: Any) -> bool:
@@ -153,9 +184,13 @@ def server_url() -> str | None:
 
 
 def stop_server() -> None:
-    """Stop the figure server, if one runs (the next drawing starts a new one)."""
-    global _running
+    """Stop the figure server, if one runs, once its tabs show the last drawing (the next drawing starts a
+    new one)."""
+    global _running, _publisher
     with _lock:
+        if _publisher is not None:
+            _publisher.close()
+            _publisher = None
         if _running is not None:
             _running.stop()
             _running = None
@@ -178,6 +213,7 @@ def show(wait: bool | None = None) -> None:
     """
     if wait is None:
         wait = "--no-wait" not in sys.argv[1:]
+    flush()
     if not wait or _running is None or in_jupyter():
         return
     print("egtviz figure: serving until Ctrl-C", flush=True)

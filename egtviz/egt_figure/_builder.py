@@ -10,9 +10,11 @@ script never fails because of a drawing.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import warnings
-from collections.abc import Callable
+from collections import defaultdict
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
@@ -30,7 +32,14 @@ from ..scene.annotations import (
     Polyline,
 )
 from ..scene.examples import TUTORIAL_CCD
-from ..scene.limits import MAX_TITLE_LENGTH, SURFACE_SIZE
+from ..scene.limits import (
+    MAX_ANNOTATION_ITEMS,
+    MAX_PLOT_ITEMS,
+    MAX_POINTS,
+    MAX_POLYLINE_VERTICES,
+    MAX_TITLE_LENGTH,
+    SURFACE_SIZE,
+)
 from ._style import parse_style
 
 __all__ = ["Figure", "KINDS"]
@@ -51,6 +60,57 @@ def _columns(value: Any, rows: int, name: str) -> np.ndarray:
 
 def _finite_rows(P: np.ndarray) -> np.ndarray:
     return P[np.all(np.isfinite(P), axis=1)]
+
+
+def _distinct_rows(*parts: np.ndarray) -> int:
+    """How many different rows ``parts`` hold together (exact values; -0.0 is 0.0, as tuples compare)."""
+    rows = [np.asarray(p, dtype=float) for p in parts if len(p)]
+    if not rows:
+        return 0
+    A = np.ascontiguousarray(np.concatenate(rows) + 0.0)
+    return len(np.unique(A.view(np.dtype((np.void, A.dtype.itemsize * A.shape[1]))).ravel()))
+
+
+def _refuse_over(count: int, limit: int, name: str, phrase: str = "expected 0 to {limit} entries") -> None:
+    """Refuse a drawing the scene would refuse for its size, before any work per item (a million points are
+    refused at once). The message is the scene's own for that limit."""
+    if count > limit:
+        raise SceneError(f"{name}: {phrase.format(limit=limit)}, got {count}")
+
+
+def _near(h: tuple[float, ...], p: tuple[float, ...]) -> bool:
+    """``h`` and ``p`` are one pixel: every coordinate within ``1e-9 (1 + |p|)`` (a drawing's rounding)."""
+    return all(abs(a - b) <= 1e-9 * (1.0 + abs(b)) for a, b in zip(h, p))
+
+
+class _NearGrid:
+    """Rows on a grid of cells at least twice the widest :func:`_near` tolerance, so a near row is in the same or
+    a neighbouring cell: finding one costs a few lookups, not a pass over every row."""
+
+    def __init__(self, rows: Iterable[tuple[float, ...]], extent: float) -> None:
+        self.width = 2e-9 * (1.0 + extent)
+        self.cells: defaultdict[tuple[int, ...], list[tuple[float, ...]]] = defaultdict(list)
+        for r in rows:
+            self.add(r)
+
+    def _key(self, p: tuple[float, ...]) -> tuple[int, ...]:
+        return tuple(math.floor(c / self.width) for c in p)
+
+    def add(self, p: tuple[float, ...]) -> None:
+        self.cells[self._key(p)].append(p)
+
+    def holds(self, p: tuple[float, ...]) -> bool:
+        key = self._key(p)
+        for step in itertools.product((-1, 0, 1), repeat=len(key)):
+            for h in self.cells.get(tuple(k + s for k, s in zip(key, step)), ()):
+                if _near(h, p):
+                    return True
+        return False
+
+
+def _extent(*parts: Any) -> float:
+    """The largest absolute coordinate of ``parts`` (0 when empty)."""
+    return max((float(np.max(np.abs(np.asarray(p, dtype=float)))) for p in parts if len(p)), default=0.0)
 
 
 def _pose_matrix(H: Any, name: str = "H") -> np.ndarray:
@@ -120,18 +180,25 @@ class _PlotState:
         return new
 
     def add_points(self, P: np.ndarray) -> None:
-        """Append pixels not already there (drawing the same points twice draws them once)."""
-        have = np.array(self.points).reshape(-1, 2)
+        """Append pixels not already there (drawing the same points twice draws them once).
+
+        More different pixels than a plot holds are refused before any are compared one by one.
+        """
+        P = np.asarray(P, dtype=float).reshape(-1, 2)
+        if len(self.points) + len(P) > MAX_PLOT_ITEMS:
+            _refuse_over(_distinct_rows(np.array(self.points).reshape(-1, 2), P), MAX_PLOT_ITEMS, "plot points")
+        grid = _NearGrid(self.points, _extent(self.points, P))
         for p in P:
-            if not len(have) or not np.any(np.all(np.abs(have - p) <= 1e-9 * (1.0 + np.abs(p)), axis=1)):
-                self.points.append((float(p[0]), float(p[1])))
-                have = np.array(self.points).reshape(-1, 2)
+            t = (float(p[0]), float(p[1]))
+            if not grid.holds(t):
+                self.points.append(t)
+                grid.add(t)
 
     def holds(self, P: np.ndarray) -> bool:
-        have = np.array(self.points).reshape(-1, 2)
-        if not len(have) or not len(P):
+        if not self.points or not len(P):
             return False
-        return all(np.any(np.all(np.abs(have - p) <= 1e-9 * (1.0 + np.abs(p)), axis=1)) for p in P)
+        grid = _NearGrid(self.points, _extent(self.points, P))
+        return all(grid.holds((float(p[0]), float(p[1]))) for p in P)
 
     def plot(self) -> Plot:
         return Plot(number=self.number, points=tuple(self.points), lines=tuple(self.lines),
@@ -205,6 +272,11 @@ class Figure:
             return False
         self.revision += 1
         return True
+
+    def _refuse_items(self, key: str, count: int) -> None:
+        """Refuse ``count`` new items of kind ``key`` (``"polylines"``, ...) over the scene's limit, before any
+        is made."""
+        _refuse_over(len(self.items[key]) + count, MAX_ANNOTATION_ITEMS, key)
 
     def _message(self, text: str) -> None:
         # stacklevel: the student's line (an EGT function -> _draw -> egt_figure.draw -> Figure.draw -> here).
@@ -294,7 +366,9 @@ class Figure:
 
     def _draw_projection_rays(self, points: Any, centre: Any) -> None:
         C = np.asarray(centre, dtype=float).reshape(3)
-        for X in _finite_rows(_columns(points, 3, "points")):
+        P = _finite_rows(_columns(points, 3, "points"))
+        self._refuse_items("polylines", len(P))
+        for X in P:
             self.items["polylines"].append(Polyline(points=(tuple(C), tuple(X)), colour="#777777", kind="ray"))
 
     def _draw_epipolar_lines(self, lines: Any, points: Any, epipole: Any, figure: Any = None,
@@ -303,12 +377,17 @@ class Figure:
         P = _columns(points, 2, "points")
         if len(L) != len(P):
             raise ValueError(f"lines, points: expected as many lines as points, got {len(L)} and {len(P)}")
-        plot = self._plot(figure, points=_finite_rows(P))
-        plot.add_points(_finite_rows(P))
-        for line, p in zip(L, P):
-            if np.all(np.isfinite(line)) and np.all(np.isfinite(p)) and math.hypot(line[0], line[1]) > 0:
-                plot.lines.append(tuple(float(v) for v in line / math.hypot(line[0], line[1])))
-                plot.line_points.append((float(p[0]), float(p[1])))
+        seen = _finite_rows(P)
+        if len(seen) > MAX_PLOT_ITEMS:
+            _refuse_over(_distinct_rows(seen), MAX_PLOT_ITEMS, "plot points")
+        drawn = np.all(np.isfinite(L), axis=1) & np.all(np.isfinite(P), axis=1) & np.any(L[:, :2] != 0, axis=1)
+        _refuse_over(int(drawn.sum()), MAX_PLOT_ITEMS, "plot lines")
+        plot = self._plot(figure, points=seen)
+        plot.add_points(seen)
+        _refuse_over(len(plot.lines) + int(drawn.sum()), MAX_PLOT_ITEMS, "plot lines")
+        for line, p in zip(L[drawn], P[drawn]):
+            plot.lines.append(tuple(float(v) for v in line / math.hypot(line[0], line[1])))
+            plot.line_points.append((float(p[0]), float(p[1])))
         e = np.asarray(epipole, dtype=float).reshape(3)
         if np.all(np.isfinite(e)) and np.any(e):
             e_h = _homogeneous(e)
@@ -326,6 +405,8 @@ class Figure:
         X = _columns(points, 3, "points")
         Xh = _columns(mirror_points, 3, "mirror_points")
         seen = np.all(np.isfinite(Xh), axis=1) & np.all(np.isfinite(X), axis=1)
+        _refuse_over(int(seen.sum()), MAX_POLYLINE_VERTICES, "point set points", "expected 1 to {limit} entries")
+        self._refuse_items("polylines", int(seen.sum()))
         self.add_points(X)
         if seen.any():
             self.items["point_sets"].append(PointSet(points=tuple(map(tuple, Xh[seen])), colour=colour))
@@ -337,6 +418,9 @@ class Figure:
         colour = parse_style(style, "#0000e0").colour
         M = _pose_matrix(H)
         S = _finite_rows(_columns(sphere_points, 3, "sphere_points"))
+        _refuse_over(len(S), MAX_POLYLINE_VERTICES, "point set points", "expected 1 to {limit} entries")
+        if rays:
+            self._refuse_items("polylines", len(S))
         self.add_points(_columns(points, 3, "points"))
         if len(S):
             self.items["point_sets"].append(PointSet(points=tuple(map(tuple, S)), colour=colour))
@@ -352,11 +436,13 @@ class Figure:
 
     def _draw_line3d(self, points: Any, style: Any = None) -> None:
         P = _columns(points, 3, "points")
+        _refuse_over(len(P), MAX_POLYLINE_VERTICES, "polyline points", "expected 2 to {limit} entries")
         self.items["polylines"].append(Polyline(points=tuple(map(tuple, P)), colour=parse_style(style).colour,
                                                 kind="line"))
 
     def _draw_scene_points(self, points: Any, style: Any = None) -> None:
         P = _finite_rows(_columns(points, 3, "points"))
+        _refuse_over(len(P), MAX_POLYLINE_VERTICES, "point set points", "expected 1 to {limit} entries")
         if len(P):
             self.items["point_sets"].append(PointSet(points=tuple(map(tuple, P)),
                                                      colour=parse_style(style, "#d00000").colour))
@@ -409,9 +495,16 @@ class Figure:
         self._camera_poses.append(M)
 
     def add_points(self, P: np.ndarray) -> None:
-        """Scene points (rows), skipping non-finite ones and points the figure already has."""
+        """Scene points (rows), skipping non-finite ones and points the figure already has.
+
+        More different points than a scene holds are refused before any are added one by one.
+        """
+        P = _finite_rows(np.asarray(P, dtype=float).reshape(-1, 3))
+        if len(self.points) + len(P) > MAX_POINTS:
+            _refuse_over(_distinct_rows(np.array(self.points).reshape(-1, 3), P), MAX_POINTS, "points",
+                         "at most {limit}")
         have = set(self.points)
-        for p in _finite_rows(np.asarray(P, dtype=float).reshape(-1, 3)):
+        for p in P:
             t = (float(p[0]), float(p[1]), float(p[2]))
             if t not in have:
                 self.points.append(t)
@@ -426,6 +519,7 @@ class Figure:
         if len(nums) != len(P):
             raise ValueError(f"numbers: expected one per point ({len(P)}), got {len(nums)}")
         keep = np.all(np.isfinite(P), axis=1)
+        _refuse_over(int(keep.sum()), MAX_POLYLINE_VERTICES, "point set points", "expected 1 to {limit} entries")
         if keep.any():
             self.items["point_sets"].append(PointSet(
                 points=tuple(map(tuple, P[keep])), colour=parse_style(style, "#d00000").colour, numbered=True,

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["FigureServer", "figures_enabled", "in_jupyter", "show_inline"]
+__all__ = ["FigureServer", "figures_enabled", "in_jupyter", "on_cell_end", "show_inline"]
 
 #: The first port tried; the server takes the next free one above it when it is busy.
 FIRST_PORT = 8080
@@ -46,6 +46,19 @@ def show_inline(url: str, modules: Mapping[str, Any] = sys.modules) -> Any:
     frame = display.IFrame(url, width="100%", height=INLINE_HEIGHT)
     display.display(frame)
     return frame
+
+
+def on_cell_end(callback: Any, modules: Mapping[str, Any] = sys.modules) -> bool:
+    """Call ``callback`` after each notebook cell runs (IPython's ``post_run_cell`` event); True if registered.
+
+    Only a kernel IPython already imported is used (as :func:`in_jupyter`); a shell without events is left alone.
+    """
+    try:
+        shell = modules["IPython"].get_ipython()
+        shell.events.register("post_run_cell", callback)
+    except Exception:  # noqa: BLE001 - without the hook, the tabs still catch up on their own
+        return False
+    return True
 
 
 class FigureServer:

@@ -1,0 +1,105 @@
+"""The figure's way to the open tabs: one background thread pushes the latest state, a burst of drawings once.
+
+A drawing call only records the figure's state (an immutable :class:`~egtviz.scene.Scene`) and returns; the
+publisher's thread shows the newest recorded state in every open tab. States recorded while a push is under
+way replace each other (the latest wins), so 300 drawings in a loop cost a handful of pushes whatever the
+number of tabs. Between two pushes the thread rests at least as long as the last push took: the script's own
+thread keeps at least half of the interpreter while tabs are open. :meth:`Publisher.flush` waits until the
+tabs show the last state (the end of a script, :func:`egtviz.egt_figure.show`, a notebook cell's end).
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+__all__ = ["COALESCE_SECONDS", "MAX_REST_SECONDS", "Publisher"]
+
+#: How long the thread waits after the first new state before pushing, so a loop's drawings go out together.
+COALESCE_SECONDS = 0.05
+#: The longest rest between two pushes (a slow push with many tabs does not hold the next one back longer).
+MAX_REST_SECONDS = 1.0
+
+
+class Publisher:
+    """Shows the latest submitted state with ``show`` from one daemon thread (see the module docstring).
+
+    Args:
+        show: pushes one state to every open tab (called in the publisher's thread only).
+        coalesce: seconds to wait after a new state before pushing it (:data:`COALESCE_SECONDS`).
+    """
+
+    def __init__(self, show: Callable[[Any], None], *, coalesce: float = COALESCE_SECONDS) -> None:
+        self._show = show
+        self._coalesce = coalesce
+        self._cond = threading.Condition()
+        self._pending: Any = None
+        self._submitted = 0
+        """Number of the newest submitted state."""
+        self._shown = 0
+        """Number of the newest state pushed (or failed to push)."""
+        self._urgent = False
+        self._closing = False
+        self.pushes = 0
+        """Pushes made so far."""
+        self._thread = threading.Thread(target=self._run, name="egtviz-figure-publisher", daemon=True)
+        self._thread.start()
+
+    def submit(self, state: Any) -> None:
+        """Record ``state`` as the one the tabs should show next; returns at once."""
+        with self._cond:
+            self._pending = state
+            self._submitted += 1
+            self._cond.notify_all()
+
+    def flush(self, timeout: float | None = 30.0) -> bool:
+        """Push the last submitted state now and wait until it is shown; True if it was within ``timeout``."""
+        with self._cond:
+            target = self._submitted
+            self._urgent = True
+            self._cond.notify_all()
+            self._cond.wait_for(lambda: self._shown >= target or not self._thread.is_alive(), timeout)
+            if self._shown >= self._submitted:
+                self._urgent = False  # nothing left to hurry: the next burst is coalesced again
+            return self._shown >= target
+
+    def close(self, *, flush: bool = True, timeout: float = 10.0) -> None:
+        """Stop the thread (after pushing the last state, with ``flush``)."""
+        if flush:
+            self.flush(timeout)
+        with self._cond:
+            self._closing = True
+            self._cond.notify_all()
+        if self._thread is not threading.current_thread():
+            self._thread.join(timeout)
+
+    def _pause(self, seconds: float) -> None:
+        """Wait ``seconds`` unless a flush or close asks for the state now (called holding the condition)."""
+        self._cond.wait_for(lambda: self._urgent or self._closing, seconds)
+
+    def _run(self) -> None:
+        while True:
+            with self._cond:
+                self._cond.wait_for(lambda: self._pending is not None or self._closing)
+                if self._pending is None:
+                    return
+                self._pause(self._coalesce)
+                state, number = self._pending, self._submitted
+                self._pending = None
+                self._urgent = False
+            start = time.perf_counter()
+            try:
+                self._show(state)
+            except Exception as exc:  # noqa: BLE001 - a tab that cannot be updated must not stop the figures
+                print(f"egtviz figure: the browser tabs were not updated ({type(exc).__name__}: {exc})",
+                      file=sys.stderr, flush=True)
+            elapsed = time.perf_counter() - start
+            with self._cond:
+                self.pushes += 1
+                self._shown = max(self._shown, number)
+                self._cond.notify_all()
+                if self._pending is not None:
+                    self._pause(min(elapsed, MAX_REST_SECONDS))
