@@ -339,3 +339,57 @@ def test_load_scene_commits_an_uploaded_scene_and_is_undoable():
     model.load_scene(scene_from_bytes(scene_to_bytes(panoramic_scene()), "upload.json"))
     assert model.scene.camera_names == ("pano1", "pano2") and kinds == ["load"]
     assert model.undo() and model.scene is start
+
+
+def test_an_undo_barrier_stops_undo_and_reset_comes_back_to_it():
+    model = SceneModel()
+    model.update_camera("cam1", focal_length=0.01)
+    with model.batch("step", barrier="Undo stops here."):
+        model.update_camera("cam1", focal_length=0.03)
+        model.lock("cam1")
+    at_barrier = model.scene
+    assert model.barrier_scene is at_barrier and model.undo_barrier_note == "Undo stops here."
+    assert not model.can_undo and not model.undo()  # the batch and what came before are behind the barrier
+    assert model.scene is at_barrier and model.scene.camera("cam1").focal_length == 0.03
+    model.update_camera("cam1", focal_length=0.02)
+    assert model.undo() and not model.undo()
+    assert model.scene.camera("cam1").focal_length == 0.03 and model.scene.locked == {"cam1"}
+    model.randomize_points(20, seed=1)
+    model.reset()  # to the barrier, not to the scene the model started with
+    assert model.scene is at_barrier
+    with pytest.raises(SceneError, match="note"):
+        model.set_undo_barrier("")
+
+
+def test_a_lock_holds_for_every_edit_of_the_pose_not_only_the_gizmo():
+    model = SceneModel()
+    model.lock("cam1")
+    model.lock("point:2")
+    before = model.scene
+    spec = before.camera("cam1")
+    with pytest.raises(SceneError, match="cam1: the camera is locked"):
+        model.update_camera("cam1", position=(1.0, 2.0, 3.0))  # a typed position
+    with pytest.raises(SceneError, match="cam1: the camera is locked"):
+        model.update_camera("cam1", ypr_deg=(10.0, 0.0, 0.0))  # typed angles
+    with pytest.raises(SceneError, match="cam1: the camera is locked"):
+        model.set_camera_pose("cam1", (0.0, 0.0, 9.0), spec.camera().pose.R)  # a gizmo or a raw message
+    with pytest.raises(SceneError, match="point 3 is locked"):
+        model.set_point(2, (0.5, 0.5, 0.5))
+    with pytest.raises(SceneError, match="cam1: the camera is locked"), model.batch():
+        model.update_camera("cam2", focal_length=0.01)
+        model.update_camera("cam1", position=(1.0, 2.0, 3.0))
+    assert model.scene is before  # nothing committed, the batch all or nothing
+    model.update_camera("cam1", focal_length=0.012)  # a lock holds the pose: the intrinsics may change
+    model.set_point(3, (0.5, 0.5, 0.5))
+    assert model.scene.camera("cam1").focal_length == 0.012 and model.scene.points[3] == (0.5, 0.5, 0.5)
+
+
+def test_a_lesson_steps_own_changes_may_move_what_it_locked_and_end_at_a_barrier():
+    model = SceneModel()
+    model.lock("cam1")
+    with model.lesson_step("Undo stops at the step."):
+        model.update_camera("cam1", position=(1.0, -8.0, 1.5))
+    assert model.scene.camera("cam1").position == (1.0, -8.0, 1.5)
+    assert model.undo_barrier_note == "Undo stops at the step." and not model.undo()
+    with pytest.raises(SceneError, match="locked"):  # the step's authority ended with it
+        model.update_camera("cam1", position=(2.0, -8.0, 1.5))

@@ -20,7 +20,11 @@ from .markup import render_markdown
 from .progress import ProgressStore, learner_key
 from .tasks import Task, TaskContext, TaskResult, task_seed
 
-__all__ = ["Attempt", "LessonRun", "ResolvedTask"]
+__all__ = ["Attempt", "LessonRun", "ResolvedTask", "UNDO_NOTE"]
+
+#: What Undo says at the start of a step: a step's own changes (its locks, the values it sets) are the lesson's.
+UNDO_NOTE = ("Undo stops at the start of this step: the step's own changes cannot be undone "
+             "(\u201creset step\u201d starts the step again).")
 
 
 @dataclass(frozen=True)
@@ -91,7 +95,7 @@ class LessonRun:
             self.demo = record
 
     def _enter(self, index: int) -> None:
-        with self.model.batch("lesson"):
+        with self.model.lesson_step(UNDO_NOTE):
             for change in self.lesson.steps[index].changes:
                 self.apply(change)
         self.step_index = index
@@ -103,7 +107,7 @@ class LessonRun:
         if not 0 <= index < len(self.lesson.steps):
             raise IndexError(f"step: expected 0..{len(self.lesson.steps) - 1}, got {index}")
         self.lab, self.lens, self.ranges, self.demo = LabSettings(), LensToggles(), {}, None
-        with self.model.batch("lesson"):
+        with self.model.lesson_step(UNDO_NOTE):
             self.model.load_scene(self.lesson.scene)
             for i in range(index):
                 for change in self.lesson.steps[i].changes:

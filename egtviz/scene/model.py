@@ -55,6 +55,26 @@ def _without_point(marks: frozenset[str], index: int) -> frozenset[str]:
         out.add(m)
     return frozenset(out)
 _POSE_FIELDS = frozenset({"position", "ypr_deg"})
+_LOCKABLE = frozenset({"camera", "points"})
+"""The change kinds that edit one camera or point in place (a lock may refuse them)."""
+
+
+def _lock_refusal(old: Scene, new: Scene, change: Change) -> str | None:
+    """Why ``new`` breaks a lock of ``old``: a locked camera placed elsewhere or a locked point moved (None: it
+    does not). A lock holds a camera's position and orientation (what its gizmo moves), not its other fields."""
+    for name in change.names:
+        if name not in old.locked:
+            continue
+        if name.startswith("point:"):
+            i = int(name[6:])
+            if i < len(old.points) and i < len(new.points) and old.points[i] != new.points[i]:
+                return f"point {i + 1} is locked in this step: it cannot move"
+        elif name in old.camera_names:
+            a = old.camera(name)
+            b = new.camera(name) if name in new.camera_names else None
+            if b is not None and b is not a and (a.position != b.position or a.ypr_deg != b.ypr_deg):
+                return f"{name}: the camera is locked in this step; its position and orientation cannot change"
+    return None
 
 
 @dataclass(frozen=True)
@@ -86,6 +106,8 @@ class SceneModel:
         self._batch_changes: list[Change] = []
         self._batch_start: Scene | None = None
         self._merge_key: object = None
+        self._barrier: tuple[Scene, str] | None = None
+        self._authority: tuple[int, int] | None = None  # (thread, depth) inside :meth:`lesson_step`
 
     # -- reading ---------------------------------------------------------------
 
@@ -115,6 +137,11 @@ class SceneModel:
 
     def _commit(self, new: Scene, change: Change, *, undoable: bool = True, merge_key: object = None) -> None:
         with self._lock:
+            # Every edit of a camera or a point passes here, whatever sent it (a field, a gizmo, a raw message).
+            if change.kind in _LOCKABLE and not self._has_authority():
+                refusal = _lock_refusal(self._scene, new, change)
+                if refusal is not None:
+                    raise SceneError(refusal)
             if self._batch_depth:  # drawn once, when the batch ends
                 self._scene = new
                 self._batch_changes.append(change)
@@ -122,8 +149,7 @@ class SceneModel:
             derived = compute_derived(new)  # SceneError: not drawable, nothing committed
             # Consecutive changes with the same merge key (one gizmo drag) make one undo step.
             if undoable and (merge_key is None or merge_key != self._merge_key):
-                self._undo.append(self._scene)
-                del self._undo[:-UNDO_DEPTH]
+                self._push_undo(self._scene)
             self._merge_key = merge_key if undoable else None
             self._scene = new
             self._derived = derived
@@ -138,9 +164,21 @@ class SceneModel:
             raise SceneError(str(exc)) from exc
         self._commit(new, change, merge_key=merge_key)
 
+    def _push_undo(self, scene: Scene) -> None:
+        self._undo.append(scene)
+        del self._undo[:-UNDO_DEPTH]
+
+    def _has_authority(self) -> bool:
+        """Whether this thread is applying a lesson step's own changes (:meth:`lesson_step`)."""
+        return self._authority is not None and self._authority[0] == threading.get_ident()
+
     @contextmanager
-    def batch(self, kind: str = "batch") -> Iterator[None]:
-        """Group changes: one undo step and one notification at the end; all or nothing on error."""
+    def batch(self, kind: str = "batch", *, barrier: str | None = None) -> Iterator[None]:
+        """Group changes: one undo step and one notification at the end; all or nothing on error.
+
+        ``barrier``: when the outermost batch ends without error, an undo barrier is set there
+        (:meth:`set_undo_barrier`) before the listeners hear of the change.
+        """
         with self._lock:
             if self._batch_depth == 0:
                 self._batch_start = self._scene
@@ -159,22 +197,45 @@ class SceneModel:
             if self._batch_depth:
                 return
             changes, start = self._batch_changes, self._batch_start
+            if changes:
+                try:
+                    derived = compute_derived(self._scene)
+                except SceneError:
+                    self._scene = start  # type: ignore[assignment]
+                    raise
+                self._derived = derived
+                self._push_undo(start)  # type: ignore[arg-type]
+                self._merge_key = None
+            if barrier is not None:
+                self.set_undo_barrier(barrier)
             if not changes:
                 return
-            try:
-                derived = compute_derived(self._scene)
-            except SceneError:
-                self._scene = start  # type: ignore[assignment]
-                raise
-            self._derived = derived
             names = tuple(dict.fromkeys(n for c in changes for n in c.names))
-            self._undo.append(start)  # type: ignore[arg-type]
-            del self._undo[:-UNDO_DEPTH]
             new = self._scene
             listeners = list(self._listeners)
         change = changes[0] if len(changes) == 1 else Change(kind, names)
         for listener in listeners:
             listener(new, change)
+
+    @contextmanager
+    def lesson_step(self, note: str) -> Iterator[None]:
+        """Apply a lesson step's own changes: one :meth:`batch` in which locks do not hold (the lesson may move
+        what it locked), then an undo barrier (``note``: what undo says there, :meth:`set_undo_barrier`).
+
+        Only the calling thread has that authority; an edit from another thread meanwhile is judged as usual.
+        """
+        me = threading.get_ident()
+        with self._lock:
+            if self._authority is not None and self._authority[0] != me:
+                raise SceneError("a lesson step is being applied to this scene already")
+            depth = 0 if self._authority is None else self._authority[1]
+            self._authority = (me, depth + 1)
+        try:
+            with self.batch("lesson", barrier=note):
+                yield
+        finally:
+            with self._lock:
+                self._authority = None if depth == 0 else (me, depth)
 
     # -- cameras ---------------------------------------------------------------
 
@@ -371,7 +432,7 @@ class SceneModel:
     # -- history and files -------------------------------------------------------
 
     def undo(self) -> bool:
-        """Go back one change; False when there is nothing to undo."""
+        """Go back one change; False when there is nothing to undo (or only what an undo barrier holds)."""
         with self._lock:
             if not self._undo:
                 return False
@@ -383,9 +444,37 @@ class SceneModel:
     def can_undo(self) -> bool:
         return bool(self._undo)
 
+    def set_undo_barrier(self, note: str) -> None:
+        """Undo stops here: the changes made so far can no longer be undone, and :meth:`reset` comes back here.
+
+        A lesson sets one when a step is entered, so that its own changes (a lock, a value the step sets) are
+        not undone by the learner. ``note`` is what an undo at the barrier says (:attr:`undo_barrier_note`).
+        """
+        if type(note) is not str or not note:
+            raise SceneError(f"note: expected a sentence, got {_short(note)}")
+        with self._lock:
+            self._undo.clear()
+            self._merge_key = None
+            self._barrier = (self._scene, note)
+
+    @property
+    def undo_barrier_note(self) -> str | None:
+        """What undo says when it stops at the barrier (None: no barrier is set)."""
+        barrier = self._barrier
+        return None if barrier is None else barrier[1]
+
+    @property
+    def barrier_scene(self) -> Scene | None:
+        """The scene at the undo barrier (a lesson step's start), or None."""
+        barrier = self._barrier
+        return None if barrier is None else barrier[0]
+
     def reset(self, scene: Scene | None = None) -> None:
-        """Back to the scene the model started with (or to ``scene``); undoable."""
-        self._commit(scene if scene is not None else self._initial, Change("reset"))
+        """Back to ``scene``, else to the undo barrier's scene (a lesson step's start), else to the scene the model
+        started with; undoable."""
+        barrier = self._barrier
+        target = scene if scene is not None else (barrier[0] if barrier is not None else self._initial)
+        self._commit(target, Change("reset"))
 
     def load_scene(self, scene: Scene) -> None:
         """Replace the scene with ``scene`` (e.g. from :func:`egtviz.scene.scene_from_bytes`); undoable."""

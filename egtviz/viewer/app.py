@@ -70,7 +70,7 @@ from .fields import (
     on_event,
     parse_numbers,
 )
-from .figure_export import panel_svg_of, svg_to_png
+from .figure_export import panel_svg_of
 from .panels import (
     CONTROL_PX,
     DEFAULT_WINDOW,
@@ -87,6 +87,7 @@ from .panels import (
 )
 from .models import SHORT_LABELS
 from .plot_svg import plot_svg
+from .png_worker import PngDownloads
 from .svg import NORMAL, PRESENT, empty_svg, image_plane_svg
 from .svg import warm_up as svg_warm_up
 
@@ -313,6 +314,8 @@ class ClientView:
         self._views: dict[str, tuple[tuple[int, int], PanelView]] = {}
         #: Each camera's panel buttons (button groups by label: ``panel view``, ``panel pan``, ``download panel``).
         self.panel_buttons: dict[str, dict[str, Any]] = {}
+        #: The panels' PNG downloads: rendered in a worker process, one waiting per tab, refused above the limits.
+        self.png = PngDownloads(client)
         self._synced_specs: dict[str, Any] = {}
         self._synced_fields: dict[str, Any] = {}
         self._point_options_n = -1
@@ -408,7 +411,7 @@ class ClientView:
                 self._on(self.btn_servo_panoramic.on_click, lambda _: self.open_demo("panoramic"))
         with gui.add_folder("Scene", expand_by_default=False):
             self.btn_undo = gui.add_button("Undo")
-            self._on(self.btn_undo.on_click, lambda _: self._user_event(self.model.undo))
+            self._on(self.btn_undo.on_click, lambda _: self._user_event(self._undo))
             self.btn_reset = gui.add_button("Reset")
             self._on(self.btn_reset.on_click, lambda _: self._user_event(self.model.reset))
             self.builtin = gui.add_dropdown("built-in scene", tuple(SCENES), initial_value=next(iter(SCENES)),
@@ -488,6 +491,12 @@ class ClientView:
                 return
             self._t_event = t0
             action()
+
+    def _undo(self) -> None:
+        """Undo one change; at an undo barrier (a lesson step's start) say why nothing happened."""
+        if not self.model.undo() and self.model.undo_barrier_note is not None:
+            self.client.add_notification("Nothing to undo", self.model.undo_barrier_note, color="yellow",
+                                         auto_close_seconds=8.0)
 
     def _text_event(self, key: Any, apply: Any, text: Any = None) -> None:
         """A text field changed: judge its text once the user stopped typing (latest text wins)."""
@@ -1026,9 +1035,11 @@ class ClientView:
             raise SceneError(f"{name}: no such camera")
         svg = panel_svg_of(plane, present=self.present, view=self._panel_view(name, plane).resolve(plane),
                            selected_point=scene.selected_point, show_labels=scene.options.show_labels)
-        data = svg.encode("utf-8") if fmt == "SVG" else svg_to_png(svg)
         stem = "".join(c if c.isascii() and (c.isalnum() or c in "-_") else "_" for c in name)[:40] or "camera"
-        self.client.send_file_download(f"{stem}-image-plane.{fmt.lower()}", data, save_immediately=True)
+        if fmt == "PNG":  # rendered in a worker process: this tab gets the file when it is done, others carry on
+            self.png.request(f"{stem}-image-plane.png", svg)
+            return
+        self.client.send_file_download(f"{stem}-image-plane.svg", svg.encode("utf-8"), save_immediately=True)
 
     def _set_present(self, value: Any) -> None:
         """Presentation mode on or off: the panels' style, the GUI's type and the layout follow."""
@@ -1111,7 +1122,7 @@ class ClientView:
             title = self._title_html()
             # A drag changes one camera's pose and nothing below: skip the rest when its inputs are unchanged.
             rest_key = (scene.camera_names, scene.drawn_pair, len(scene.points), scene.selected_point, scene.options,
-                        self.model.can_undo, title)
+                        self.model.can_undo, self.model.undo_barrier_note, title)
             if not force and rest_key == self._synced_rest:
                 return
             self._synced_rest = rest_key
@@ -1135,8 +1146,9 @@ class ClientView:
             for opt, cb in self.toggles.items():
                 _set(cb, getattr(scene.options, opt))
             _set(self.n_points, self._n_points_text)
-            if self.btn_undo.disabled != (not self.model.can_undo):
-                self.btn_undo.disabled = not self.model.can_undo
+            undo_off = not self.model.can_undo and self.model.undo_barrier_note is None  # a barrier explains itself
+            if self.btn_undo.disabled != undo_off:
+                self.btn_undo.disabled = undo_off
             if self.title.content != title:
                 self.title.content = title
         finally:
@@ -1151,6 +1163,7 @@ class ClientView:
                 return
             self.closed = True
             self._typing.close()
+            self.png.close()
             self._unsubscribe()
 
 
