@@ -83,7 +83,8 @@ def test_number_answers_within_tolerance_pass_and_say_too_high_or_low():
     high = check(t, ctx(scene, answer="801"))
     assert not high.passed and "too high" in high.feedback
     assert "too low" in check(t, ctx(scene, answer="-8e2")).feedback
-    assert check(t, ctx(scene, answer="eight hundred")).feedback == "Type a number (in px)."
+    assert check(t, ctx(scene, answer="eight hundred")).feedback == (
+        "Type one number, e.g. 2.5 (in px: 2.5 or 2.5 px); got 'eight hundred'.")
     assert not check(t, ctx(scene, answer=None)).passed
 
 

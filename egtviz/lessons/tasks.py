@@ -32,19 +32,20 @@ import numpy as np
 from ..geometry import PinholeCamera
 from ..geometry.epipolar import epipolar_planes, lines_of_planes
 from ..geometry.triangulation import triangulate_linear, triangulate_optimal
-from ..scene import Scene
+from ..scene import Scene, SceneError
 from ..scene.derived import Derived, compute_derived
 from ..scene.lab import METHODS, LabResult, LabSettings, run_lab
 from ..scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT
 from ..scene.lens import LensToggles, LensView, lens_view
 from ..scene.limits import COORDINATE, MAX_POINTS, PRINCIPAL_POINT, Range
 from . import fields
+from .answers import AnswerError, read_number
 from .changes import Change, parse_change
 from .errors import EntryError
 from .markup import MarkupError, render_markdown
 from .servo_runs import MEASURES, DemoRun, measure_run
 
-__all__ = ["TASK_KINDS", "Task", "TaskContext", "TaskResult", "Uniform", "parse_task", "task_seed"]
+__all__ = ["RESET_ADVICE", "TASK_KINDS", "Task", "TaskContext", "TaskResult", "Uniform", "parse_task", "task_seed"]
 
 WITHIN_PX = Range(1e-3, 1e4, "px")
 WITHIN_DEG = Range(1e-3, 180.0, "deg")
@@ -58,7 +59,8 @@ _COMPONENT = Range(0, 2, "", integer=True)
 _MAX_OPTIONS = 12
 _BELOW = {"deg": Range(1e-6, 180.0, "deg"), "cm": Range(1e-6, 100.0 * COORDINATE.high, "cm")}
 _TRIANGULATION_DRAWS = 200
-_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+#: How a check that finds something missing tells the learner the way back (the lesson panel's step button).
+RESET_ADVICE = "press \u201creset step\u201d to start this step again."
 
 
 @dataclass(frozen=True)
@@ -168,9 +170,27 @@ class Task:
         """The prompt with its ``{name}`` placeholders replaced by the drawn values."""
         return self.prompt.format_map(_SafeValues({k: _Shown(v) for k, v in params.items()}))
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:  # pragma: no cover - abstract
-        """Measure the goal in ``ctx`` with the drawn ``params``: passed, and feedback saying what was measured."""
+    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        """Measure the goal in ``ctx`` with the drawn ``params``: passed, and feedback saying what was measured.
+
+        A scene that no longer has what the task measures (a camera removed, another scene opened) fails with
+        what is missing and the way back (the step's *reset step*), never an exception.
+        """
+        gone = self.missing(ctx.scene)
+        if gone is None:
+            try:
+                return self.judge(ctx, params)
+            except SceneError as exc:  # e.g. the lab or the lens cannot be computed on this scene
+                gone = str(exc)
+        return TaskResult(False, f"{gone}: {RESET_ADVICE}")
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:  # pragma: no cover - abstract
+        """The check on a scene that has what the task names (:meth:`missing` found nothing)."""
         raise NotImplementedError
+
+    def missing(self, scene: Scene) -> str | None:
+        """What the task measures that ``scene`` does not have, e.g. ``"cam2 is not in the scene any more"``."""
+        return None
 
     def validate(self, scene: Scene) -> None:
         """Refuse a task that names what the step's scene does not have (an :class:`EntryError` naming the key)."""
@@ -204,6 +224,35 @@ def _projective_pair(scene: Scene, pair: tuple[str, str] | None) -> bool:
     return pair is not None and all(scene.camera(n).camera().projective_calibration is not None for n in pair)
 
 
+def _camera_gone(scene: Scene, *names: str) -> str | None:
+    """Which of ``names`` the scene no longer has (the first), as the learner is told."""
+    for name in names:
+        if name not in scene.camera_names:
+            return f"{name} is not in the scene any more"
+    return None
+
+
+def _point_gone(scene: Scene, index: int) -> str | None:
+    if index >= len(scene.points):
+        return f"point {point_label(index)} is not in the scene any more (it has {len(scene.points)} points)"
+    return None
+
+
+def _pair_gone(scene: Scene, camera: str | None = None, *, pinhole: bool = False) -> str | None:
+    """Why the drawn pair is not what the task measures: none, without ``camera``, or not two pin-holes."""
+    gone = None if camera is None else _camera_gone(scene, camera)
+    if gone is not None:
+        return gone
+    pair = scene.drawn_pair
+    if pair is None:
+        return "the scene has fewer than two cameras: no pair is drawn"
+    if camera is not None and camera not in pair:
+        return f"{camera} is not in the drawn pair ({pair[0]} & {pair[1]}) any more"
+    if pinhole and not _projective_pair(scene, pair):
+        return f"the drawn pair ({pair[0]} & {pair[1]}) is not two pin-hole cameras any more"
+    return None
+
+
 def point_label(index: int) -> int:
     """The number the viewer shows for point ``index`` (panels, 3D labels, the point list count from 1); prompts
     (``{point}``) and feedback name points by it, lesson files by their index from 0."""
@@ -229,7 +278,7 @@ def _lab_constraints(ctx: TaskContext, min_noise: float, min_outliers: float) ->
 
 @dataclass(frozen=True, kw_only=True)
 class NumberTask(Task):
-    """A numeric answer within ``tolerance`` of ``answer`` (a unit typed after the number is ignored)."""
+    """A numeric answer within ``tolerance`` of ``answer``: one number, optionally followed by ``unit``."""
 
     answer: float
     tolerance: float = 0.0
@@ -238,18 +287,17 @@ class NumberTask(Task):
     kind: ClassVar[str] = "number"
     question: ClassVar[bool] = True
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         return _compare_number(ctx.answer, self.answer, self.tolerance, self.unit)
 
 
 def _compare_number(typed: str | None, answer: float, tolerance: float, unit: str) -> TaskResult:
-    """The typed number against ``answer`` within ``tolerance`` (a unit typed after the number is ignored)."""
-    m = _NUMBER.match(typed or "")
-    if m is None:
-        return TaskResult(False, "Type a number" + (f" (in {unit})." if unit else "."))
-    x = float(m.group(1))
-    if not math.isfinite(x):
-        return TaskResult(False, "Type a finite number.")
+    """The typed number (:func:`~egtviz.lessons.answers.read_number`: one number, then optionally ``unit``)
+    against ``answer`` within ``tolerance``."""
+    try:
+        x = read_number(typed, unit)
+    except AnswerError as exc:
+        return TaskResult(False, str(exc))
     shown = f" {unit}" if unit else ""
     if abs(x - answer) <= tolerance:
         return TaskResult(True, f"Right: {_fmt(x)}{shown}.")
@@ -292,7 +340,7 @@ class ServoNumberTask(Task):
             raise EntryError("below" if self.below is not None else "measure",
                              f"the {run.demo} run ({run.describe() or 'its defaults'}) never gets there")
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         if ctx.demo is None:
             return TaskResult(False, "This step opens no servo demo to read the answer from.")
         return _compare_number(ctx.answer, self.answer_for(ctx.demo), params["tolerance"], self.unit)
@@ -308,7 +356,7 @@ class ChoiceTask(Task):
     kind: ClassVar[str] = "choice"
     question: ClassVar[bool] = True
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         given = (ctx.answer or "").strip()
         if given.isdigit() and 1 <= int(given) <= len(self.options):
             given = self.options[int(given) - 1]
@@ -339,7 +387,10 @@ class EpipoleNearTask(Task):
     def validate(self, scene: Scene) -> None:
         _in_pair(scene, self.camera)
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _camera_gone(scene, self.camera)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         u, v, within = params["u"], params["v"], params["within_px"]
         plane = ctx.drawn().image_planes.get(self.camera)
         if plane is None or not plane.in_pair:
@@ -380,7 +431,10 @@ class SameOrientationTask(Task):
         if a.model_kind != b.model_kind:
             raise EntryError("cameras", f"expected two cameras of one kind, got {a.model_kind} and {b.model_kind}")
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _camera_gone(scene, *self.cameras)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         a, b = (ctx.scene.camera(n) for n in self.cameras)
         angle = rotation_angle_deg(a.pose.R, b.pose.R)
         msg = f"{self.cameras[0]} and {self.cameras[1]} differ by a rotation of {angle:.1f} degrees"
@@ -419,7 +473,10 @@ class LinesParallelTask(Task):
         if len(scene.points) < 2:
             raise EntryError(None, "lines_parallel needs at least two points in the scene")
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _pair_gone(scene, self.camera, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         scene = ctx.scene
         n1, n2 = scene.drawn_pair  # type: ignore[misc]
         c1, c2 = scene.camera(n1).camera(), scene.camera(n2).camera()
@@ -453,7 +510,10 @@ class PointOnLineTask(Task):
         _point_in(scene, self.point)
         _in_pair(scene, self.camera, pinhole_pair=True)
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _point_gone(scene, self.point) or _pair_gone(scene, self.camera, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         view = ctx.lens_view()
         d = (view.distances1_px if self.camera == view.names[0] else view.distances2_px)[self.point]
         if not math.isfinite(d):
@@ -483,7 +543,10 @@ class SampsonBelowTask(Task):
     def validate(self, scene: Scene) -> None:
         _lab_scene(scene)
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _pair_gone(scene, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
         if refused is not None:
             return refused
@@ -514,7 +577,10 @@ class InliersRecallTask(Task):
     def validate(self, scene: Scene) -> None:
         _lab_scene(scene)
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _pair_gone(scene, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
         if refused is not None:
             return refused
@@ -549,7 +615,10 @@ class PointInImageTask(Task):
         _point_in(scene, self.point)
         _camera_in(scene, self.camera)
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _camera_gone(scene, self.camera) or _point_gone(scene, self.point)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         plane = ctx.drawn().image_planes[self.camera]
         i, label = self.point, point_label(self.point)
         if plane.in_image[i]:
@@ -590,7 +659,18 @@ class CameraFieldTask(Task):
         if isinstance(value, str):
             raise EntryError("field", f"{self.field!r} is not a number")
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        gone = _camera_gone(scene, self.camera)
+        if gone is not None:
+            return gone
+        value = getattr(scene.camera(self.camera), self.field, None)
+        shape_ok = (isinstance(value, tuple) and self.component is not None and self.component < len(value)
+                    or isinstance(value, (int, float)) and self.component is None)
+        if not shape_ok:
+            return f"{self.camera} has no {self.field.replace('_', ' ')} any more (another kind of camera?)"
+        return None
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         value = getattr(ctx.scene.camera(self.camera), self.field)
         x = float(value[self.component] if self.component is not None else value)
         name = self.field + (f"[{self.component}]" if self.component is not None else "")
@@ -625,7 +705,10 @@ class XiBetweenTask(Task):
     def validate(self, scene: Scene) -> None:
         _camera_in(scene, self.camera)
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _camera_gone(scene, self.camera)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         xi = camera_xi(ctx.scene.camera(self.camera))
         if params["low"] <= xi <= params["high"]:
             return TaskResult(True, f"Done: xi = {xi:.3f}.")
@@ -656,7 +739,10 @@ class TriangulationErrorTask(Task):
         if not _projective_pair(scene, pair):
             raise EntryError(None, f"triangulation needs a drawn pair of pin-hole cameras, got {pair}")
 
-    def check(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+    def missing(self, scene: Scene) -> str | None:
+        return _point_gone(scene, self.point) or _pair_gone(scene, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         err = triangulation_rms(ctx.scene, self.point, params["noise_px"], self.method)
         if not math.isfinite(err):
             return TaskResult(False, f"Point {point_label(self.point)} is not seen by both cameras.")
