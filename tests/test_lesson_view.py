@@ -263,7 +263,7 @@ def test_a_set_range_limit_refuses_the_field_and_is_enforced_when_a_task_is_chec
         index = next(i for i, s in enumerate(lesson.steps) if any(c.do == "set_range" for c in s.changes))
         panel.go_to(index)
         assert ("cam1", "focal_length") in panel.run.ranges
-        assert "focal length 0.002 to 0.05" in panel.ranges.content
+        assert "focal length 2 to 50 mm" in panel.ranges.content  # in the field's unit, as the learner types it
         assert range_refusal(panel.run) is None
         before = panel.view.model.scene.camera("cam1").focal_length
         panel.view._cam_fields["cam1"]["focal"].value = "60"  # mm: above the step's 50 mm
@@ -272,7 +272,7 @@ def test_a_set_range_limit_refuses_the_field_and_is_enforced_when_a_task_is_chec
         # A change from elsewhere (a script, another control) that leaves the range blocks the step's tasks.
         panel.view.model.update_camera("cam1", focal_length=0.06)
         refusal = range_refusal(panel.run)
-        assert refusal is not None and "between 0.002 and 0.05" in refusal
+        assert refusal is not None and "focal length must stay between 2 mm and 50 mm (it is 60 mm)" in refusal
         task = panel.rows[0]
         task.button.value = True
         assert task.task_id not in panel.attempts and "must stay between" in task.feedback.content
@@ -289,6 +289,83 @@ def test_a_locked_camera_gizmo_is_put_back_with_a_message(store):
         with pytest.raises(SceneError, match="cam2 is locked"):
             view._camera_gizmo_event("cam2", type("E", (), {"target": target, "phase": "end"})())
         assert view.model.scene.camera("cam2") is before
+
+
+def zoom_step_panel(app) -> LessonPanel:
+    """Lesson 3's step 2 in a tab: cam1 at 30 mm, locked ("without moving the camera"), 2..50 mm allowed."""
+    (panel,) = app.course.wait_for_tab(LessonPanel)
+    panel.go_to(1)
+    assert panel.view.model.scene.locked == {"cam1"}
+    return panel
+
+
+def test_undo_stops_at_the_steps_start_and_says_so(store):
+    with course(store, lesson="03-intrinsics") as (app, open_tab):
+        open_tab()
+        panel = zoom_step_panel(app)
+        view = panel.view
+        told = []
+        view.client.add_notification = lambda title, body, **_: told.append((title, body))
+        start = view.model.scene
+        assert not view.btn_undo.disabled  # enabled at the barrier, so that it can say why it does nothing
+        view.btn_undo.value = True
+        view.btn_undo.value = True
+        assert view.model.scene is start and start.locked == {"cam1"} and start.camera("cam1").focal_length == 0.03
+        assert told and all(t == "Nothing to undo" and "Undo stops at the start of this step" in b for t, b in told)
+        for row in panel.rows:  # no work done: both tasks still fail
+            row.button.value = True
+            assert not panel.attempts[row.task_id].result.passed
+
+
+def test_typing_a_locked_cameras_position_is_refused_and_the_field_reverts(store):
+    with course(store, lesson="03-intrinsics") as (app, open_tab):
+        open_tab()
+        panel = zoom_step_panel(app)
+        view = panel.view
+        told = []
+        view.client.add_notification = lambda title, body, **_: told.append(body)
+        shown = view._cam_fields["cam1"]["position"].value
+        before = view.model.scene.camera("cam1")
+        view._cam_fields["cam1"]["position"].value = "0, -20, 1.5"
+        assert view.model.scene.camera("cam1") is before
+        assert view._cam_fields["cam1"]["position"].value == shown
+        assert told[-1] == "cam1: the camera is locked in this step; its position and orientation cannot change"
+        view._cam_fields["cam1"]["focal"].value = "8"  # the intrinsics are the step's instrument
+        assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
+        assert all(answer(panel, row.task_id).result.passed for row in panel.rows)
+
+
+def test_a_check_finds_a_locked_camera_moved_or_gone_and_offers_the_reset(store):
+    with course(store, lesson="03-intrinsics") as (app, open_tab):
+        open_tab()
+        panel = zoom_step_panel(app)
+        model = panel.view.model
+        moved = model.scene.replace(
+            cameras=tuple(c.with_pose(position=(0.0, -30.0, 1.5)) if c.name == "cam1" else c
+                          for c in model.scene.cameras), locked=frozenset())
+        model.load_scene(moved)  # e.g. a scene file uploaded in the lesson: the lock went with the old scene
+        row = panel.rows[0]
+        row.button.value = True
+        assert row.task_id not in panel.attempts  # not counted
+        assert "cam1 must stay where this step put it (it is locked)" in row.feedback.content
+        assert "reset step" in row.feedback.content
+        model.remove_camera("cam1")
+        row.button.value = True
+        assert "cam1 is not in the scene any more" in row.feedback.content and "reset step" in row.feedback.content
+        panel.nav.buttons.value = "reset step"
+        assert model.scene.camera("cam1").position == panel.run.model.barrier_scene.camera("cam1").position
+
+
+def test_a_task_whose_camera_was_removed_says_so_at_check(store):
+    with course(store, lesson=LESSON6) as (app, open_tab):
+        open_tab()
+        (panel,) = app.course.wait_for_tab(LessonPanel)
+        panel.go_to(2)  # cam1 locked; the task measures the epipolar lines in cam2
+        panel.view.model.remove_camera("cam2")
+        attempt = answer(panel, "parallel")
+        assert not attempt.result.passed
+        assert attempt.result.feedback == ("cam2 is not in the scene any more: "
+                                           "press \u201creset step\u201d to start this step again.")
 
 
 def test_lessons_use_the_instruments_their_changes_and_tasks_name():

@@ -9,12 +9,14 @@ accepts. ``xi`` is a slider (it morphs the image live).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 from ..geometry.camera_model import ParameterSpec
 from .fields import NumberRule
 
-__all__ = ["PRESENTATIONS", "CameraField", "camera_fields"]
+__all__ = ["PRESENTATIONS", "CameraField", "camera_fields", "field_of_spec"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,12 @@ class CameraField:
     def parameters_of(self, shown: tuple[float, ...]) -> dict[str, float]:
         """The model's parameter values from the field's numbers."""
         return {p: self.scale / x if self.reciprocal else x / self.scale for p, x in zip(self.parameters, shown)}
+
+    def shown_number(self, value: float) -> float:
+        """One stored number in the field's unit (``scale * value``, or ``scale / value`` when ``reciprocal``)."""
+        if self.reciprocal:
+            return math.inf if value == 0 else self.scale / value
+        return value * self.scale
 
     def rules(self, specs: dict[str, ParameterSpec]) -> tuple[NumberRule, ...]:
         """What each number of the field accepts, in the field's unit: the parameters' ranges converted."""
@@ -92,3 +100,33 @@ def camera_fields(parameters: tuple[ParameterSpec, ...]) -> tuple[CameraField, .
         out.append(field)
         done.update(field.parameters)
     return tuple(out)
+
+
+#: The pose fields every camera spec has, as the GUI shows them.
+_POSE = {"position": CameraField("position", "position", "m", ("position",)),
+         "ypr_deg": CameraField("ypr", "angle", "deg", ("ypr_deg",))}
+
+
+def field_of_spec(spec: Any, field: str) -> CameraField:
+    """How the GUI shows a camera spec's field ``field`` (e.g. ``focal_length``: focal length in mm), so a message
+    about a stored value can use the words and unit of the field the user types in.
+
+    Args:
+        spec: a camera spec (its ``PARAMETER_FIELDS`` maps the model's parameters to its fields).
+        field: a field of the spec, e.g. ``"focal_length"``, ``"pixels_per_metre"``, ``"width"``.
+
+    Returns:
+        The field's presentation; its :meth:`CameraField.shown_number` converts a stored number. A spec field
+        that holds one parameter of a grouped field (``width`` of the image size) is named with its axis; a field
+        no GUI field shows keeps its own name and no unit.
+    """
+    if field in _POSE:
+        return _POSE[field]
+    stored = tuple(p for p, (f, _) in getattr(spec, "PARAMETER_FIELDS", {}).items() if f == field)
+    for shown in camera_fields(spec.model.parameters):
+        if stored and set(stored) <= set(shown.parameters):
+            if len(stored) == 1 and len(shown.parameters) > 1:
+                return CameraField(shown.key, f"{shown.label} {_AXES.get(stored[0], stored[0])}", shown.unit, stored,
+                                   scale=shown.scale, reciprocal=shown.reciprocal)
+            return shown
+    return CameraField(field, field.replace("_", " "), "", (field,))

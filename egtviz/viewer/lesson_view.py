@@ -39,15 +39,18 @@ from typing import Any
 import numpy as np
 
 from ..lessons import Lesson, LessonRun, ProgressStore
-from ..lessons.changes import SetLab, SetLens, SetRange
+from ..lessons.changes import RANGED_FIELDS, SetLab, SetLens, SetRange
 from ..lessons.progress import LearnerNameError, learner_key
 from ..lessons.runner import ResolvedTask
+from ..lessons.tasks import RESET_ADVICE
 from ..scene import SceneError
-from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, format_number, on_event
+from .camera_fields import field_of_spec
+from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
+from .progress_notice import progress_notice_html
 
 __all__ = [
-    "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "pose_within_ranges",
-    "range_refusal", "typed_learner_key",
+    "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "lock_refusal",
+    "pose_within_ranges", "range_refusal", "typed_learner_key",
 ]
 
 #: The choice field's value before the learner picks an option.
@@ -89,18 +92,58 @@ def range_refusal(run: LessonRun) -> str | None:
     return None
 
 
+def lock_refusal(run: LessonRun) -> str | None:
+    """Why the scene breaks the step's locks, or None: a camera (or point) locked at the step's start (the model's
+    undo barrier) that is gone or no longer where the step put it, whatever moved it (another scene opened,
+    a script). The model refuses every edit of a locked pose; this catches what replaced the scene."""
+    start = run.model.barrier_scene
+    if start is None:
+        return None
+    scene = run.model.scene
+    for name in sorted(start.locked):
+        if name.startswith("point:"):
+            i = int(name[6:])
+            if i >= len(scene.points):
+                return f"Point {i + 1} is not in the scene any more: {RESET_ADVICE}"
+            if scene.points[i] != start.points[i]:
+                return f"Point {i + 1} must stay where this step put it (it is locked): {RESET_ADVICE}"
+        elif name in start.camera_names:
+            if name not in scene.camera_names:
+                return f"{name} is not in the scene any more: {RESET_ADVICE}"
+            a, b = start.camera(name), scene.camera(name)
+            if a.position != b.position or a.ypr_deg != b.ypr_deg:
+                return f"{name} must stay where this step put it (it is locked): {RESET_ADVICE}"
+    return None
+
+
+def _range_terms(run: LessonRun, camera: str, field: str) -> tuple[str, NumberRule, Callable[[float], float]]:
+    """A ranged spec field in the words and unit of its GUI field: ``(label, rule, stored -> shown)``."""
+    scene = run.model.scene
+    limit = run.ranges[(camera, field)]
+    if camera in scene.camera_names:
+        shown = field_of_spec(scene.camera(camera), field)
+        label, unit, convert = shown.label, shown.unit, shown.shown_number
+    else:
+        label, unit, convert = field.replace("_", " "), "", float
+    unit = unit or (RANGED_FIELDS[field].unit if field in RANGED_FIELDS else "")
+    lo, hi = sorted((convert(limit.low), convert(limit.high)))  # a reciprocal (pixel size) swaps the bounds
+    return label, NumberRule(label, unit, lo, hi), convert
+
+
 def field_range_refusal(run: LessonRun, camera: str, fields: dict[str, Any]) -> str | None:
     """Why new values of ``camera``'s spec ``fields`` break the step's ``set_range`` limits, or None (the tab's
-    ``field_guard``: the field is refused and reverts)."""
+    ``field_guard``: the field is refused and reverts). The message uses the GUI field's words and unit (the
+    focal length in mm, the pixel size in µm), as the field the learner types in."""
     for field, value in sorted(fields.items()):
         limit = run.ranges.get((camera, field))
         if limit is None:
             continue
         values = value if isinstance(value, tuple) else (value,)
         if any(not isinstance(v, (int, float)) or not _inside(limit, float(v)) for v in values):
-            shown = ", ".join(format_number(float(v)) for v in values if isinstance(v, (int, float)))
-            return (f"In this step {camera}'s {field.replace('_', ' ')} must stay between "
-                    f"{format_number(limit.low)} and {format_number(limit.high)} (it is {shown})")
+            label, rule, convert = _range_terms(run, camera, field)
+            shown = ", ".join(rule.with_units(convert(float(v))) for v in values if isinstance(v, (int, float)))
+            return (f"In this step {camera}'s {label} must stay between {rule.with_units(rule.lo)} and "
+                    f"{rule.with_units(rule.hi)} (it is {shown})")
     return None
 
 
@@ -251,6 +294,9 @@ class LessonPanel:
             self.folder = gui.add_folder("Lesson", order=LESSON_ORDER, expand_by_default=True)
             with self.folder:
                 self.nav = StepNav(gui)
+                store = progress if progress is not None else run.progress
+                self._notice = store.problem if store is not None else None
+                self.notice = gui.add_html(progress_notice_html(self._notice))
                 self.text = gui.add_markdown("")
                 self.tasks_folder = gui.add_folder(None)
                 self.ranges = gui.add_html("")
@@ -287,9 +333,27 @@ class LessonPanel:
             with self.view.lock:
                 if self.view.closed:
                     return
-                callback(event)
+                try:
+                    callback(event)
+                finally:
+                    self._show_notice()
 
         on_event(register, locked, self.view.report)
+
+    def _show_notice(self) -> None:
+        """Once progress stops being kept (the store fell back to memory), say so in this tab, once."""
+        store = self.progress if self.progress is not None else self.run.progress
+        problem = store.problem if store is not None else None
+        if problem == self._notice:
+            return
+        self._notice = problem
+        self.notice.content = progress_notice_html(problem)
+        if problem:
+            try:
+                self.view.client.add_notification("Progress is not being kept", problem, color="yellow",
+                                                  auto_close_seconds=15.0)
+            except Exception:  # noqa: BLE001 - the tab may be gone; the notice stays in the panel
+                pass
 
     def _name_typed(self, text: Any) -> None:
         """The name field changed: take the name once the typing stops (latest text wins)."""
@@ -300,7 +364,10 @@ class LessonPanel:
         try:
             with self.view.lock:
                 if not self.view.closed:
-                    action()
+                    try:
+                        action()
+                    finally:
+                        self._show_notice()
         except Exception as exc:  # noqa: BLE001 - every failure must reach the tab
             self.view.report(exc)
 
@@ -333,8 +400,10 @@ class LessonPanel:
                 row = TaskRow(gui, k, resolved, passed_before=(i, resolved.task.id) in passed)
                 self._on(row.button.on_click, lambda _, r=row: self._check(r))
                 self.rows.append(row)
-        limits = [f"{escape(c)}: {escape(f.replace('_', ' '))} {format_number(r.low)} to {format_number(r.high)}"
-                  for (c, f), r in sorted(run.ranges.items())]
+        limits = []
+        for c, f in sorted(run.ranges):
+            label, rule, _ = _range_terms(run, c, f)
+            limits.append(f"{escape(c)}: {escape(label)} {format_number(rule.lo)} to {escape(rule.with_units(rule.hi))}")
         self.ranges.content = ('<div style="font-size:0.8em">In this step: ' + "; ".join(limits) + "</div>"
                                if limits else "")
         for instrument in (self.lab, self.lens):
@@ -382,7 +451,7 @@ class LessonPanel:
 
     def _check(self, row: TaskRow) -> None:
         answer = row.answer_text()
-        refusal = range_refusal(self.run)
+        refusal = lock_refusal(self.run) or range_refusal(self.run)
         if refusal is not None:
             row.feedback.content = _feedback_markdown(False, refusal, None)
             return
@@ -400,8 +469,13 @@ class LessonPanel:
     # -- the learner ------------------------------------------------------------------------------
 
     def _set_learner(self, name: Any) -> None:
-        """A name typed: the run is keyed by it from now on, and resumes where that learner was."""
-        key = typed_learner_key(name)
+        """A name typed: the run is keyed by it from now on, and resumes where that learner was. A refused name
+        is not left in the field: it shows the name in use again, and the notification says why."""
+        try:
+            key = typed_learner_key(name)
+        except FieldError:
+            self.learner.value = self.run.learner
+            raise
         if key == self.run.learner:
             return
         with self.view.client.atomic():
