@@ -122,7 +122,8 @@ def test_another_built_in_scene_opened_in_a_lesson_fails_the_check_with_the_reas
     run.model.load_scene(SCENES["example2"]())  # a panoramic scene: no cam1
     attempt = run.check("zoom-out")
     assert not attempt.result.passed
-    assert attempt.result.feedback == "cam1 is not in the scene any more: press \u201creset step\u201d to start this step again."
+    assert attempt.result.feedback == ("cam1 is not in the scene any more: "
+                                       "press \u201creset step\u201d to start this step again.")
 
 
 def test_a_camera_field_task_on_a_camera_of_another_kind_says_the_field_has_gone():

@@ -13,6 +13,10 @@ by :func:`task_seed`; the prompt shows the drawn values through ``{name}`` place
 The kinds, their keys and when they pass are listed in ``docs/lessons.md`` and in each class's docstring
 (:data:`TASK_KINDS` maps the names to the classes).
 
+A check on a scene that no longer has what the task names (a camera removed, another scene opened) fails
+with what is missing and :data:`RESET_ADVICE` (:meth:`Task.missing`), never an exception; a typed number is
+read strictly (:func:`egtviz.lessons.answers.read_number`).
+
 Every task also has ``id`` (unique in its step), ``prompt``, ``hint`` and optional ``solution`` (a list of
 changes, as in ``[[steps.changes]]``, that solves it from the step's starting scene).
 """

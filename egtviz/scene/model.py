@@ -138,7 +138,8 @@ class SceneModel:
     def _commit(self, new: Scene, change: Change, *, undoable: bool = True, merge_key: object = None) -> None:
         with self._lock:
             # Every edit of a camera or a point passes here, whatever sent it (a field, a gizmo, a raw message).
-            if change.kind in _LOCKABLE and not self._has_authority():
+            authority = self._authority is not None and self._authority[0] == threading.get_ident()
+            if change.kind in _LOCKABLE and not authority:
                 refusal = _lock_refusal(self._scene, new, change)
                 if refusal is not None:
                     raise SceneError(refusal)
@@ -168,17 +169,10 @@ class SceneModel:
         self._undo.append(scene)
         del self._undo[:-UNDO_DEPTH]
 
-    def _has_authority(self) -> bool:
-        """Whether this thread is applying a lesson step's own changes (:meth:`lesson_step`)."""
-        return self._authority is not None and self._authority[0] == threading.get_ident()
-
     @contextmanager
     def batch(self, kind: str = "batch", *, barrier: str | None = None) -> Iterator[None]:
-        """Group changes: one undo step and one notification at the end; all or nothing on error.
-
-        ``barrier``: when the outermost batch ends without error, an undo barrier is set there
-        (:meth:`set_undo_barrier`) before the listeners hear of the change.
-        """
+        """Group changes: one undo step and one notification at the end; all or nothing on error. With ``barrier``
+        the outermost batch ends at an undo barrier (:meth:`set_undo_barrier`), set before the listeners hear."""
         with self._lock:
             if self._batch_depth == 0:
                 self._batch_start = self._scene
@@ -445,11 +439,8 @@ class SceneModel:
         return bool(self._undo)
 
     def set_undo_barrier(self, note: str) -> None:
-        """Undo stops here: the changes made so far can no longer be undone, and :meth:`reset` comes back here.
-
-        A lesson sets one when a step is entered, so that its own changes (a lock, a value the step sets) are
-        not undone by the learner. ``note`` is what an undo at the barrier says (:attr:`undo_barrier_note`).
-        """
+        """Undo stops here and :meth:`reset` comes back here: a lesson sets one as a step is entered, so the
+        learner cannot undo its changes (a lock, a value it sets). ``note``: what undo says there."""
         if type(note) is not str or not note:
             raise SceneError(f"note: expected a sentence, got {_short(note)}")
         with self._lock:
@@ -460,14 +451,12 @@ class SceneModel:
     @property
     def undo_barrier_note(self) -> str | None:
         """What undo says when it stops at the barrier (None: no barrier is set)."""
-        barrier = self._barrier
-        return None if barrier is None else barrier[1]
+        return None if self._barrier is None else self._barrier[1]
 
     @property
     def barrier_scene(self) -> Scene | None:
         """The scene at the undo barrier (a lesson step's start), or None."""
-        barrier = self._barrier
-        return None if barrier is None else barrier[0]
+        return None if self._barrier is None else self._barrier[0]
 
     def reset(self, scene: Scene | None = None) -> None:
         """Back to ``scene``, else to the undo barrier's scene (a lesson step's start), else to the scene the model

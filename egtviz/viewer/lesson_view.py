@@ -17,14 +17,18 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
   with them in this tab (the demo's *Back* button returns to the lesson, at the same step).
 
 A ``set_range`` change of a step limits a camera field: the tab's ``field_guard`` refuses a typed value
-outside it (the field reverts, with the range in the message), the panel lists it, and a task is not checked
-while the scene breaks it (a script may still move a camera out of a range). A gizmo drag cannot
-(:func:`pose_within_ranges`, the tab's ``pose_guard``): a ``position`` range stops the camera at its edge,
+outside it (the field reverts, with the range in the message, in the field's own unit), the panel lists it,
+and a task is not checked while the scene breaks it (a script may still move a camera out of a range). A
+gizmo drag cannot (:func:`pose_within_ranges`, the tab's ``pose_guard``): a ``position`` range stops the camera at its edge,
 each coordinate clamped like a mechanical stop; under a ``ypr_deg`` range the camera keeps the last
 orientation that respected it. The gizmo follows the pointer while it is held and shows the applied pose when
 the drag ends. The browser's own gizmo limits (viser's ``translation_limits``, ``rotation_limits``) are not
 used: they bound the offset along each of the gizmo's own, rotated, axes accumulated since the gizmo was
 drawn, not the camera centre's world coordinates, and a pose the server sets does not reset them.
+
+A lock is the scene model's (it refuses every edit of a locked pose); a check also fails, with *reset step*
+as the way back, when a camera locked at the step's start (the model's undo barrier) has gone or moved
+because the scene was replaced (:func:`lock_refusal`).
 
 Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
 notification in this tab.
@@ -403,7 +407,8 @@ class LessonPanel:
         limits = []
         for c, f in sorted(run.ranges):
             label, rule, _ = _range_terms(run, c, f)
-            limits.append(f"{escape(c)}: {escape(label)} {format_number(rule.lo)} to {escape(rule.with_units(rule.hi))}")
+            shown = f"{format_number(rule.lo)} to {rule.with_units(rule.hi)}"
+            limits.append(f"{escape(c)}: {escape(label)} {escape(shown)}")
         self.ranges.content = ('<div style="font-size:0.8em">In this step: ' + "; ".join(limits) + "</div>"
                                if limits else "")
         for instrument in (self.lab, self.lens):
