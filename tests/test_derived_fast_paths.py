@@ -21,7 +21,8 @@ from egtviz.geometry.epipolar import (
     lines_of_planes,
 )
 from egtviz.geometry.homogeneous import _clip_lines, clip_lines_to_rect, normalize_homogeneous
-from egtviz.geometry.panoramic_epipolar import _circle_arcs, _sample_circles, sample_plane_conics
+from egtviz.geometry.panoramic_epipolar import _sample_circles, sample_plane_conics
+from egtviz.geometry.unified_sphere import great_circle_arcs
 from egtviz.geometry.pinhole import Intrinsics
 from egtviz.geometry.poses import look_at
 from egtviz.scene import PanoramicSpec, PinholeSpec, Scene, compute_derived, default_scene, panoramic_scene
@@ -259,7 +260,7 @@ def test_conic_arcs_match_the_projected_samples(seed, kind, n):
     normals[:4] = [[0, 0, 1], [1, 0, 0], [0.95, 0.2, 0.1], [0, 0, 0]]
     normals[4] = np.nan
     ref = reference_sample_circles(cam, normals, n)
-    arcs = _circle_arcs(cam, np.ascontiguousarray(normals.T), n)
+    arcs = great_circle_arcs(np.ascontiguousarray(normals.T), n, cam.mirror.rim_cosine, cam._unit_ray_pixels)
     assert_same_arcs(arcs, ref)
     assert all(isinstance(a, tuple) for a in arcs)
     assert_same_arcs(_sample_circles(cam, normals, n), ref)

@@ -27,3 +27,28 @@ from .poses import rotx as rotx
 from .poses import roty as roty
 from .poses import rotz as rotz
 from .unified import UnifiedCamera as UnifiedCamera
+
+__all__ = [
+    "CAMERA_MODELS",
+    "MAX_MAGNITUDE",
+    "MIN_MAGNITUDE",
+    "CameraModel",
+    "CatadioptricCamera",
+    "DegenerateConfigurationError",
+    "EpipolarPair",
+    "GeometryError",
+    "Intrinsics",
+    "ParameterSpec",
+    "PinholeCamera",
+    "Pose",
+    "UnifiedCamera",
+    "clip_lines_to_rect",
+    "epipolar_curves",
+    "epipolar_lines",
+    "epipolar_lines_in_first",
+    "epipolar_pair",
+    "normalize_homogeneous",
+    "rotx",
+    "roty",
+    "rotz",
+]

@@ -109,7 +109,7 @@ def _scan_sequence(value: object, name: str, depth: int = 0) -> None:
                 _scan_sequence(item, name, depth + 1)
 
 
-def _to_float64(value: object, name: str) -> np.ndarray:
+def to_float64(value: object, name: str) -> np.ndarray:
     """``value`` as a float64 array (any shape), refusing every non-real-number type."""
     if value is None:
         raise GeometryError(f"{name}: expected a number or an array of numbers, got None")
@@ -177,6 +177,29 @@ def _refuse_non_finite_or_huge(arr: np.ndarray, name: str, max_abs: float | None
 
 _FLOAT_MAX = float(np.finfo(np.float64).max)
 
+__all__ = [
+    "CALIBRATION_ZERO_TOL",
+    "MAX_IMAGE_SIZE",
+    "MAX_MAGNITUDE",
+    "MIN_MAGNITUDE",
+    "DegenerateConfigurationError",
+    "GeometryError",
+    "as_array",
+    "as_calibration",
+    "as_count",
+    "as_matrix",
+    "as_points",
+    "as_positive",
+    "as_rotation",
+    "as_scalar",
+    "as_up_to_scale",
+    "as_up_to_scale_rows",
+    "as_vector",
+    "row_scales",
+    "short_repr",
+    "to_float64",
+]
+
 
 def as_array(
     value: npt.ArrayLike, name: str, *, allow_empty: bool = True, max_abs: float | None = MAX_MAGNITUDE
@@ -193,7 +216,7 @@ def as_array(
         GeometryError: ``None``, strings, booleans, complex numbers, objects, ragged lists, NaN, inf,
             an entry above ``max_abs``, or an empty array when ``allow_empty`` is False.
     """
-    arr = _to_float64(value, name)
+    arr = to_float64(value, name)
     if not allow_empty and arr.size == 0:
         raise GeometryError(f"{name}: expected a non-empty array, got shape {arr.shape}")
     _refuse_non_finite_or_huge(arr, name, max_abs)

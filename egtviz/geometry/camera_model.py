@@ -43,7 +43,7 @@ import numpy.typing as npt
 
 from ._validate import (
     GeometryError,
-    _to_float64,
+    to_float64,
     as_count,
     as_scalar,
     as_vector,
@@ -305,7 +305,7 @@ def as_normals(normals_world: npt.ArrayLike) -> np.ndarray:
 
 def normals_with_planes(normals_world: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """:func:`as_normals`, and the indices of the rows that define a plane (finite and non-zero)."""
-    n = _to_float64(normals_world, "normals_world")
+    n = to_float64(normals_world, "normals_world")
     if n.ndim == 1 and n.shape[0] == 3:
         n = n[None, :]
     if n.ndim != 2 or n.shape[1] != 3:

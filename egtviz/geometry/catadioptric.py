@@ -59,6 +59,7 @@ from .camera_model import (
 from .homogeneous import normalize_homogeneous
 from .mirrors import HyperbolicMirror, Mirror, ParabolicMirror
 from .poses import Pose
+from .unified_sphere import great_circle_arcs, great_circle_conics
 
 __all__ = [
     "B_OVER_A_RANGE",
@@ -207,23 +208,25 @@ class CatadioptricCamera:
     def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
         """Image conics (N, 3, 3) of planes through the focus with world normals (N, 3) (of their mirror-frame normals
         :math:`R^T n`, ``panoramic_epipolar.conic_from_plane``); NaN rows for zero or NaN normals."""
-        from .panoramic_epipolar import conic_from_plane
-
         n = as_normals(normals_world)
         C = np.full((len(n), 3, 3), np.nan)
         good = finite_nonzero_rows(n)
         if len(good):
-            C[good] = conic_from_plane(self, n[good] @ self.pose.R)
+            C[good] = self._mirror_plane_conics(n[good] @ self.pose.R)
         return C
 
     def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[tuple[np.ndarray, ...]]:
         """Per world normal, the arcs of its plane's image that the mirror shows (ends on the rim's image)."""
-        from .panoramic_epipolar import _circle_arcs
-
         n_samples = check_sample_count(n_samples, "n_samples", 3)
         n = as_normals(normals_world)
         # Each normal's arcs as a tuple (a sequence, as the interface asks): no copy of hundreds of small lists.
-        return _circle_arcs(self, np.ascontiguousarray((n @ self.pose.R).T), n_samples)
+        return great_circle_arcs(np.ascontiguousarray((n @ self.pose.R).T), n_samples, self.mirror.rim_cosine,
+                                 self._unit_ray_pixels)
+
+    def _mirror_plane_conics(self, n_mirror: np.ndarray) -> np.ndarray:
+        r"""Image conics (N, 3, 3) of planes through the focus with float64 mirror-frame normals (N, 3) (unchecked):
+        :math:`C = K_g^{-T} \Omega(F n) K_g^{-1}` (``great_circle_conics``); NaN rows for zero normals."""
+        return great_circle_conics(n_mirror @ UNIFIED_FLIP.T, self.mirror.xi, np.linalg.inv(self.unified_calibration))
 
     def rim(self, n: int = 128) -> np.ndarray:
         """Closed polyline (n + 1, 2) of the rim's image, the boundary of the drawn region."""
@@ -384,7 +387,8 @@ class CatadioptricCamera:
             return (u >= 0) & (u <= self.width) & (v >= 0) & (v <= self.height)
 
     def _unified_homogeneous(self, d_mirror: np.ndarray) -> np.ndarray:
-        r"""Unnormalised homogeneous pixels :math:`K_g (s_x, s_y, s_z + \xi)` of (N, 3) mirror-frame directions.
+        r"""Unnormalised homogeneous pixels :math:`K_g (s_x, s_y, s_z + \xi)` of (N, 3) float64 mirror-frame
+        directions (unchecked; a zero direction gives NaN).
 
         No visibility test: this is the algebraic image of the whole sphere
         (including the blind cone's phantom points), as used by the conics.

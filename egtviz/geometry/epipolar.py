@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -23,9 +22,31 @@ from ._validate import (
     as_up_to_scale_rows,
     as_vector,
 )
-from .homogeneous import _normalize_homogeneous3, clip_lines_to_rect, homogeneous, normalize_homogeneous
+from ._shared import inverse_calibration, normalize_homogeneous3
+from .homogeneous import clip_lines_to_rect, homogeneous, normalize_homogeneous
 from .pinhole import PinholeCamera
 from .poses import Pose
+
+__all__ = [
+    "COINCIDENT_CENTRES_TOL",
+    "EpipolarPair",
+    "check_distinct_centres",
+    "clipped_epipolar_lines",
+    "epipolar_constraint",
+    "epipolar_lines",
+    "epipolar_lines_in_first",
+    "epipolar_pair",
+    "epipolar_planes",
+    "epipole_of_centre",
+    "epipoles_from_fundamental",
+    "essential_from_fundamental",
+    "essential_from_poses",
+    "fundamental_from_cameras",
+    "fundamental_from_essential",
+    "lines_of_planes",
+    "relative_pose",
+    "unit_frobenius",
+]
 
 #: Two centres closer than this (relative to the scene scale 1) have no epipolar geometry.
 COINCIDENT_CENTRES_TOL = 1e-9
@@ -148,30 +169,12 @@ def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
         K2: ``(3, 3)`` calibration of camera 2.
     """
     E = as_up_to_scale(E, "E", (3, 3))
-    F = _inverse_calibration(K2, "K2").T @ E @ _inverse_calibration(K1, "K1")
+    F = inverse_calibration(K2, "K2").T @ E @ inverse_calibration(K1, "K1")
     F = F / np.abs(F).max()  # K^-1 may be small (1e-3 per entry): keep the norm's squares in range
     n = np.linalg.norm(F)
     if not n > 0:
         raise GeometryError("E: expected a nonzero matrix")
     return F / n
-
-
-def _inverse_calibration(K: npt.ArrayLike, name: str) -> np.ndarray:
-    """``inv(as_calibration(K))``, remembered per matrix (a camera drag keeps both calibrations).
-
-    A (3, 3) float64 array is looked up by its bytes (checked on the first use only); anything else is
-    checked first.
-    """
-    if not (isinstance(K, np.ndarray) and K.dtype == np.float64 and K.shape == (3, 3)):
-        K = as_calibration(K, name)
-    return _inverse_of(np.ascontiguousarray(K).tobytes(), name)
-
-
-@lru_cache(maxsize=64)
-def _inverse_of(K_bytes: bytes, name: str) -> np.ndarray:
-    inv = np.linalg.inv(as_calibration(np.frombuffer(K_bytes).reshape(3, 3), name))
-    inv.setflags(write=False)
-    return inv
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,13 +221,13 @@ def epipolar_pair(cam1: PinholeCamera, cam2: PinholeCamera) -> EpipolarPair:
     if _centres_coincide(c1, c2):
         raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
     b = c1 - c2
-    EF = np.matmul(cam2._frames.transpose(0, 2, 1) @ _skew(*b.tolist()), cam1._frames)  # (E, F) unscaled
+    EF = np.matmul(cam2.ray_frames.transpose(0, 2, 1) @ _skew(*b.tolist()), cam1.ray_frames)  # (E, F) unscaled
     flat = EF.reshape(2, 9)
     norm = np.sqrt(np.einsum("ij,ij->i", flat, flat))
     largest = flat[(0, 1), np.abs(flat).argmax(axis=1)]
     flat *= np.copysign(1.0 / norm, largest)[:, None]
-    (x1, y1, z1), (x2, y2, z2) = (cam1._K_Rt @ b).tolist(), (cam2._K_Rt @ b).tolist()
-    e1, e2 = _normalize_homogeneous3(-x1, -y1, -z1), _normalize_homogeneous3(x2, y2, z2)  # K R^T (c' - c)
+    (x1, y1, z1), (x2, y2, z2) = (cam1.K_Rt @ b).tolist(), (cam2.K_Rt @ b).tolist()
+    e1, e2 = normalize_homogeneous3(-x1, -y1, -z1), normalize_homogeneous3(x2, y2, z2)  # K R^T (c' - c)
     return EpipolarPair(
         E=EF[0],
         F=EF[1],
@@ -239,8 +242,8 @@ def epipolar_pair(cam1: PinholeCamera, cam2: PinholeCamera) -> EpipolarPair:
 
 def _epipole_of_centre(camera: PinholeCamera, other_centre: np.ndarray) -> tuple[np.ndarray, bool]:
     """:func:`epipole_of_centre` of a checked (3,) centre known to differ from the camera's."""
-    x, y, z = (camera._K_Rt @ (other_centre - camera.center)).tolist()
-    return _normalize_homogeneous3(x, y, z), z > 0
+    x, y, z = (camera.K_Rt @ (other_centre - camera.center)).tolist()
+    return normalize_homogeneous3(x, y, z), z > 0
 
 
 def epipole_of_centre(camera: PinholeCamera, other_centre: npt.ArrayLike) -> tuple[np.ndarray, bool]:
@@ -317,7 +320,7 @@ def lines_of_planes(camera: PinholeCamera, normals_world: npt.ArrayLike) -> np.n
     """
     _check_pinhole(camera, "camera")
     n = as_up_to_scale_rows(normals_world, "normals_world", 3)
-    return n @ camera._plane_to_line.T
+    return n @ camera.plane_to_line.T
 
 
 def fundamental_from_cameras(cam1: PinholeCamera, cam2: PinholeCamera) -> np.ndarray:

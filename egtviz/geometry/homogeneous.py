@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import numpy.typing as npt
 
+from ._shared import AT_INFINITY_TOL, normalize_homogeneous3
 from ._validate import as_array, as_points, as_positive, as_up_to_scale_rows
 
-#: A homogeneous point whose last coordinate is below this fraction of its norm is at infinity.
-AT_INFINITY_TOL = 1e-12
+__all__ = [
+    "AT_INFINITY_TOL",
+    "clip_lines_to_rect",
+    "homogeneous",
+    "is_at_infinity",
+    "normalize_homogeneous",
+    "normalize_lines",
+]
 
 
 def homogeneous(points: npt.ArrayLike, name: str = "points") -> np.ndarray:
@@ -35,7 +40,7 @@ def normalize_homogeneous(v: npt.ArrayLike) -> np.ndarray:
     single = _is_single(v, "v")
     a = as_up_to_scale_rows(v, "v", 3)
     if single:
-        return _normalize_homogeneous3(*a[0].tolist())
+        return normalize_homogeneous3(*a[0].tolist())
     norm = np.linalg.norm(a, axis=1)
     at_inf = np.abs(a[:, 2]) <= AT_INFINITY_TOL * norm
     out = np.empty_like(a)
@@ -49,15 +54,6 @@ def normalize_homogeneous(v: npt.ArrayLike) -> np.ndarray:
 def _is_single(v: npt.ArrayLike, name: str) -> bool:
     """Whether ``v`` is one flat vector (then results are returned flat); bad input raises naming ``name``."""
     return as_array(v, name, max_abs=None).ndim == 1
-
-
-def _normalize_homogeneous3(x: float, y: float, z: float) -> np.ndarray:
-    """:func:`normalize_homogeneous` of one vector given as plain floats (epipoles, on every drag): the same rule."""
-    norm = math.sqrt(x * x + y * y + z * z)
-    if abs(z) <= AT_INFINITY_TOL * norm:
-        safe = norm if norm > 0 else 1.0
-        return np.array([x / safe, y / safe, 0.0])
-    return np.array([x / z, y / z, 1.0])
 
 
 def is_at_infinity(v: npt.ArrayLike) -> np.ndarray | bool:

@@ -195,6 +195,12 @@ class HyperbolicMirror:
         r"""Height of the rim, :math:`-e + a \sqrt{1 + \rho^2 / b^2}` with :math:`\rho` the rim radius."""
         return float(self.profile_z(np.array([self.rim_radius]))[0])
 
+    @cached_property
+    def rim_cosine(self) -> float:
+        r""":math:`c_{rim} = z_{rim} / \sqrt{r_{rim}^2 + z_{rim}^2}`: the cosine of the rim's angle from the axis; a
+        unit ray from the focus meets the mirror inside its rim exactly when :math:`d_z \le c_{rim}`."""
+        return float(self.rim_z / np.hypot(self.rim_radius, self.rim_z))
+
     def profile_z(self, r: npt.ArrayLike) -> np.ndarray:
         r"""Height of the visible sheet at distance ``r`` from the axis: :math:`-e + a\sqrt{1 + r^2/b^2}`."""
         r = _radii(r)
@@ -363,6 +369,12 @@ class ParabolicMirror:
     def rim_z(self) -> float:
         r"""Height of the rim, :math:`(\rho^2 - h^2) / (2h)` with :math:`\rho` the rim radius."""
         return float(self.profile_z(np.array([self.rim_radius]))[0])
+
+    @cached_property
+    def rim_cosine(self) -> float:
+        r""":math:`c_{rim} = z_{rim} / \sqrt{r_{rim}^2 + z_{rim}^2}`: the cosine of the rim's angle from the axis; a
+        unit ray from the focus meets the mirror inside its rim exactly when :math:`d_z \le c_{rim}`."""
+        return float(self.rim_z / np.hypot(self.rim_radius, self.rim_z))
 
     def profile_z(self, r: npt.ArrayLike) -> np.ndarray:
         r"""Height of the mirror at distance ``r`` from the axis: :math:`(r^2 - h^2) / (2h)`."""

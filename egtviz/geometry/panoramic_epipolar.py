@@ -28,18 +28,17 @@ image. :func:`sample_plane_conic` returns only the real, visible arcs.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
 
 from ._validate import DegenerateConfigurationError, GeometryError, as_count, as_points, as_up_to_scale_rows
-from .catadioptric import UNIFIED_FLIP, CatadioptricCamera
-from .mirrors import Mirror
+from .catadioptric import CatadioptricCamera
 from .poses import skew
-from .unified_sphere import _great_circle_conics
+from .unified_sphere import MAX_CONIC_SAMPLES, great_circle_arcs
 
 __all__ = [
+    "MAX_CONIC_SAMPLES",
     "PanoramicEpipoles",
     "biconic",
     "conic_from_plane",
@@ -52,9 +51,6 @@ __all__ = [
 ]
 
 _DEGENERATE_REL = 1e-10
-
-#: Most samples per great circle (a drawing: a few hundred are plenty).
-MAX_CONIC_SAMPLES = 100_000
 
 
 def _check_camera(camera: object, name: str) -> CatadioptricCamera:
@@ -180,8 +176,7 @@ def panoramic_epipoles(cam1: CatadioptricCamera, cam2: CatadioptricCamera) -> Pa
 
 def _conics_from_normals(camera: CatadioptricCamera, n_mirror: np.ndarray) -> np.ndarray:
     """Vectorised conics (N, 3, 3) of planes through the focus; NaN rows for zero normals."""
-    return _great_circle_conics(n_mirror @ UNIFIED_FLIP.T, camera.mirror.xi,
-                                np.linalg.inv(camera.unified_calibration))
+    return camera._mirror_plane_conics(n_mirror)
 
 
 def conic_from_plane(camera: CatadioptricCamera, n_mirror: npt.ArrayLike) -> np.ndarray:
@@ -296,120 +291,12 @@ def sample_biconics(
     return _sample_circles(camera, biconic_normals(d_current, d_desired), n)
 
 
-def _circle_basis(n: np.ndarray) -> np.ndarray:
-    r"""Orthonormal :math:`u = n \times h / |n \times h|`, :math:`v = n \times u` of unit normals ``n`` (3, N).
-
-    The helper :math:`h` is :math:`e_x` unless the normal is close to it (:math:`|n_x| \ge 0.9`), then
-    :math:`e_y`; the cross products with a unit axis are written out: :math:`n \times e_x = (0, n_z, -n_y)`,
-    :math:`n \times e_y = (-n_z, 0, n_x)`. Returns ``uv`` (2, 3, N): ``uv[0]`` is ``u``, ``uv[1]`` is ``v``.
-    """
-    uv = np.empty((2,) + n.shape)
-    u = np.where(np.abs(n[0]) < 0.9, n[[2, 2, 1]] * _CROSS_X, n[[2, 0, 0]] * _CROSS_Y)
-    np.divide(u, np.sqrt(np.add.reduce(u * u, axis=0)), out=uv[0])
-    u = uv[0]
-    np.subtract(n[[1, 2, 0]] * u[[2, 0, 1]], n[[2, 0, 1]] * u[[1, 2, 0]], out=uv[1])  # n x u
-    return uv
-
-
-# n x e_x = (0, n_z, -n_y) = (n_z, n_z, n_y) * _CROSS_X; n x e_y = (-n_z, 0, n_x) = (n_z, n_x, n_x) * _CROSS_Y.
-_CROSS_X = np.array([[0.0], [1.0], [-1.0]])
-_CROSS_Y = np.array([[-1.0], [0.0], [1.0]])
-_CROSS_X.setflags(write=False)
-_CROSS_Y.setflags(write=False)
-
-
-@lru_cache(maxsize=16)
-def _full_circle_samples(n: int) -> tuple[np.ndarray, np.ndarray]:
-    r"""``(t, cs)`` for ``n`` samples: :math:`t_j = j / (n - 1)`, and the rows :math:`(\cos\theta_j, \sin\theta_j)`
-    (n, 2) at the angles :math:`\theta_j = 2\pi \frac{n-1}{n} t_j` of a closed circle (the same for every fully
-    visible circle)."""
-    t = np.linspace(0.0, 1.0, n)
-    theta = 2.0 * np.pi * (n - 1) / n * t
-    cs = np.column_stack([np.cos(theta), np.sin(theta)])
-    t.setflags(write=False)
-    cs.setflags(write=False)
-    return t, cs
-
-
 def _sample_circles(camera: CatadioptricCamera, normals: np.ndarray, n: int) -> list[list[np.ndarray]]:
-    """Visible arcs of the images of great circles, one list of polylines per normal (see :func:`_circle_arcs`)."""
-    return [list(arcs) for arcs in _circle_arcs(camera, normals.T, n)]
-
-
-def _circle_arcs(camera: CatadioptricCamera, normals_T: np.ndarray, n: int) -> list[tuple[np.ndarray, ...]]:
-    r"""Visible arcs of the images of great circles, a tuple of polylines per normal (column of ``normals_T``).
-
-    A ray from the focus meets the mirror inside its rim exactly when its angle
-    from the mirror axis exceeds the rim's: :math:`d_z / |d| \le c_{rim}`, with
-    :math:`c_{rim} = z_{rim} / \sqrt{r_{rim}^2 + z_{rim}^2}` (the hit radius grows
-    monotonically with elevation, and a hyperbola's rim lies below its asymptote).
-    On the circle :math:`d(\theta) = \cos\theta\,u + \sin\theta\,v`,
-    :math:`d_z = A \cos(\theta - \theta_0)` with :math:`A = \sqrt{u_z^2 + v_z^2}`, so the
-    visible part is the single arc :math:`|\theta - \theta_0| \ge \arccos(c_{rim} / A)`:
-    sampled directly, its ends exactly on the rim, with no splitting and no
-    phantom branch. A fully visible circle is one closed polyline.
-
-    Every sample is thus a visible unit direction, projected without a rim test
-    (:meth:`~egtviz.geometry.catadioptric.CatadioptricCamera._unit_ray_pixels`).
-    The fully visible circles share their angles, so their directions are one
-    matrix product, :math:`[d_x\ d_y\ d_z] = [\cos\theta_j\ \sin\theta_j]\,[u; v]`.
-
-    The normals are given coordinate-major, ``normals_T`` (3, N) (mirror frame); they
-    need not be unit or finite (zero and NaN normals get no arc). No other checks
-    (internal: the viewer samples hundreds of circles per drag).
-    """
+    """Visible arcs of the images of great circles, one list of polylines per normal (checked mirror-frame
+    normals (N, 3); :func:`~egtviz.geometry.unified_sphere.great_circle_arcs`)."""
     n = as_count(n, "n", minimum=3, maximum=MAX_CONIC_SAMPLES)
-    out: list[tuple[np.ndarray, ...]] = [()] * normals_T.shape[1]
-    norm = np.sqrt(np.add.reduce(normals_T * normals_T, axis=0))
-    good = np.flatnonzero(np.isfinite(norm) & (norm > 0))
-    if len(good) == 0:
-        return out
-    if len(good) < len(out):
-        normals_T, norm = normals_T[:, good], norm[good]
-    uv = _circle_basis(normals_T / norm)  # (u or v, coordinate, circle)
-    c_rim = _rim_cosine(camera.mirror)
-    A = np.hypot(uv[0, 2], uv[1, 2])
-    full = A <= c_rim
-    rows = np.flatnonzero(full | (c_rim > -A))
-    if len(rows) == 0:
-        return out
-    m = len(rows)
-    if m < len(full):
-        uv, full, A = uv[:, :, rows], full[rows], A[rows]
-    # Directions (coordinate, circle, sample), all at the angles of a full circle: one matrix product.
-    t, cs = _full_circle_samples(n)
-    d = (uv.reshape(2, 3 * m).T @ cs.T).reshape(3, m, n)
-    all_full = bool(full.all())
-    if not all_full:
-        # Partial circles: the arc |theta - theta0| >= half_blind, a hair inside the rim so that rounding
-        # never puts an end point outside it. A > 0 here (a horizontal circle is all visible or all blind).
-        part = np.flatnonzero(~full)
-        u, v = uv[0][:, part], uv[1][:, part]
-        half_blind = np.arccos(c_rim / A[part])  # |c_rim| < A: in [-1, 1] even after rounding
-        inset = 1e-13
-        start = np.arctan2(v[2], u[2]) + half_blind + inset
-        span = 2.0 * (np.pi - half_blind - inset)
-        theta = start[:, None] + span[:, None] * t
-        d[:, part] = np.cos(theta) * u[:, :, None] + np.sin(theta) * v[:, :, None]
-    buf = np.empty((m, n + 1, 2))  # pixels, with room for the closing point of the full circles
-    camera._unit_ray_pixels(d[0], d[1], d[2], buf[:, :n, 0], buf[:, :n, 1])
-    buf[:, n] = buf[:, 0]
-    arcs = list(zip(buf))  # 1-tuples (closed polyline,), built in C
-    if not all_full:
-        for j in part.tolist():
-            arcs[j] = (buf[j, :n],)
-    if m == len(out):
-        return arcs
-    for k, arc in zip(good[rows].tolist(), arcs):
-        out[k] = arc
-    return out
-
-
-@lru_cache(maxsize=32)
-def _rim_cosine(mirror: Mirror) -> float:
-    r""":math:`c_{rim} = z_{rim} / \sqrt{r_{rim}^2 + z_{rim}^2}`, the cosine of the rim's angle from the mirror axis
-    (remembered per mirror: ``rim_z`` is a numpy evaluation)."""
-    return float(mirror.rim_z / np.hypot(mirror.rim_radius, mirror.rim_z))
+    arcs = great_circle_arcs(np.ascontiguousarray(normals.T), n, camera.mirror.rim_cosine, camera._unit_ray_pixels)
+    return [list(a) for a in arcs]
 
 
 def sample_plane_conic(camera: CatadioptricCamera, n_mirror: npt.ArrayLike, n: int = 256) -> list[np.ndarray]:

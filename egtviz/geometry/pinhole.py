@@ -40,8 +40,17 @@ from .camera_model import (
     parameters_from_specs,
     rectangle_rim,
 )
-from .homogeneous import _normalize_homogeneous3, clip_lines_to_rect
+from ._shared import inverse_calibration, normalize_homogeneous3
+from .homogeneous import clip_lines_to_rect
 from .poses import Pose
+
+__all__ = [
+    "FOCAL_PIXELS_RANGE",
+    "SKEW_OVER_FOCAL_RANGE",
+    "Intrinsics",
+    "PinholeCamera",
+    "PinholeProjection",
+]
 
 FOCAL_PIXELS_RANGE = (1.0, 1e6)
 """Accepted ``ku f`` and ``kv f`` (pixels) of :meth:`PinholeCamera.from_parameters`: with the principal point's and
@@ -237,19 +246,19 @@ class PinholeCamera:
     def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
         """The one image :math:`K R^T d` of the line through the centre along ``d`` (both directions image to it),
         normalised (``normalize_homogeneous``); shown when :math:`(R^T d)_z > 0` (the direction is in front)."""
-        m = self._K_Rt @ as_direction(direction_world)
+        m = self.K_Rt @ as_direction(direction_world)
         x, y, z = m.tolist()
-        return DirectionImages(_normalize_homogeneous3(x, y, z)[None, :], np.array([z > 0]))
+        return DirectionImages(normalize_homogeneous3(x, y, z)[None, :], np.array([z > 0]))
 
     def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray:
         r"""Image lines :math:`l = K^{-T} R^T n` (N, 3) of planes through the centre; NaN rows for zero or NaN
         normals."""
         n, good = normals_with_planes(normals_world)
         if len(good) == len(n):
-            return n @ self._plane_to_line.T
+            return n @ self.plane_to_line.T
         lines = np.full((len(n), 3), np.nan)
         if len(good):
-            lines[good] = n[good] @ self._plane_to_line.T
+            lines[good] = n[good] @ self.plane_to_line.T
         return lines
 
     def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
@@ -277,34 +286,32 @@ class PinholeCamera:
     # Read-only matrices of this (immutable) camera, built once: the epipolar geometry of a pair
     # uses them on every drag of the other camera.
     @cached_property
-    def _K_inv(self) -> np.ndarray:
-        """:math:`K^{-1}` (read-only; the same array as ``epipolar._inverse_calibration(K)``)."""
-        from .epipolar import _inverse_calibration
-
-        return _inverse_calibration(self.K, "K")
+    def K_inv(self) -> np.ndarray:
+        """:math:`K^{-1}` (read-only; the same array as ``inverse_calibration(K)``)."""
+        return inverse_calibration(self.K, "K")
 
     @cached_property
-    def _K_Rt(self) -> np.ndarray:
+    def K_Rt(self) -> np.ndarray:
         r""":math:`K R^T` (read-only): a world direction :math:`d` images to :math:`m \sim K R^T d`."""
         return _read_only(self.K @ self.pose.R.T)
 
     @cached_property
-    def _plane_to_line(self) -> np.ndarray:
+    def plane_to_line(self) -> np.ndarray:
         r""":math:`K^{-T} R^T` (read-only): a plane through the centre with world normal :math:`n` images to the line
         :math:`l = K^{-T} R^T n`."""
-        return _read_only(self._R_K_inv.T.copy())
+        return _read_only(self.R_K_inv.T.copy())
 
     @cached_property
-    def _R_K_inv(self) -> np.ndarray:
+    def R_K_inv(self) -> np.ndarray:
         r""":math:`R K^{-1}` (read-only): pixel :math:`m` at depth :math:`z_c` is the world point
         :math:`z_c R K^{-1} m + t`."""
-        return _read_only(self.pose.R @ self._K_inv)
+        return _read_only(self.pose.R @ self.K_inv)
 
     @cached_property
-    def _frames(self) -> np.ndarray:
+    def ray_frames(self) -> np.ndarray:
         r"""(2, 3, 3) read-only stack :math:`(R, R K^{-1})`: directions of the camera frame and of pixels in the world
         (both epipolar matrices of a pair are built from them in one product, ``epipolar.epipolar_pair``)."""
-        return _read_only(np.array([self.pose.R, self._R_K_inv]))
+        return _read_only(np.array([self.pose.R, self.R_K_inv]))
 
     @property
     def center(self) -> np.ndarray:
@@ -333,7 +340,7 @@ class PinholeCamera:
 
     def _project(self, X: np.ndarray) -> PinholeProjection:
         """:meth:`project` of checked (N, 3) float64 points (internal: no conversion, no check)."""
-        M = self._K_Rt
+        M = self.K_Rt
         c = M @ self.pose.t
         # K R^T (X - t) = K R^T X - K R^T t: one thin product, then per-column work (no (N, 3) temporaries).
         m = X @ M.T
@@ -358,7 +365,7 @@ class PinholeCamera:
     def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
         r"""Unit world directions (N, 3) of the rays through ``pixels`` (N, 2): :math:`d \propto R K^{-1} m`."""
         m = as_points(pixels, "pixels", 2)
-        d = np.column_stack([m, np.ones(len(m))]) @ self._R_K_inv.T
+        d = np.column_stack([m, np.ones(len(m))]) @ self.R_K_inv.T
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
     def frustum_corners(self, depth: float = 1.0) -> np.ndarray:
@@ -369,12 +376,12 @@ class PinholeCamera:
         depth = as_positive(depth, "depth")
         w, h = self.intrinsics.width, self.intrinsics.height
         corners = np.array([[0.0, 0.0, 1.0], [w, 0.0, 1.0], [w, h, 1.0], [0.0, h, 1.0]])
-        d_cam = corners @ self._K_inv.T
+        d_cam = corners @ self.K_inv.T
         d_cam = d_cam * (depth / d_cam[:, 2:3])
         return self.pose.to_world(d_cam)
 
     def image_to_world(self, pixels: npt.ArrayLike, depth: float = 1.0) -> np.ndarray:
         """World points (N, 3) of ``pixels`` (N, 2) on the plane ``z_c = depth`` (for drawing the image in 3D)."""
         m = as_points(pixels, "pixels", 2)
-        d_cam = np.column_stack([m, np.ones(len(m))]) @ self._K_inv.T
+        d_cam = np.column_stack([m, np.ones(len(m))]) @ self.K_inv.T
         return self.pose.to_world(d_cam * as_positive(depth, "depth"))

@@ -18,6 +18,20 @@ from scipy.spatial.transform import Rotation
 
 from ._validate import GeometryError, as_matrix, as_points, as_rotation, as_scalar, as_vector
 
+__all__ = [
+    "EGT_CAMERA_BASE",
+    "Pose",
+    "egt_rotation_from_ypr",
+    "look_at",
+    "matrix_from_quat_wxyz",
+    "quat_wxyz_from_matrix",
+    "rotx",
+    "roty",
+    "rotz",
+    "skew",
+    "ypr_from_egt_rotation",
+]
+
 
 def rotx(angle: float) -> np.ndarray:
     r"""Right-handed rotation about x by ``angle`` radians (EGT ``rotox``).

@@ -77,7 +77,7 @@ from .camera_model import (
 )
 from .homogeneous import normalize_homogeneous
 from .poses import Pose
-from .unified_sphere import _great_circle_conics
+from .unified_sphere import great_circle_conics
 
 __all__ = ["UnifiedCamera"]
 
@@ -289,7 +289,7 @@ class UnifiedCamera:
         ``C`` is the image of the whole great circle; where :math:`\xi > 0` and the circle dips below
         :math:`s_z = -\xi`, part of it (a branch to infinity) belongs to rays that are not seen.
         """
-        return _great_circle_conics(as_normals(normals_world) @ self.pose.R, self.xi, self._K_inv)
+        return great_circle_conics(as_normals(normals_world) @ self.pose.R, self.xi, self._K_inv)
 
     def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray | None:
         r"""For :math:`\xi = 0` (a pin-hole) the image lines :math:`l = K^{-T} R^T n` (N, 3), NaN rows for zero or NaN
