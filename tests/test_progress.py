@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sqlite3
 import threading
+import unicodedata
 
 import pytest
 
@@ -64,6 +65,30 @@ def test_learner_names_are_trimmed_and_checked():
             learner_key(bad)
 
 
+@pytest.mark.parametrize("name", [
+    "\U0001f468\u200d\U0001f469\u200d\U0001f467",  # a family: three emoji joined by zero-width joiners
+    "Ada \U0001f469\U0001f3fd\u200d\U0001f4bb",  # a technologist with a skin tone
+    "\U0001f441\ufe0f\u200d\U0001f5e8\ufe0f",  # variation selectors around a joiner
+    "\u0645\u06cc\u200c\u062e\u0648\u0627\u0647\u0645",  # Persian: a zero-width non-joiner inside a word
+    "\u2764\ufe0e",  # text presentation selector
+])
+def test_emoji_sequences_and_joined_scripts_are_names(name):
+    assert learner_key(name) == unicodedata.normalize("NFC", name)
+
+
+@pytest.mark.parametrize("name", [
+    "Ada\u202eecalvol",  # right-to-left override: shows as another name
+    "Ada\u2066x\u2069",  # bidi isolates
+    "A\u200bda",  # zero-width space
+    "\u200dAda", "Ada\u200d", "Ada \u200d Lovelace", "A\u200d\u200dda",  # a joiner with nothing to join
+    "\U0001f3f4\U000e0067\U000e0062\U000e007f",  # tag characters (invisible text)
+    "Ada\u00ad", "\ufeffAda", "Ada\u200e",  # soft hyphen, BOM, direction mark
+])
+def test_format_characters_that_can_hide_or_reorder_text_are_refused(name):
+    with pytest.raises(LearnerNameError, match="control characters"):
+        learner_key(name)
+
+
 def test_several_threads_record_attempts_without_losing_any(tmp_path):
     store = ProgressStore(tmp_path / "p.sqlite3")
     errors = []
@@ -93,7 +118,9 @@ def test_the_schema_is_versioned_and_a_newer_one_is_refused(tmp_path):
         assert migrate(conn) == SCHEMA_VERSION  # nothing to do
         conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION + 1}")
     with pytest.raises(sqlite3.DatabaseError, match="newer|version"):
-        ProgressStore(path)
+        migrate(sqlite3.connect(path))
+    newer = ProgressStore(path)  # the course still starts: progress is kept in memory, the file is left alone
+    assert not newer.persistent and f"schema version {SCHEMA_VERSION + 1}" in newer.problem
 
 
 def test_the_database_lives_in_the_users_data_folder(monkeypatch, tmp_path):

@@ -53,26 +53,40 @@ def add_progress_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run_progress(args: argparse.Namespace) -> int:
-    """Print the progress table (learner, lesson, step, tasks done, attempts); 2 if the database cannot be read."""
-    import sqlite3
+    """Print the progress table (learner, lesson, step, tasks done, attempts); 2 if the database cannot be read.
 
-    from .progress import ProgressStore
+    A report: the database is opened read-only (``mode=ro``), so nothing is created, written or journalled; a
+    path that does not exist has no progress yet; anything that is not a progress database is refused.
+    """
+    from .progress import ProgressStore, default_database_path
 
-    try:
-        rows = ProgressStore(args.database).summary()
-    except (OSError, sqlite3.Error) as exc:
-        print(f"egtviz: progress database: {exc}", file=sys.stderr)
+    path = args.database if args.database is not None else default_database_path()
+    store = ProgressStore(path, read_only=True)
+    if store.fault is not None:
+        print(f"egtviz: progress: {store.fault}", file=sys.stderr)
         return 2
+    rows = store.summary()
     if not rows:
         print("no progress recorded yet")
         return 0
     header = ("learner", "lesson", "step", "tasks done", "attempts")
-    table = [header] + [(printable(r.learner), r.lesson, str(r.step + 1), str(r.tasks_passed), str(r.attempts))
-                        for r in rows]
+    table = [header] + [(_learner_shown(r.learner), printable(r.lesson), str(r.step + 1), str(r.tasks_passed),
+                         str(r.attempts)) for r in rows]
     widths = [max(len(row[i]) for row in table) for i in range(len(header))]
     for row in table:
         print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
     return 0
+
+
+def _learner_shown(name: str) -> str:
+    """A learner's name for the terminal: as typed when it is a name the course accepts (an emoji family's
+    joiners included), else with its control characters written out."""
+    from .progress import LearnerNameError, learner_key
+
+    try:
+        return name if learner_key(name) == name else printable(name)
+    except LearnerNameError:
+        return printable(name)
 
 
 def add_check_arguments(parser: argparse.ArgumentParser) -> None:

@@ -5,26 +5,42 @@ types (:func:`learner_key`), so a reload, a new tab or a restarted server resume
 schema is versioned with ``PRAGMA user_version`` and upgraded by :func:`migrate`. Every call opens its own
 connection (``sqlite3`` connections are not shared between threads) and writes in one transaction, so
 several threads, or several server processes, may use one file.
+
+A file that cannot be used never stops the course: a folder, a FIFO, bytes that are no SQLite database, a
+database of a newer egtviz, a read-only folder, a full disk. The store then keeps this session's progress
+in memory, says why once (:attr:`ProgressStore.problem`, naming the file, and a warning on the terminal)
+and leaves the file exactly as it was: nothing is written, no journal is made, no schema is migrated. A file
+that stops being writable while the server runs (the disk fills, the file is replaced) is handled the same
+way from the first write that fails; what the file held is carried over when it can still be read.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import sqlite3
+import stat
 import threading
 import time
 import unicodedata
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
+from urllib.parse import quote
 
-__all__ = ["SCHEMA_VERSION", "LearnerNameError", "ProgressRow", "ProgressStore", "default_database_path", "learner_key"]
+__all__ = [
+    "SCHEMA_VERSION", "LearnerNameError", "LessonProgress", "ProgressRow", "ProgressStore", "default_database_path",
+    "learner_key",
+]
 
 SCHEMA_VERSION = 1
 MAX_LEARNER_NAME = 40
 """Characters of a learner's name (after trimming)."""
 _TIMEOUT_S = 10.0
+_log = logging.getLogger(__name__)
+_T = TypeVar("_T")
 
 _MIGRATIONS = {
     1: (
@@ -48,7 +64,15 @@ _MIGRATIONS = {
                PRIMARY KEY (learner, lesson, step, task))""",
     ),
 }
-"""Statements that take the schema from version ``n - 1`` to ``n``."""
+"""Statements that take the schema from version ``n - 1`` to ``n``. The primary keys lead with the learner:
+every per-learner read (the start page's, the runner's) is an index search, not a scan of the table."""
+
+_TABLES = frozenset({"learners", "lesson_state", "task_state"})
+#: Joiners that shape what is around them (an emoji family, a Persian word): allowed between two visible
+#: characters. Every other format character (bidi overrides and isolates, zero-width spaces, tags) is refused.
+_JOINERS = frozenset("\u200c\u200d")
+_FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+               (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"))
 
 
 class LearnerNameError(ValueError):
@@ -57,7 +81,9 @@ class LearnerNameError(ValueError):
 
 def learner_key(name: object) -> str:
     """The name a learner typed as the key of their progress: NFC-normalised, trimmed, inner runs of spaces
-    made one; 1 to :data:`MAX_LEARNER_NAME` characters, no control characters.
+    made one; 1 to :data:`MAX_LEARNER_NAME` characters, no control or format characters except a zero-width
+    joiner or non-joiner between two visible characters (emoji sequences such as a family, joined scripts).
+    Variation selectors (emoji or text presentation) are marks and are kept.
 
     Raises:
         LearnerNameError: naming what is wrong.
@@ -69,9 +95,17 @@ def learner_key(name: object) -> str:
         raise LearnerNameError("name: expected a name (it is empty)")
     if len(key) > MAX_LEARNER_NAME:
         raise LearnerNameError(f"name: at most {MAX_LEARNER_NAME} characters, got {len(key)}")
-    if any(unicodedata.category(c)[0] == "C" for c in key):
-        raise LearnerNameError("name: control characters are not allowed")
+    for i, c in enumerate(key):
+        if unicodedata.category(c)[0] != "C":
+            continue
+        if c in _JOINERS and 0 < i < len(key) - 1 and _visible(key[i - 1]) and _visible(key[i + 1]):
+            continue
+        raise LearnerNameError(f"name: control characters are not allowed (U+{ord(c):04X})")
     return key
+
+
+def _visible(c: str) -> bool:
+    return not c.isspace() and unicodedata.category(c)[0] != "C"
 
 
 def default_database_path() -> Path:
@@ -84,8 +118,8 @@ def default_database_path() -> Path:
     return Path(folder) / "progress.sqlite3"
 
 
-def migrate(conn: sqlite3.Connection) -> int:
-    """Bring the schema of ``conn`` to :data:`SCHEMA_VERSION`; returns the version found.
+def migrate(conn: sqlite3.Connection, to: int = SCHEMA_VERSION) -> int:
+    """Bring the schema of ``conn`` to version ``to`` (default :data:`SCHEMA_VERSION`); returns the version found.
 
     Raises:
         sqlite3.DatabaseError: a database written by a newer egtviz (its version is higher).
@@ -93,7 +127,7 @@ def migrate(conn: sqlite3.Connection) -> int:
     found = conn.execute("PRAGMA user_version").fetchone()[0]
     if found > SCHEMA_VERSION:
         raise sqlite3.DatabaseError(f"progress database of schema version {found}; this egtviz reads {SCHEMA_VERSION}")
-    for version in range(found + 1, SCHEMA_VERSION + 1):
+    for version in range(found + 1, to + 1):
         with conn:
             for statement in _MIGRATIONS[version]:
                 conn.execute(statement)
@@ -113,56 +147,290 @@ class ProgressRow:
     attempts: int
 
 
-class ProgressStore:
-    """The progress database at ``path`` (created with its folder on first use)."""
+@dataclass(frozen=True)
+class LessonProgress:
+    """What one learner did in one lesson (the start page's line for it)."""
 
-    def __init__(self, path: str | os.PathLike | None = None) -> None:
+    step: int
+    """The step they were last at (0-based; 0 if they only checked tasks)."""
+    passed: frozenset[tuple[int, str]]
+    """``(step, task id)`` of the tasks passed."""
+
+
+class _Unusable(Exception):
+    """The file cannot hold progress: ``reason`` (naming it) and, when it can still be read, a read-only
+    connection to carry its progress over into memory."""
+
+    def __init__(self, reason: str, seed: sqlite3.Connection | None = None) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.seed = seed
+
+
+def _shown(path: Path | str) -> str:
+    """A path as a message shows it: no control characters."""
+    text = os.fspath(path)
+    return "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in text)
+
+
+def _uri(path: Path, mode: str) -> str:
+    return f"file:{quote(os.path.abspath(path))}?mode={mode}"
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be a database file (a folder, a FIFO...), None if it is a regular file or absent.
+
+    Raises:
+        _Unusable: its folder is not a folder.
+    """
+    folder = path.parent
+    if folder.exists() and not folder.is_dir():
+        raise _Unusable(f"the data folder {_shown(folder)} is a file, not a folder")
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise _Unusable(f"{_shown(path)} cannot be read ({exc.strerror})") from exc
+    for test, kind in _FILE_KINDS:
+        if test(mode):
+            return f"{_shown(path)} is {kind}, not a progress database"
+    return None
+
+
+def _read_only(path: Path) -> sqlite3.Connection:
+    """A read-only connection to the progress database ``path`` (it never writes, creates or journals).
+
+    Raises:
+        _Unusable: it is not a progress database of a version this egtviz reads.
+    """
+    conn = sqlite3.connect(_uri(path, "ro"), uri=True, timeout=_TIMEOUT_S, check_same_thread=False)
+    try:
+        version = conn.execute("PRAGMA user_version").fetchone()[0]
+        tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    except sqlite3.DatabaseError as exc:
+        conn.close()
+        raise _Unusable(f"{_shown(path)} is not a progress database ({exc})") from exc
+    if version > SCHEMA_VERSION:
+        conn.close()
+        raise _Unusable(f"{_shown(path)} was written by a newer egtviz (schema version {version}; this one "
+                        f"reads {SCHEMA_VERSION})")
+    if (version == 0 and tables) or (version > 0 and not _TABLES <= tables):
+        conn.close()
+        raise _Unusable(f"{_shown(path)} is not a progress database (it holds other tables)")
+    return conn
+
+
+def _writable(path: Path) -> str | None:
+    """Why the database ``path`` (or the journal next to it) cannot be written, None if it can."""
+    folder = path.parent
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"{_shown(path)} cannot be written: its folder is read-only"
+    if path.exists() and not os.access(path, os.W_OK):
+        return f"{_shown(path)} is read-only"
+    return None
+
+
+class ProgressStore:
+    """The progress database at ``path`` (created with its folder on first use).
+
+    Args:
+        path: the database file (default :func:`default_database_path`).
+        read_only: only read the file (opened ``mode=ro``: never written, created or journalled), e.g. for a
+            report; a path that does not exist reads as no progress.
+        max_pages: at most this many pages in the file (SQLite's ``max_page_count``): a quota; a write past it
+            is handled like a full disk.
+
+    Nothing here raises for the file: a file that cannot be used leaves :attr:`problem` saying why, and the
+    progress is then kept in memory for as long as this store lives.
+    """
+
+    def __init__(self, path: str | os.PathLike | None = None, *, read_only: bool = False,
+                 max_pages: int | None = None) -> None:
         self.path = Path(path) if path is not None else default_database_path()
-        self._lock = threading.Lock()
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with self._connect() as conn:
+        self.read_only = bool(read_only)
+        self.max_pages = max_pages
+        self._lock = threading.RLock()
+        self._memory: sqlite3.Connection | None = None
+        #: Why the file cannot be used (naming it), None while it can.
+        self.fault: str | None = None
+        try:
+            self._open()
+        except _Unusable as exc:
+            self._fall_back(exc.reason, exc.seed)
+        except (OSError, sqlite3.Error) as exc:
+            self._fall_back(f"{_shown(self.path)} cannot be used ({_why(exc)})", None)
+
+    @property
+    def problem(self) -> str | None:
+        """Why progress is not being kept in the file, as the course says it (a sentence naming the file), None
+        while it is."""
+        if self.fault is None:
+            return None
+        return (f"Progress is not being kept: {self.fault}. This session's progress is kept in memory until the "
+                "server stops.")
+
+    @property
+    def persistent(self) -> bool:
+        """Whether what is recorded goes to the file (False: into memory, until this store is dropped)."""
+        return self._memory is None
+
+    def _open(self) -> None:
+        """Check the file and bring it to the current schema (read-only: only check it).
+
+        Raises:
+            _Unusable: why the file cannot be used.
+        """
+        kind = _file_problem(self.path)
+        if kind is not None:
+            raise _Unusable(kind)
+        if not self.path.exists():
+            if self.read_only:  # no progress yet; nothing is made
+                self._memory = self._empty_memory()
+            else:
+                self._create()
+            return
+        seed = _read_only(self.path)
+        if self.read_only:
+            empty = seed.execute("PRAGMA user_version").fetchone()[0] == 0
+            seed.close()
+            if empty:  # an empty file, or an empty SQLite database: a report does not make it one
+                raise _Unusable(f"{_shown(self.path)} is not a progress database (it holds no progress tables)")
+            return
+        try:
+            version = seed.execute("PRAGMA user_version").fetchone()[0]
+            refusal = _writable(self.path)
+            if refusal is not None:
+                raise _Unusable(refusal, seed)
+            if version < SCHEMA_VERSION:
+                with self._connect() as conn:
+                    migrate(conn)
+        except (OSError, sqlite3.Error) as exc:
+            raise _Unusable(f"{_shown(self.path)} cannot be written ({_why(exc)})", seed) from exc
+        seed.close()
+
+    def _create(self) -> None:
+        """A new database file (and its folder)."""
+        folder = self.path.parent
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise _Unusable(f"the data folder {_shown(folder)} cannot be made ({_why(exc)})") from exc
+        refusal = _writable(self.path)
+        if refusal is not None:
+            raise _Unusable(refusal)
+        conn = sqlite3.connect(_uri(self.path, "rwc"), uri=True, timeout=_TIMEOUT_S)
+        try:
+            self._limit(conn)
             migrate(conn)
+        except sqlite3.Error as exc:
+            conn.close()
+            if self.path.is_file() and self.path.stat().st_size == 0:
+                self.path.unlink()  # the empty file this call made: nothing of it is left behind
+            raise _Unusable(f"{_shown(self.path)} cannot be made ({_why(exc)})") from exc
+        conn.close()
+
+    def _limit(self, conn: sqlite3.Connection) -> None:
+        conn.execute("PRAGMA foreign_keys = ON")
+        if self.max_pages is not None:
+            conn.execute(f"PRAGMA max_page_count = {int(self.max_pages)}")
 
     @contextmanager
     def _connect(self) -> Iterator[sqlite3.Connection]:
-        conn = sqlite3.connect(self.path, timeout=_TIMEOUT_S)
+        """A connection to the file; it must exist (``mode=rw``: a file removed meanwhile is not made again)."""
+        conn = sqlite3.connect(_uri(self.path, "ro" if self.read_only else "rw"), uri=True, timeout=_TIMEOUT_S)
         try:
-            conn.execute("PRAGMA foreign_keys = ON")
+            self._limit(conn)
             yield conn
         finally:
             conn.close()
 
-    @contextmanager
-    def _write(self) -> Iterator[sqlite3.Connection]:
-        with self._lock, self._connect() as conn, conn:
-            yield conn
+    @staticmethod
+    def _empty_memory() -> sqlite3.Connection:
+        memory = sqlite3.connect(":memory:", check_same_thread=False)
+        migrate(memory)
+        memory.execute("PRAGMA foreign_keys = ON")
+        return memory
 
-    def _learner(self, conn: sqlite3.Connection, name: str) -> str:
-        key = learner_key(name)
+    def _fall_back(self, reason: str, seed: sqlite3.Connection | None) -> None:
+        """Keep progress in memory from now on (a copy of what ``seed`` can still read, else nothing) and say
+        why, once: :attr:`problem`, and a warning on the terminal (not for a read-only store: its caller says)."""
+        memory = sqlite3.connect(":memory:", check_same_thread=False)
+        try:
+            if seed is not None:
+                seed.backup(memory)
+            migrate(memory)
+            memory.execute("PRAGMA foreign_keys = ON")
+        except sqlite3.Error:
+            memory.close()
+            memory = self._empty_memory()
+        finally:
+            if seed is not None:
+                seed.close()
+        self._memory = memory
+        self.fault = reason
+        if not self.read_only:
+            _log.warning("egtviz: %s", self.problem)
+
+    def _degrade(self, exc: BaseException) -> None:
+        """A use of the file failed: progress goes to memory from now on (once; later calls find it there)."""
+        with self._lock:
+            if self._memory is not None:
+                return
+            try:
+                seed = sqlite3.connect(_uri(self.path, "ro"), uri=True, check_same_thread=False)
+            except sqlite3.Error:
+                seed = None
+            self._fall_back(f"{_shown(self.path)} could not be used any more ({_why(exc)})", seed)
+
+    def _run(self, work: Callable[[sqlite3.Connection], _T], *, write: bool) -> _T:
+        """``work`` on the file (a write: one transaction, under the lock), or in memory once the file failed."""
+        if self._memory is None:
+            try:
+                if not write:
+                    with self._connect() as conn:
+                        return work(conn)
+                with self._lock:
+                    if self._memory is None:
+                        with self._connect() as conn, conn:
+                            return work(conn)
+            except (sqlite3.DatabaseError, OSError) as exc:
+                if isinstance(exc, (sqlite3.IntegrityError, sqlite3.ProgrammingError)):
+                    raise  # a fault of this code, not of the file
+                self._degrade(exc)
+        with self._lock:
+            return self._in_memory(work)
+
+    def _in_memory(self, work: Callable[[sqlite3.Connection], _T]) -> _T:
+        memory = self._memory
+        assert memory is not None
+        with memory:
+            return work(memory)
+
+    @staticmethod
+    def _learner(conn: sqlite3.Connection, key: str) -> None:
         conn.execute("INSERT OR IGNORE INTO learners (name, created) VALUES (?, ?)", (key, time.time()))
-        return key
 
     def set_step(self, learner: str, lesson: str, step: int) -> None:
         """Remember that ``learner`` is at ``step`` of ``lesson``."""
-        with self._write() as conn:
-            key = self._learner(conn, learner)
+        key = learner_key(learner)
+
+        def work(conn: sqlite3.Connection) -> None:
+            self._learner(conn, key)
             conn.execute(
                 "INSERT INTO lesson_state (learner, lesson, step, updated) VALUES (?, ?, ?, ?) "
                 "ON CONFLICT (learner, lesson) DO UPDATE SET step = excluded.step, updated = excluded.updated",
                 (key, lesson, int(step), time.time()),
             )
 
-    def current_step(self, learner: str, lesson: str) -> int:
-        """The step ``learner`` was last at in ``lesson`` (0 if never started)."""
-        with self._connect() as conn:
-            row = conn.execute("SELECT step FROM lesson_state WHERE learner = ? AND lesson = ?",
-                               (learner_key(learner), lesson)).fetchone()
-        return int(row[0]) if row else 0
+        self._run(work, write=True)
 
     def record_attempt(self, learner: str, lesson: str, step: int, task: str, passed: bool) -> None:
         """Count one attempt at a task; once passed, a task stays passed."""
-        with self._write() as conn:
-            key = self._learner(conn, learner)
+        key = learner_key(learner)
+
+        def work(conn: sqlite3.Connection) -> None:
+            self._learner(conn, key)
             conn.execute(
                 "INSERT INTO task_state (learner, lesson, step, task, attempts, passed, updated) "
                 "VALUES (?, ?, ?, ?, 1, ?, ?) ON CONFLICT (learner, lesson, step, task) DO UPDATE SET "
@@ -170,37 +438,65 @@ class ProgressStore:
                 (key, lesson, int(step), task, int(bool(passed)), time.time()),
             )
 
+        self._run(work, write=True)
+
+    def current_step(self, learner: str, lesson: str) -> int:
+        """The step ``learner`` was last at in ``lesson`` (0 if never started)."""
+        row = self._run(lambda conn: conn.execute("SELECT step FROM lesson_state WHERE learner = ? AND lesson = ?",
+                                                  (learner_key(learner), lesson)).fetchone(), write=False)
+        return int(row[0]) if row else 0
+
     def passed_tasks(self, learner: str, lesson: str) -> frozenset[tuple[int, str]]:
         """``(step, task id)`` of the tasks ``learner`` has passed in ``lesson``."""
-        with self._connect() as conn:
-            rows = conn.execute("SELECT step, task FROM task_state WHERE learner = ? AND lesson = ? AND passed = 1",
-                                (learner_key(learner), lesson)).fetchall()
+        rows = self._run(lambda conn: conn.execute(
+            "SELECT step, task FROM task_state WHERE learner = ? AND lesson = ? AND passed = 1",
+            (learner_key(learner), lesson)).fetchall(), write=False)
         return frozenset((int(s), t) for s, t in rows)
 
     def attempts(self, learner: str, lesson: str, step: int, task: str) -> int:
         """How many times ``learner`` checked that task (0 if never)."""
-        with self._connect() as conn:
-            row = conn.execute(
-                "SELECT attempts FROM task_state WHERE learner = ? AND lesson = ? AND step = ? AND task = ?",
-                (learner_key(learner), lesson, int(step), task),
-            ).fetchone()
+        row = self._run(lambda conn: conn.execute(
+            "SELECT attempts FROM task_state WHERE learner = ? AND lesson = ? AND step = ? AND task = ?",
+            (learner_key(learner), lesson, int(step), task)).fetchone(), write=False)
         return int(row[0]) if row else 0
+
+    def lessons_of(self, learner: str) -> dict[str, LessonProgress]:
+        """Every lesson ``learner`` started (moved in it or checked a task), in one indexed query."""
+        key = learner_key(learner)
+        rows = self._run(lambda conn: conn.execute(
+            "SELECT lesson, step, NULL, 0 FROM lesson_state WHERE learner = ? "
+            "UNION ALL SELECT lesson, step, task, passed FROM task_state WHERE learner = ?", (key, key)).fetchall(),
+            write=False)
+        steps: dict[str, int] = {}
+        passed: dict[str, set[tuple[int, str]]] = {}
+        for lesson, step, task, ok in rows:
+            passed.setdefault(lesson, set())
+            if task is None:
+                steps[lesson] = int(step)
+            elif ok:
+                passed[lesson].add((int(step), task))
+        return {lesson: LessonProgress(steps.get(lesson, 0), frozenset(done)) for lesson, done in passed.items()}
 
     def learners(self) -> list[str]:
         """Every learner who has made progress, sorted."""
-        with self._connect() as conn:
-            return [r[0] for r in conn.execute("SELECT name FROM learners ORDER BY name")]
+        return self._run(lambda conn: [r[0] for r in conn.execute("SELECT name FROM learners ORDER BY name")],
+                         write=False)
 
     def summary(self) -> list[ProgressRow]:
         """One row per learner and lesson started, sorted by learner then lesson."""
-        with self._connect() as conn:
-            rows = conn.execute(
-                """SELECT l.learner, l.lesson, l.step,
-                          COALESCE(SUM(t.passed), 0), COALESCE(SUM(t.attempts), 0)
-                   FROM (SELECT learner, lesson, step FROM lesson_state
-                         UNION SELECT learner, lesson, 0 FROM task_state
-                         WHERE (learner, lesson) NOT IN (SELECT learner, lesson FROM lesson_state)) AS l
-                   LEFT JOIN task_state t ON t.learner = l.learner AND t.lesson = l.lesson
-                   GROUP BY l.learner, l.lesson ORDER BY l.learner, l.lesson"""
-            ).fetchall()
+        rows = self._run(lambda conn: conn.execute(
+            """SELECT l.learner, l.lesson, l.step,
+                      COALESCE(SUM(t.passed), 0), COALESCE(SUM(t.attempts), 0)
+               FROM (SELECT learner, lesson, step FROM lesson_state
+                     UNION SELECT learner, lesson, 0 FROM task_state
+                     WHERE (learner, lesson) NOT IN (SELECT learner, lesson FROM lesson_state)) AS l
+               LEFT JOIN task_state t ON t.learner = l.learner AND t.lesson = l.lesson
+               GROUP BY l.learner, l.lesson ORDER BY l.learner, l.lesson""").fetchall(), write=False)
         return [ProgressRow(a, b, int(c), int(d), int(e)) for a, b, c, d, e in rows]
+
+
+def _why(exc: BaseException) -> str:
+    """An error as a message shows it: the OS's words for an OSError, SQLite's for the rest."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    return str(exc)

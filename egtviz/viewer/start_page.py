@@ -8,6 +8,9 @@ workbench. A lesson opens as the workbench with the lesson's panel on top
 workbench has the same button. ``egtviz lesson NAME`` opens that lesson in every new tab instead.
 
 The lessons are read once, when the server starts: a lesson file edited later is read on the next start.
+One render of the page reads the learner's progress in one indexed query (:meth:`ProgressStore.lessons_of`),
+and the name field is taken once the typing stops. When progress is not being kept (the database cannot be
+used, :attr:`ProgressStore.problem`), the page says so under its title, naming the file.
 """
 
 from __future__ import annotations
@@ -17,11 +20,13 @@ from html import escape
 from typing import Any
 
 from ..lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
+from ..lessons.progress import LessonProgress
 from ..scene import SceneModel
-from .fields import FieldError, on_event
+from .fields import Debouncer, FieldError, on_event
 from .lesson_view import LESSON_ORDER, LessonPanel, typed_learner_key
+from .progress_notice import progress_notice_html
 
-__all__ = ["Course", "LessonStatus", "StartPage", "lesson_status"]
+__all__ = ["Course", "LessonStatus", "StartPage", "course_statuses", "lesson_status"]
 
 #: The start page's control panel is wider than the workbench's: it is the page.
 START_PAGE_WIDTH_PX = 560
@@ -35,18 +40,21 @@ class LessonStatus:
     DONE = "done"
 
 
-def lesson_status(progress: ProgressStore, learner: str, lesson: Lesson) -> str:
+def lesson_status(record: LessonProgress | None, lesson: Lesson) -> str:
     """``"done"`` (every task passed; a lesson without tasks: its last step reached), ``"step k of n"``, or
-    ``"not started"`` (also for an anonymous learner, whose progress is not kept)."""
-    if not learner:
+    ``"not started"`` (``record`` None: the learner never started it, or is anonymous and nothing is kept)."""
+    if record is None:
         return LessonStatus.NOT_STARTED
     tasks = {(i, t.id) for i, step in enumerate(lesson.steps) for t in step.tasks}
-    passed = progress.passed_tasks(learner, lesson.name)
-    step = progress.current_step(learner, lesson.name)
-    if (tasks and tasks <= passed) or (not tasks and step == len(lesson.steps) - 1):
+    if (tasks and tasks <= record.passed) or (not tasks and record.step == len(lesson.steps) - 1):
         return LessonStatus.DONE
-    started = any(r.learner == learner and r.lesson == lesson.name for r in progress.summary())
-    return f"step {step + 1} of {len(lesson.steps)}" if started else LessonStatus.NOT_STARTED
+    return f"step {record.step + 1} of {len(lesson.steps)}"
+
+
+def course_statuses(progress: ProgressStore, learner: str, lessons: dict[str, Lesson]) -> dict[str, str]:
+    """:func:`lesson_status` of each lesson for ``learner`` (``""``: anonymous), from one query of ``progress``."""
+    records = progress.lessons_of(learner) if learner else {}
+    return {name: lesson_status(records.get(name), lesson) for name, lesson in lessons.items()}
 
 
 class StartPage:
@@ -64,6 +72,7 @@ class StartPage:
         self.learner = learner
         self.closed = False
         self._lock = threading.RLock()
+        self._typing = Debouncer(course.app.field_delay)
         gui = client.gui
         with client.atomic():
             gui.configure_theme(dark_mode=False, show_logo=False)
@@ -79,6 +88,7 @@ class StartPage:
                 f"Two-view geometry: a course</h2>{len(course.lessons)} lessons, from camera poses to visual "
                 "servoing. Each lesson is a workbench with a panel of steps; its tasks are checked as you go. "
                 "Type your name to keep your progress.</div>")
+            self.notice = gui.add_html("")
             self.name = gui.add_text("your name", learner,
                                      hint="Your progress is kept under this name: type it again in any tab, or "
                                           "after a restart, to resume where you were.")
@@ -95,7 +105,7 @@ class StartPage:
         for name, button in self.buttons.items():
             self._on(button.on_click, lambda _, n=name: self.course.open_lesson(self.client, n, self.learner))
         self._on(self.btn_workbench.on_click, lambda _: self.course.open_workbench(self.client))
-        self._on(self.name.on_update, lambda e: self._set_name(e.target.value))
+        self._on(self.name.on_update, lambda e: self._name_typed(e.target.value))
 
     def _height(self) -> float:
         """The page's height: the window's (as the tab reported its canvas) less the margins."""
@@ -122,17 +132,36 @@ class StartPage:
 
         on_event(register, guarded, self.report)
 
+    def _name_typed(self, text: Any) -> None:
+        """The name field changed: take the name once the typing stops (each keystroke is not a learner)."""
+        self._typing.submit("learner", lambda: self._later(lambda: self._set_name(text)))
+
+    def _later(self, action: Any) -> None:
+        """Run a debounced action (from a timer thread: no callback wrapper above it) under the page's lock."""
+        try:
+            with self._lock:
+                if not self.closed:
+                    action()
+        except Exception as exc:  # noqa: BLE001 - every failure must reach the tab
+            self.report(exc)
+
     def _set_name(self, name: Any) -> None:
-        key = typed_learner_key(name)
+        try:
+            key = typed_learner_key(name)
+        except FieldError:
+            self.name.value = self.learner  # the field shows the name in use, the notification why
+            raise
         if key != self.learner:
             self.learner = key
             self.course.remember(self.client.client_id, key)
             self._show_status()
 
     def _show_status(self) -> None:
-        """Each lesson's summary and how far this learner got in it."""
+        """Each lesson's summary and how far this learner got in it; whether progress is kept."""
+        statuses = course_statuses(self.course.progress, self.learner, self.course.lessons)
+        self.notice.content = progress_notice_html(self.course.progress.problem)
         for name, lesson in self.course.lessons.items():
-            status = lesson_status(self.course.progress, self.learner, lesson)
+            status = statuses[name]
             colour = "#117733" if status == LessonStatus.DONE else "#555"
             mark = "\u2713 " if status == LessonStatus.DONE else ""
             self.status[name].content = (
@@ -142,6 +171,7 @@ class StartPage:
             )
 
     def close(self) -> None:
+        self._typing.close()
         with self._lock:
             self.closed = True
 
