@@ -111,7 +111,8 @@ def test_normalize_by_hand_and_properties():
     U = rng.uniform(0, 640, (2, 30))
     Un, T = f_normalize(U)
     np.testing.assert_allclose(Un.mean(axis=1), 0, atol=1e-12)
-    np.testing.assert_allclose(np.sqrt(np.mean(np.sum(Un**2, axis=0))), np.sqrt(2), rtol=1e-12)
+    # H&Z's (and OpenCV's, kornia's) normalisation: MEAN distance sqrt(2) from the centroid, not RMS.
+    np.testing.assert_allclose(np.mean(np.linalg.norm(Un, axis=0)), np.sqrt(2), rtol=1e-12)
     np.testing.assert_allclose((T @ np.vstack([U, np.ones(30)]))[:2], Un, atol=1e-12)
 
 

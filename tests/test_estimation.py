@@ -1,4 +1,5 @@
-"""Tests of egtviz.geometry.estimation (triangulation: ``test_triangulation.py``; EGT 2.0's robust
+"""Tests of the two-view estimators (``egtviz.geometry.fundamental``, ``.essential``, ``.error_metrics``,
+``.sampson_refinement``, ``.robust``; triangulation: ``test_triangulation.py``; EGT 2.0's robust
 estimators and LMedS on few points: ``test_robust_estimators.py``).
 
 Every scene comes from ``_twoview.make_two_view`` with an explicit
@@ -15,26 +16,18 @@ from hypothesis import strategies as st
 
 from egtviz.geometry._validate import DegenerateConfigurationError, GeometryError
 from egtviz.geometry.epipolar import essential_from_fundamental, fundamental_from_essential
-from egtviz.geometry.estimation import (
-    RobustEstimate,
-    decompose_essential,
-    fundamental_7point,
-    fundamental_8point,
-    fundamental_lmeds,
-    fundamental_normalized_8point,
-    fundamental_ransac,
-    fundamental_sampson,
-    pose_from_essential,
-    reprojection_error,
-    sampson_distance,
-    symmetric_epipolar_distance,
-)
+from egtviz.geometry.error_metrics import reprojection_error, sampson_distance, symmetric_epipolar_distance
+from egtviz.geometry.essential import decompose_essential, essential_from_correspondences, pose_from_essential
+from egtviz.geometry.fundamental import fundamental_7point, fundamental_8point, fundamental_normalized_8point
+from egtviz.geometry.matrices import hartley_normalization
 from egtviz.geometry.poses import skew
+from egtviz.geometry.robust import RobustEstimate, fundamental_lmeds, fundamental_ransac
+from egtviz.geometry.sampson_refinement import fundamental_sampson
 
 try:
-    from tests._twoview import f_distance, make_two_view, transfer_error, true_sampson, true_symmetric
+    from tests._twoview import f_distance, make_two_view, transfer_error, true_sampson, true_symmetric, unit_sign
 except ImportError:  # tests/ run as a plain directory
-    from _twoview import f_distance, make_two_view, transfer_error, true_sampson, true_symmetric
+    from _twoview import f_distance, make_two_view, transfer_error, true_sampson, true_symmetric, unit_sign
 
 LINEAR = [fundamental_8point, fundamental_normalized_8point, fundamental_sampson]
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
@@ -310,7 +303,6 @@ def test_reprojection_error_propagates_nan_points() -> None:
 def test_all_coplanar_scene_is_refused_by_every_estimator(robust):
     # Points on one plane seen by two cameras are related by a homography: F is not determined.
     from egtviz.geometry import GeometryError, Intrinsics, PinholeCamera
-    from egtviz.geometry.estimation import fundamental_lmeds, fundamental_ransac
     from egtviz.geometry.poses import look_at
 
     rng = np.random.default_rng(5)
@@ -328,8 +320,6 @@ def test_all_coplanar_scene_is_refused_by_every_estimator(robust):
 @settings(max_examples=25, deadline=None)
 @given(st.integers(0, 2**32 - 1))
 def test_essential_from_calibrated_correspondences(seed):
-    from egtviz.geometry.estimation import essential_from_correspondences
-
     scene = make_two_view(np.random.default_rng(seed), 40)
     E = essential_from_correspondences(scene.U1, scene.U2, scene.K1, scene.K2)
     s = np.linalg.svd(E, compute_uv=False)
@@ -354,9 +344,7 @@ def two_view():
 
 
 def _public_calls(scene):
-    """(function, valid keyword arguments) for every public function of the estimation module."""
-    from egtviz.geometry.estimation import essential_from_correspondences
-
+    """(function, valid keyword arguments) for every public function of the two-view estimation modules."""
     U1, U2 = scene.U1, scene.U2
     x1 = (np.c_[U1, np.ones(len(U1))] @ np.linalg.inv(scene.K1).T)[:, :2]
     x2 = (np.c_[U2, np.ones(len(U2))] @ np.linalg.inv(scene.K2).T)[:, :2]
@@ -426,3 +414,36 @@ def test_pixel_magnitudes_that_cannot_be_solved_are_refused(two_view) -> None:
         fundamental_normalized_8point(U1 * 1e120, U2)
     with pytest.raises(GeometryError, match="U2: the points spread over .* F cannot be computed"):
         fundamental_normalized_8point(U1, U2 * 1e-103)
+
+
+# --------------------------------------------------------------------------- Hartley's normalisation
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=seeds, n=st.integers(2, 300), spread=st.sampled_from([1e-3, 1.0, 640.0, 1e6]))
+def test_hartley_normalization_has_centroid_zero_and_mean_distance_sqrt2(seed: int, n: int, spread: float) -> None:
+    # H&Z section 4.4.4 (and OpenCV's and kornia's 8-point): the MEAN distance from the centroid is sqrt 2.
+    rng = np.random.default_rng(seed)
+    U = rng.uniform(-spread, spread, (n, 2)) + rng.uniform(-10 * spread, 10 * spread, 2)
+    Un, T = hartley_normalization(U)
+    np.testing.assert_allclose(Un.mean(axis=0), 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(Un, axis=1).mean(), np.sqrt(2.0), rtol=1e-12)
+    np.testing.assert_allclose((np.c_[U, np.ones(n)] @ T.T)[:, :2], Un, atol=1e-9)
+    # The normalised 8-point algorithm uses the same T: its F is T2^T Fn T1 for the F of the normalised points.
+    if n >= 8:
+        V = rng.uniform(0, 640, (n, 2))
+        Vn, T2 = hartley_normalization(V)
+        F = fundamental_normalized_8point(U, V)
+        np.testing.assert_allclose(
+            np.abs(F), np.abs(unit_sign(T2.T @ fundamental_normalized_8point(Un, Vn) @ T)), rtol=1e-6, atol=1e-9
+        )
+
+
+def test_hartley_normalization_by_hand() -> None:
+    # Distances 1, 1, 4 and 4 from the centroid (0, 0): mean 2.5, so s = sqrt(2) / 2.5 (the RMS distance,
+    # sqrt(8.5), would give s = sqrt(2) / sqrt(8.5)).
+    Un, T = hartley_normalization([[1.0, 0.0], [-1.0, 0.0], [0.0, 4.0], [0.0, -4.0]])
+    s = np.sqrt(2.0) / 2.5
+    np.testing.assert_allclose(T, [[s, 0, 0], [0, s, 0], [0, 0, 1]], atol=1e-15)
+    with pytest.raises(DegenerateConfigurationError, match="U: all points coincide"):
+        hartley_normalization(np.tile([3.0, 4.0], (5, 1)))

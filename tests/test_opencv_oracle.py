@@ -18,13 +18,10 @@ import pytest
 cv2 = pytest.importorskip("cv2")
 
 from egtviz.geometry.epipolar import essential_from_fundamental  # noqa: E402
-from egtviz.geometry.estimation import (  # noqa: E402
-    fundamental_lmeds,
-    fundamental_normalized_8point,
-    fundamental_ransac,
-    pose_from_essential,
-)
-from egtviz.geometry.robust import fundamental_mapsac, fundamental_mestimator  # noqa: E402
+from egtviz.geometry.essential import pose_from_essential  # noqa: E402
+from egtviz.geometry.fundamental import fundamental_normalized_8point  # noqa: E402
+from egtviz.geometry.mestimator import fundamental_mestimator  # noqa: E402
+from egtviz.geometry.robust import fundamental_lmeds, fundamental_mapsac, fundamental_ransac  # noqa: E402
 from egtviz.geometry.triangulation import correct_correspondences, triangulate_linear  # noqa: E402
 
 try:

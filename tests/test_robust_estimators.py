@@ -1,5 +1,5 @@
-"""Tests of EGT 2.0's robust estimators (``egtviz.geometry.robust``), of LMedS on few points and of
-the essential matrix from rays.
+"""Tests of EGT 2.0's robust estimators (``egtviz.geometry.robust``, ``egtviz.geometry.mestimator``), of
+LMedS on few points and of the essential matrix from rays.
 
 Scenes come from ``_twoview.make_two_view`` (true ``F`` built from the fixture's own ``R``, ``t``,
 ``K``) and, for rays, from ``_ray_scene`` below, whose true ``E = [t]_x R`` is written out here.
@@ -14,15 +14,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.geometry._validate import DegenerateConfigurationError, GeometryError
-from egtviz.geometry.estimation import (
+from egtviz.geometry.essential import essential_from_rays
+from egtviz.geometry.fundamental import fundamental_normalized_8point
+from egtviz.geometry.mestimator import fundamental_mestimator
+from egtviz.geometry.robust import (
     RobustEstimate,
-    essential_from_rays,
+    essential_from_rays_ransac,
     fundamental_lmeds,
-    fundamental_normalized_8point,
+    fundamental_mapsac,
     fundamental_ransac,
-    fundamental_sampson,
 )
-from egtviz.geometry.robust import essential_from_rays_ransac, fundamental_mapsac, fundamental_mestimator
+from egtviz.geometry.sampson_refinement import fundamental_sampson
 
 try:
     from tests._hostile import all_bad_values, assert_rejects

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.geometry._validate import DegenerateConfigurationError, GeometryError
-from egtviz.geometry.estimation import reprojection_error, sampson_distance
+from egtviz.geometry.error_metrics import reprojection_error, sampson_distance
 from egtviz.geometry.triangulation import (
     correct_correspondences,
     fundamental_from_projections,

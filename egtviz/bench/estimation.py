@@ -59,7 +59,7 @@ def _scene(n: int, noise: float, outlier_ratio: float, seed: int = 0) -> dict:
 
 
 def _accuracy(F: np.ndarray, s: dict) -> float:
-    from ..geometry.estimation import symmetric_epipolar_distance
+    from ..geometry.error_metrics import symmetric_epipolar_distance
 
     m = s["inl"]
     return float(np.mean(np.sqrt(symmetric_epipolar_distance(F, s["U1t"][m], s["U2t"][m]))))
@@ -67,7 +67,8 @@ def _accuracy(F: np.ndarray, s: dict) -> float:
 
 def run_estimation_bench(repeats: int = 20) -> list[dict]:
     """Median wall times (ms) of our estimators and OpenCV's, one row per case."""
-    from ..geometry.estimation import fundamental_lmeds, fundamental_normalized_8point, fundamental_ransac
+    from ..geometry.fundamental import fundamental_normalized_8point
+    from ..geometry.robust import fundamental_lmeds, fundamental_ransac
     from ..geometry.triangulation import triangulate_linear
 
     try:

@@ -6,7 +6,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..geometry._validate import as_up_to_scale
-from ..geometry.estimation import decompose_essential
+from ..geometry.essential import decompose_essential
 from ..geometry.matrices import full_angle, hartley_normalization, nearest_rank2, stack_columns, unstack_columns
 from ..geometry.poses import skew
 from ..geometry.procrustes import rotation_aligning
@@ -35,7 +35,10 @@ def f_E2Motion(E: npt.ArrayLike) -> np.ndarray:
 
 
 def f_normalize(U: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    r"""Hartley's normalisation of pixels ``U`` (2, N) or (3, N): centroid 0, RMS distance :math:`\sqrt 2`.
+    r"""Hartley's normalisation of pixels ``U`` (2, N) or (3, N): centroid 0, mean distance :math:`\sqrt 2`.
+
+    H&Z's definition (section 4.4.4), as ``docs/conventions.md`` states; EGT's own code divided the
+    root of the summed squares by ``N``, which is neither the mean nor the RMS distance.
 
     Returns ``(Un, T)``: (2, N) normalised points and the 3x3 ``T`` with
     :math:`(Un; 1) = T (U; 1)`.

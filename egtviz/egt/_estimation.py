@@ -7,7 +7,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ..geometry import estimation, robust
+from ..geometry.fundamental import fundamental_8point, fundamental_normalized_8point
+from ..geometry.mestimator import fundamental_mestimator
+from ..geometry.robust import essential_from_rays_ransac, fundamental_lmeds, fundamental_mapsac, fundamental_ransac
+from ..geometry.sampson_refinement import fundamental_sampson
 from ..geometry._validate import GeometryError, as_count, as_positive, short_repr
 from ._convert import columns, pixels
 
@@ -59,18 +62,18 @@ def f_Festim(U1: npt.ArrayLike, U2: npt.ArrayLike, algorithm: int | str = 2, *un
     kind = _algorithm(algorithm)
     p1, p2 = pixels(U1, "U1"), pixels(U2, "U2")
     if kind == 1:
-        return estimation.fundamental_8point(p1, p2)
+        return fundamental_8point(p1, p2)
     if kind == 2:
-        return estimation.fundamental_normalized_8point(p1, p2)
+        return fundamental_normalized_8point(p1, p2)
     if kind == 3:
-        return estimation.fundamental_sampson(p1, p2)
+        return fundamental_sampson(p1, p2)
     if kind == 4:
-        return robust.fundamental_mestimator(p1, p2, weight="torr").F
+        return fundamental_mestimator(p1, p2, weight="torr").F
     if kind == 5:
-        return estimation.fundamental_lmeds(p1, p2).F
+        return fundamental_lmeds(p1, p2).F
     if kind == 6:
-        return robust.fundamental_mapsac(p1, p2).F
-    return estimation.fundamental_ransac(p1, p2).F
+        return fundamental_mapsac(p1, p2).F
+    return fundamental_ransac(p1, p2).F
 
 
 def f_panEestim(M: npt.ArrayLike, n: int = 2000, error: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
@@ -93,7 +96,7 @@ def f_panEestim(M: npt.ArrayLike, n: int = 2000, error: float = 1e-3) -> tuple[n
         :math:`(1/\sqrt2, 1/\sqrt2, 0)`, and the (N,) inlier flags (1 inlier, 0 outlier).
     """
     rows = columns(M, "M", 6)
-    est = robust.essential_from_rays_ransac(
+    est = essential_from_rays_ransac(
         rows[:, :3], rows[:, 3:], threshold_rad=as_positive(error, "error"), max_iterations=as_count(n, "n")
     )
     return est.F, est.inliers.astype(int)

@@ -5,27 +5,62 @@ Points are rows, ``(N, 2)`` pixels; conventions: ``docs/conventions.md``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
+from scipy.linalg import lapack as _lapack
 
 from ._validate import DegenerateConfigurationError, GeometryError, as_array, as_count, as_matrix, as_points
 
-__all__ = ["full_angle", "hartley_normalization", "nearest_rank2", "stack_columns", "unstack_columns"]
+__all__ = [
+    "full_angle",
+    "hartley_normalization",
+    "nearest_rank2",
+    "point_pairs",
+    "stack_columns",
+    "unstack_columns",
+]
+
+#: Smallest mean distance of the points from their centroid that can be normalised: ``F``'s entries scale as
+#: ``1 / spread^2`` against ``F[2, 2]``, and below this they are not representable.
+_MIN_SPREAD = 1e-100
 
 
-def nearest_rank2(M: npt.ArrayLike) -> np.ndarray:
-    r"""The rank-2 matrix nearest to ``M`` in Frobenius norm (Eckart-Young; H&Z 11.1.1).
+def nearest_rank2(M: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+    r"""The rank-2 matrix nearest to ``M`` in Frobenius norm (Eckart-Young; H&Z 2nd ed., section 11.1.1).
 
     .. math:: M = U \operatorname{diag}(\sigma_1, \sigma_2, \sigma_3) V^T
         \ \mapsto\ U \operatorname{diag}(\sigma_1, \sigma_2, 0) V^T
 
     Args:
-        M: (3, 3) matrix.
+        M: (3, 3) matrix, in the caller's scale.
+        check: validate ``M``. ``False`` is the estimators' inner-loop path: ``M`` must then be a
+            finite float64 (3, 3) array already checked by the caller.
     """
-    A = as_matrix(M, "M", (3, 3), max_abs=None)
-    U, s, Vt = np.linalg.svd(A)
-    s[2] = 0.0
-    return (U * s) @ Vt
+    A = as_matrix(M, "M", (3, 3), max_abs=None) if check else M
+    # LAPACK directly: numpy.linalg's wrapper costs more than a 3x3 SVD.
+    U, s, Vt, info = _lapack.dgesvd(A)
+    if info != 0:  # pragma: no cover - LAPACK failure
+        U, s, Vt = np.linalg.svd(A)
+    return (U[:, :2] * s[:2]) @ Vt[:2]
+
+
+def point_pairs(
+    U1: npt.ArrayLike, U2: npt.ArrayLike, min_count: int = 1, names: tuple[str, str] = ("U1", "U2")
+) -> tuple[np.ndarray, np.ndarray]:
+    """Two validated ``(N, 2)`` pixel arrays of corresponding points, the same ``N >= min_count``.
+
+    Raises:
+        GeometryError: a bad array (named), too few points, or different counts.
+    """
+    u1 = as_points(U1, names[0], 2, min_count=min_count)
+    u2 = as_points(U2, names[1], 2, min_count=min_count)
+    if u1.shape[0] != u2.shape[0]:
+        raise GeometryError(
+            f"{names[0]}, {names[1]}: expected the same number of points, got {u1.shape[0]} and {u2.shape[0]}"
+        )
+    return u1, u2
 
 
 def stack_columns(M: npt.ArrayLike) -> np.ndarray:
@@ -49,32 +84,51 @@ def unstack_columns(v: npt.ArrayLike, columns: int) -> np.ndarray:
     return a.reshape(k, -1).T.copy()
 
 
-def hartley_normalization(U: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    r"""Hartley's isotropic normalisation of pixels (H&Z 2nd ed., section 4.4.4).
+def hartley_normalization(
+    U: npt.ArrayLike, name: str = "U", *, check: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Hartley's isotropic normalisation of pixels (H&Z 2nd ed., section 4.4.4 and Algorithm 11.1).
 
     .. math:: T = \begin{bmatrix} s & 0 & -s c_u \\ 0 & s & -s c_v \\ 0 & 0 & 1 \end{bmatrix},
-        \qquad s = \frac{\sqrt 2}{\sqrt{\tfrac1N \sum_i |u_i - c|^2}}
+        \qquad s = \frac{\sqrt 2}{\tfrac1N \sum_i |u_i - c|}
 
-    with :math:`c` the centroid: the normalised points have centroid 0 and
-    root-mean-square distance :math:`\sqrt 2` from it.
+    with :math:`c` the centroid: the normalised points :math:`\hat u = T u` have centroid 0 and MEAN
+    distance :math:`\sqrt 2` from it (H&Z's definition, as OpenCV and kornia normalise; not the
+    root-mean-square distance). ``docs/conventions.md`` states the choice.
 
     Args:
         U: (N, 2) pixels.
+        name: the argument's name in error messages.
+        check: validate ``U``; ``False`` for a float64 (N, 2) array the caller has checked.
 
     Returns:
         ``(Un, T)``: (N, 2) normalised pixels and the (3, 3) similarity ``T``.
 
     Raises:
-        DegenerateConfigurationError: all points coincide.
+        DegenerateConfigurationError: all points coincide (to 1e-9 of their distance from the origin).
+        GeometryError: a bad ``U``, or points spread over less than 1e-100 (rescale the coordinates).
     """
-    u = as_points(U, "U", 2)
-    c = u.mean(axis=0)
-    rms = float(np.sqrt(np.mean(np.sum((u - c) ** 2, axis=1))))
-    if not rms > 0.0:
-        raise DegenerateConfigurationError("U: all points coincide; no normalisation exists")
-    s = np.sqrt(2.0) / rms
+    u = as_points(U, name, 2) if check else U
+    n = u.shape[0]
+    # Coordinate-major (2, N): every reduction runs over contiguous memory, several times faster than
+    # over the columns of (N, 2); the (N, 2) result is a transposed view of it.
+    d = np.empty((2, n))
+    d[...] = u.T
+    c = np.add.reduce(d, axis=1) / n
+    d -= c[:, None]
+    sq = d * d
+    mean = float(np.add.reduce(np.sqrt(sq[0] + sq[1]))) / n
+    if not mean > 1e-9 * max(abs(float(c[0])), abs(float(c[1]))) or mean == 0.0:
+        raise DegenerateConfigurationError(f"{name}: all points coincide; no normalisation exists")
+    if mean < _MIN_SPREAD:
+        raise GeometryError(
+            f"{name}: the points spread over {mean:.3g} only; below a spread of {_MIN_SPREAD:.0e} they cannot be "
+            "normalised and F cannot be computed (rescale the coordinates)"
+        )
+    s = math.sqrt(2.0) / mean
+    d *= s
     T = np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
-    return s * (u - c), T
+    return d.T, T
 
 
 def full_angle(y: npt.ArrayLike, x: npt.ArrayLike) -> np.ndarray:

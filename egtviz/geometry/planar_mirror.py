@@ -152,8 +152,8 @@ def fundamental_from_reflections(U: npt.ArrayLike, Ur: npt.ArrayLike, *, normali
     the epipole is their least-squares intersection, the right singular vector
     of the smallest singular value of :math:`L = [l_1; \dots; l_N]`, and
     :math:`F = [e]_\times` (:math:`m'^T F m = \det(m', e, m) = 0`). With
-    ``normalize`` the pixels are first moved to zero mean and RMS distance
-    :math:`\sqrt 2` (one similarity :math:`T` for both images, since they are
+    ``normalize`` the pixels are first moved to zero mean and mean distance
+    :math:`\sqrt 2` (Hartley's normalisation, H&Z Algorithm 11.1; one similarity :math:`T` for both images, since they are
     the same image) and :math:`F = T^T [\hat e]_\times T`.
 
     Args:

@@ -1,73 +1,59 @@
-r"""EGT 2.0's robust estimators of the epipolar geometry, beside RANSAC and LMedS.
+r"""Robust estimation of the epipolar geometry by random sampling: RANSAC, LMedS, MAPSAC.
 
-* :func:`fundamental_mestimator`: an M-estimator of ``F`` (Torr and Murray's
-  iteratively reweighted least squares on Sampson residuals, scale from the
-  median absolute deviation, then a reweighted Sampson minimisation).
-* :func:`fundamental_mapsac`: MAPSAC, the truncated cost :math:`\sum_i \min(d_i, T)`
-  over 7-point samples, then the Sampson minimisation on its inliers.
-* :func:`essential_from_rays_ransac`: a robust essential matrix from
-  corresponding rays (mirror points of two central catadioptric cameras,
-  or any bearing vectors), RANSAC over 8-ray samples.
+Hartley & Zisserman, *Multiple View Geometry*, 2nd ed. (H&Z), section 11.6 ("Automatic computation
+of F", Algorithm 11.4) with the adaptive number of samples of section 4.7.1 (Algorithm 4.5,
+"Adaptive algorithm for determining the number of RANSAC samples"):
 
-:func:`~egtviz.geometry.estimation.fundamental_ransac` and
-:func:`~egtviz.geometry.estimation.fundamental_lmeds` live in
-:mod:`egtviz.geometry.estimation`; every robust estimator returns the same
-:class:`~egtviz.geometry.estimation.RobustEstimate` record.
+* :func:`fundamental_ransac`: RANSAC over 7-point samples, scored by the truncated (MSAC) cost.
+* :func:`fundamental_lmeds`: least median of squares (Rousseeuw and Leroy), no threshold.
+* :func:`fundamental_mapsac`: MAPSAC (Torr 2002), EGT 2.0's ``f_Festim`` algorithm 6.
+* :func:`essential_from_rays_ransac`: a robust essential matrix from corresponding rays (mirror
+  points of two central catadioptric cameras, or any bearing vectors), RANSAC over 8-ray samples
+  (EGT's ``f_panEestim``).
 
-Conventions (``docs/conventions.md``): pixels as rows ``(N, 2)``, rays as rows
-``(N, 3)``; :math:`m_2^T F m_1 = 0`, :math:`d_2^T E d_1 = 0`.
+EGT 2.0's M-estimator is :func:`~egtviz.geometry.mestimator.fundamental_mestimator`; every robust
+estimator returns the same :class:`RobustEstimate` record.
+
+Conventions (``docs/conventions.md``): pixels as rows ``(N, 2)``, rays as rows ``(N, 3)``;
+:math:`m_2^T F m_1 = 0`, :math:`d_2^T E d_1 = 0`.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Literal
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import (
-    DegenerateConfigurationError,
-    GeometryError,
-    as_count,
-    as_positive,
-    as_up_to_scale,
-    short_repr,
-)
-from .estimation import (
-    RobustEstimate,
-    _canonical,
-    _check_robust_args,
-    _denormalize,
-    _design,
-    _hartley,
-    _null_vector_normal,
-    _pair,
-    _rank2,
-    _refine_sampson,
-    _essential_linear,
-    _essential_projection,
-    _iteration_bound,
-    _ray_sampson,
-    _rays_pair,
-    _robust,
-    _sample,
-)
+from ._validate import DegenerateConfigurationError, GeometryError, as_count, as_positive, as_scalar, short_repr
+from .error_metrics import sampson_distances_normalized
+from .essential import essential_linear, essential_projection, ray_pairs, ray_sampson
+from .fundamental import canonical_fundamental, design_matrix, normalized_design, null_vector, seven_point_candidates
+from .matrices import nearest_rank2, point_pairs
+from .sampson_refinement import refine_sampson
 
 __all__ = [
+    "RobustEstimate",
     "essential_from_rays_ransac",
+    "fundamental_lmeds",
     "fundamental_mapsac",
-    "fundamental_mestimator",
+    "fundamental_ransac",
 ]
 
-# Consistency factor of the MAD for Gaussian residuals: sigma = 1.4826 median |r|.
-_MAD_TO_SIGMA = 1.4826
-# Tukey's biweight cut-off, in sigmas (95% efficiency under Gaussian noise).
-_TUKEY_C = 4.685
-# Inliers of the M-estimator: |r| <= 2.5 sigma, the band LMedS uses.
-_INLIER_SIGMAS = 2.5
-# The M-estimator's smallest scale, relative to the point spread (as LMedS's floor).
+# Inliers needed before a robust estimate can be refitted with the 8-point algorithm.
+_MIN_REFIT = 8
+# Samples per batch of the robust estimators: the first batch, then what the
+# adaptive bound still asks for, within [_BATCH_MIN, _BATCH_MAX]. Batches
+# amortise numpy's per-call overhead.
+_BATCH_FIRST = 100
+_BATCH_MIN = 16
+_BATCH_MAX = 256
+# LMedS's smallest scale estimate, relative to the spread of the points.
 _SIGMA_FLOOR = 1e-9
+# Pre-emptive scoring: subset size, and hypotheses per batch scored on all points.
+_SUBSET = 100
+_KEEP = 4
 # 8-ray samples per batch of the robust essential estimator.
 _RAYS_BATCH = 128
 # chi-square 95% quantile with one degree of freedom: F is a manifold of codimension 1 in the
@@ -75,134 +61,317 @@ _RAYS_BATCH = 128
 _CHI2_1_95 = 3.84
 
 
-def _residual_parts(Fn: np.ndarray, At: np.ndarray, s1: float, s2: float) -> tuple[np.ndarray, np.ndarray]:
-    """Algebraic errors ``e`` (normalised coordinates) and Sampson denominators ``den`` (pixel units)."""
-    e = Fn.ravel() @ At
-    l2 = Fn[:2] @ At[6:9]  # (F m1)_{1,2}
-    l1 = Fn[:, :2].T @ At[2::3]  # (F^T m2)_{1,2}
-    den = s2 * s2 * (l2[0] ** 2 + l2[1] ** 2) + s1 * s1 * (l1[0] ** 2 + l1[1] ** 2)
-    return e, np.maximum(den, 1e-300)
+@dataclass(frozen=True, eq=False)
+class RobustEstimate:
+    """Result of every robust estimator: those of this module and
+    :func:`~egtviz.geometry.mestimator.fundamental_mestimator`."""
+
+    F: np.ndarray
+    """(3, 3) fundamental matrix, rank 2, unit Frobenius norm, ``m2^T F m1 = 0`` (for the estimator from
+    rays, the essential matrix, ``d2^T E d1 = 0``)."""
+    inliers: np.ndarray
+    """(N,) bool mask of the correspondences consistent with ``F``."""
+    iterations: int
+    """Number of minimal samples drawn before the adaptive bound stopped the search (for the M-estimator,
+    the number of reweighting iterations)."""
 
 
-def _weights(r: np.ndarray, sigma: float, kind: str) -> np.ndarray:
-    """IRLS weights of the residuals ``r`` at scale ``sigma`` (formulas in :func:`fundamental_mestimator`)."""
-    a = np.abs(r)
-    if kind == "torr":
-        return np.where(a < 3.0 * sigma, np.minimum(1.0, sigma / np.maximum(a, 1e-300)), 0.0)
-    u = a / (_TUKEY_C * sigma)
-    return np.where(u < 1.0, (1.0 - u * u) ** 2, 0.0)
+def _check_robust_args(confidence: object, max_iterations: object, seed: object) -> tuple[float, int, int | None]:
+    """The options shared by the sampling estimators, validated: ``(confidence, max_iterations, seed)``."""
+    conf = as_scalar(confidence, "confidence")
+    if not 0.0 < conf < 1.0:
+        raise GeometryError(f"confidence: expected a number in (0, 1), got {short_repr(confidence)}")
+    iters = as_count(max_iterations, "max_iterations")
+    if seed is not None and (isinstance(seed, bool | np.bool_) or not isinstance(seed, int | np.integer) or seed < 0):
+        raise GeometryError(f"seed: expected None or a non-negative integer, got {short_repr(seed)}")
+    return conf, iters, None if seed is None else int(seed)
 
 
-def fundamental_mestimator(
+def _iteration_bound(inlier_ratio: float, confidence: float, size: int = 7) -> float:
+    r"""Adaptive number of samples (H&Z Algorithm 4.5): :math:`\log(1-p) / \log(1 - w^s)`, sample size ``s``."""
+    p = min(max(inlier_ratio, 0.0), 1.0) ** size
+    if p >= 1.0 - 1e-15:
+        return 1.0
+    if p <= 1e-300:
+        return math.inf
+    return math.ceil(math.log(1.0 - confidence) / math.log1p(-p))
+
+
+def _sample(rng: np.random.Generator, n: int, k: int, size: int = 7) -> np.ndarray:
+    """``k`` samples of ``size`` distinct indices in ``range(n)``, ``(k, size)``."""
+    if n < 64:
+        return np.argpartition(rng.random((k, n)), min(size, n - 1), axis=1)[:, :size]
+    out = []
+    got = 0
+    while got < k:
+        draw = rng.integers(0, n, size=(k + 8, size))
+        srt = np.sort(draw, axis=1)
+        ok = np.all(srt[:, 1:] != srt[:, :-1], axis=1)
+        out.append(draw[ok])
+        got += int(ok.sum())
+    return np.concatenate(out)[:k]
+
+
+
+class _Scorer:
+    """Cost and inlier rule: truncated quadratic (RANSAC's MSAC cost, MAPSAC) or LMedS's order statistic."""
+
+    def __init__(self, mode: str, th2: float, n: int, floor2: float) -> None:
+        self.mode = mode
+        self.th2 = th2
+        # LMedS: inlier if d <= (2.5 sigma)^2, sigma = 1.4826 (1 + 5 / (N - 7)) sqrt(d_(h)).
+        self.lmeds_scale = (2.5 * 1.4826 * (1.0 + 5.0 / max(n - 7, 1))) ** 2
+        # Rounding makes the residuals of exact data about 1e-15 of the point spread, never exactly zero;
+        # the floor keeps sigma above that, and far below any real noise.
+        self.floor2 = floor2
+
+    def cost(self, d: np.ndarray) -> np.ndarray:
+        if self.mode != "lmeds":
+            return np.minimum(d, self.th2).sum(axis=-1)
+        # The order statistic h = floor(n / 2) + 4 of n residuals (Rousseeuw and Leroy's
+        # floor(n / 2) + floor((p + 1) / 2), p = 7 parameters), 0-based below: the 7 sample points fit
+        # exactly, so a plain median would fall among them for n < 14 and read a zero scale; d_(h) is
+        # the median of the other n - 7.
+        n = d.shape[-1]
+        h = min(n - 1, n // 2 + 3)
+        return np.partition(d, h, axis=-1)[..., h]
+
+    def inliers(self, d: np.ndarray, cost: float) -> np.ndarray:
+        if self.mode != "lmeds":
+            return d < self.th2
+        return d <= self.lmeds_scale * max(cost, self.floor2)
+
+
+def _prepare(U1: npt.ArrayLike, U2: npt.ArrayLike, mode: str, threshold: float, options: tuple) -> tuple:
+    """Validated data of a sampling estimator: ``(At, T1, T2, scorer, (confidence, max_iterations, seed))``."""
+    u1, u2 = point_pairs(U1, U2, _MIN_REFIT)
+    options = _check_robust_args(*options)
+    At, T1, T2 = normalized_design(u1, u2)
+    null_vector(At)  # all the data degenerate (e.g. a coplanar scene seen twice): no F to find
+    # Scale floor of LMedS: 1e-9 of the larger point spread (mean distance to the centroid, 1 / s).
+    floor2 = (_SIGMA_FLOOR / min(T1[0, 0], T2[0, 0])) ** 2
+    return At, T1, T2, _Scorer(mode, threshold * threshold, u1.shape[0], floor2), options
+
+
+def _local_refits(
+    At: np.ndarray, s1: float, s2: float, scorer: _Scorer, best: tuple[float, np.ndarray, np.ndarray], widen: float
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """LO-RANSAC: linear refits on the (widened) support of a new best ``(cost, F, d)`` while the cost falls."""
+    best_cost, best_F, best_d = best
+    for _ in range(4):
+        inl = scorer.inliers(best_d / widen**2, best_cost)
+        if inl.sum() < _MIN_REFIT:
+            break
+        try:
+            F_lo = nearest_rank2(null_vector(At[:, inl]).reshape(3, 3), check=False)
+        except DegenerateConfigurationError:
+            break
+        F_lo /= np.linalg.norm(F_lo)
+        d_lo = sampson_distances_normalized(F_lo[None], At, s1, s2)[0]
+        c_lo = float(scorer.cost(d_lo))
+        if c_lo >= best_cost:
+            break
+        best_cost, best_F, best_d = c_lo, F_lo, d_lo
+    return best_cost, best_F, best_d
+
+
+def _search(
+    At: np.ndarray, s1: float, s2: float, scorer: _Scorer, widen: float, confidence: float, max_iterations: int,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, int]:
+    """The sampling loop: the best hypothesis in normalised coordinates and the number of samples drawn."""
+    N = At.shape[1]
+    A = At.T  # rows of the design matrix, for gathering samples
+    # Pre-emptive scoring: every hypothesis is scored on a fixed random subset,
+    # only the best few of each batch on all the points.
+    sub = np.sort(rng.choice(N, _SUBSET, replace=False)) if N > 2 * _SUBSET else None
+    At_sub = At[:, sub] if sub is not None else At
+    best: tuple[float, np.ndarray, np.ndarray] | None = None
+    bound = math.inf
+    done = 0
+    while done < min(bound, max_iterations):
+        want = _BATCH_FIRST if done == 0 else min(max(bound - done, _BATCH_MIN), _BATCH_MAX)
+        k = int(min(want, max_iterations - done))
+        cand = seven_point_candidates(A[_sample(rng, N, k)])
+        done += k
+        if cand.shape[0] == 0:
+            continue
+        if sub is not None:
+            c_sub = scorer.cost(sampson_distances_normalized(cand, At_sub, s1, s2))
+            cand = cand[np.argsort(c_sub, kind="stable")[:_KEEP]]
+        d = sampson_distances_normalized(cand, At, s1, s2)
+        cost = scorer.cost(d)
+        j = int(np.argmin(cost))
+        if best is not None and cost[j] >= best[0]:
+            continue
+        best = _local_refits(At, s1, s2, scorer, (float(cost[j]), cand[j], d[j]), widen)
+        bound = _iteration_bound(float(scorer.inliers(best[2], best[0]).mean()), confidence)
+    if best is None:
+        raise DegenerateConfigurationError("U1, U2: no 7-point sample gave a fundamental matrix")
+    return best[1], done
+
+
+def _final_fit(
+    Fn: np.ndarray, At: np.ndarray, s1: float, s2: float, scorer: _Scorer, mode: str, threshold: float, widen: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Linear refits on the support, then the Sampson refinement: ``(Fn, inliers)``."""
+
+    def support(Fn: np.ndarray, widen: float) -> tuple[np.ndarray, np.ndarray]:
+        d = sampson_distances_normalized(Fn[None], At, s1, s2)[0]
+        return scorer.inliers(d / widen**2, float(scorer.cost(d))), d
+
+    sel, d = support(Fn, widen)
+    for _ in range(3):  # linear refits until the support is stable
+        if sel.sum() < _MIN_REFIT:
+            break
+        try:
+            F_lin = nearest_rank2(null_vector(At[:, sel]).reshape(3, 3), check=False)
+        except DegenerateConfigurationError:
+            break
+        Fn = F_lin / np.linalg.norm(F_lin)
+        new, d = support(Fn, widen)
+        if np.array_equal(new, sel):
+            break
+        sel = new
+    if sel.sum() < _MIN_REFIT:
+        raise DegenerateConfigurationError(
+            f"U1, U2: the best model has only {int(sel.sum())} inliers, at least {_MIN_REFIT} are needed"
+        )
+    # Sampson refinement. RANSAC and LMedS make it robust by reweighting passes
+    # (one for RANSAC, two for LMedS, whose band is looser) with Cauchy weights
+    # 1 / (1 + d / c^2), c = 2 threshold (RANSAC) or 2 sigma (LMedS); tighter
+    # weights tie the fit to the starting F (the same bias as truncation).
+    # MAPSAC refines the plain Sampson cost of its inliers (Torr's maximum
+    # likelihood step), twice, the inliers recomputed in between.
+    if mode == "lmeds":
+        c2 = 4.0 * scorer.lmeds_scale / 2.5**2 * max(float(scorer.cost(d)), scorer.floor2)
+    else:
+        c2 = 4.0 * threshold**2
+    for _ in range(1 if mode == "ransac" else 2):
+        weights = None if mode == "mapsac" else 1.0 / (1.0 + d[sel] / max(c2, 1e-300))
+        # A relative cost change of 1e-6 is far below the noise a robust fit works with.
+        Fn = refine_sampson(Fn, At[:, sel], s1, s2, weights, tol=1e-6)
+        new, d = support(Fn, widen)
+        if new.sum() < _MIN_REFIT:
+            break
+        sel = new
+    return Fn, support(Fn, 1.0)[0]
+
+
+def _robust(
     U1: npt.ArrayLike,
     U2: npt.ArrayLike,
     *,
-    weight: Literal["tukey", "torr"] = "tukey",
-    max_iterations: int = 50,
-    F0: npt.ArrayLike | None = None,
+    mode: str,
+    threshold: float,
+    confidence: float,
+    max_iterations: int,
+    seed: int | None,
 ) -> RobustEstimate:
-    r"""Robust ``F`` by an M-estimator on Sampson residuals (Torr and Murray 1997; H&Z 2nd ed., A6.8).
+    At, T1, T2, scorer, options = _prepare(U1, U2, mode, threshold, (confidence, max_iterations, seed))
+    confidence, max_iterations, seed = options
+    s1, s2 = T1[0, 0], T2[0, 0]
+    # Refits use the correspondences within 1.5 times the RANSAC threshold
+    # (LMedS's 2.5 sigma band is wide already): refitting only on d < threshold^2
+    # would favour the hypothesis that chose them (truncation bias).
+    widen = 1.5 if mode == "ransac" else 1.0
+    rng = np.random.default_rng(seed)
+    Fn, done = _search(At, s1, s2, scorer, widen, confidence, max_iterations, rng)
+    Fn, inl = _final_fit(Fn, At, s1, s2, scorer, mode, threshold, widen)
+    return RobustEstimate(F=canonical_fundamental(T2.T @ Fn @ T1), inliers=inl, iterations=int(done))
 
-    Minimises :math:`\sum_i \rho(r_i / \sigma)` over rank-2 ``F``, where
-    :math:`r_i = \sqrt{d_i}` is the Sampson distance (H&Z eq. 11.9) in pixels,
-    by iteratively reweighted least squares:
 
-    .. math:: \sigma = 1.4826\,\Bigl(1 + \frac{5}{N - 7}\Bigr) \operatorname{med}_i |r_i|, \qquad
-              w_i = \frac{\rho'(r_i/\sigma)}{r_i/\sigma}, \qquad
-              F \leftarrow \arg\min_{\|f\| = 1} \sum_i w_i \frac{(m_{2i}^T F m_{1i})^2}{g_i^2}
+def fundamental_ransac(
+    U1: npt.ArrayLike,
+    U2: npt.ArrayLike,
+    *,
+    threshold: float = 1.0,
+    confidence: float = 0.999,
+    max_iterations: int = 2000,
+    seed: int | None = 0,
+) -> RobustEstimate:
+    r"""Robust ``F`` by RANSAC over 7-point samples (H&Z 2nd ed., section 11.6, Algorithm 4.5).
 
-    with the gradient norms :math:`g_i^2` (the Sampson denominators) frozen at
-    the previous ``F``, then projected to rank 2 (in Hartley-normalised
-    coordinates). Weights, with :math:`u = r / \sigma`: Tukey's biweight
-    :math:`w = (1 - (u / 4.685)^2)^2` for :math:`|u| < 4.685`, else 0; or
-    Torr's (EGT 2.0's) Huber weights cut off at three sigma,
-    :math:`w = \min(1, 1 / |u|)` for :math:`|u| < 3`, else 0. (Plain Huber
-    weights, never zero, are not offered: with a third of gross outliers
-    their summed pull breaks the estimate down.)
-    When the weights have settled, the weighted Sampson cost is minimised
-    over rank-2 ``F`` by ``scipy.optimize.least_squares`` (the same minimal
-    parameterisation as :func:`~egtviz.geometry.estimation.fundamental_sampson`),
-    the weights recomputed after each such step.
+    Hypotheses from minimal 7-point samples (up to three each) are scored in
+    batches by the truncated (MSAC) cost of the squared Sampson distance
+    :math:`d_i` (H&Z eq. 11.9):
 
-    The start is ``F0`` if given, else the least-median-of-squares estimate
-    (:func:`~egtviz.geometry.estimation.fundamental_lmeds`): started from the
-    plain least-squares ``F``, as in EGT 2.0, an M-estimator is not robust to
-    gross outliers, whose leverage moves the start too far. Inliers are
-    :math:`|r_i| \le 2.5\sigma` with the final scale.
+    .. math:: C(F) = \sum_i \min(d_i, \tau^2), \qquad
+              N_{\text{iter}} = \frac{\log(1 - p)}{\log(1 - w^7)},
+
+    with the number of samples adapted to the inlier ratio :math:`w` of the
+    best hypothesis so far and the confidence :math:`p`. Samples are drawn in
+    batches; each batch is scored on a fixed random subset of 100
+    correspondences and its best few hypotheses on all of them. A new best
+    hypothesis is improved at once by linear refits on its support (LO-RANSAC).
+    The final model is refitted on the correspondences with
+    :math:`d_i < (1.5\tau)^2` (a wider band than the inlier test, against the
+    truncation bias) by the normalised 8-point algorithm and a Sampson
+    refinement with Cauchy weights :math:`1 / (1 + d_i / (2\tau)^2)`. Inliers
+    are :math:`d_i < \tau^2` under the final ``F``.
 
     Args:
         U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
         U2: ``(N, 2)`` corresponding pixels in image 2.
-        weight: ``"tukey"`` or ``"torr"``; both give gross outliers weight 0.
-        max_iterations: upper bound on the reweighting iterations.
-        F0: optional ``(3, 3)`` start of rank 2 (any nonzero scale).
+        threshold: inlier threshold :math:`\tau` in pixels on the Sampson
+            distance (square root of :func:`sampson_distance`).
+        confidence: probability :math:`p` of drawing one all-inlier sample.
+        max_iterations: upper bound on the number of samples.
+        seed: seed of ``np.random.default_rng``; the result is deterministic.
 
     Returns:
-        :class:`~egtviz.geometry.estimation.RobustEstimate`: ``F`` (rank 2,
-        unit Frobenius norm, largest entry positive), the inlier mask and the
-        number of reweighting iterations.
+        :class:`RobustEstimate` with ``F``, the inlier mask and the number of samples.
 
     Raises:
-        GeometryError: bad types or shapes, NaN/inf, ``N < 8``, mismatched
-            ``N``, an unknown ``weight``, a bad ``max_iterations`` or a rank < 2 ``F0``.
-        DegenerateConfigurationError: coincident points or rank-deficient data.
+        GeometryError: bad shapes, NaN/inf, ``N < 8``, mismatched ``N`` or bad options.
+        DegenerateConfigurationError: coincident points, or fewer than 8 inliers.
     """
-    if not isinstance(weight, str) or weight not in ("tukey", "torr"):
-        raise GeometryError(f"weight: expected 'tukey' or 'torr', got {short_repr(weight)}")
-    iters = as_count(max_iterations, "max_iterations")
-    u1, u2 = _pair(U1, U2, 8)
-    T1, n1, s1, T2, n2, s2 = _hartley(u1, u2)
-    At = _design(n1, n2)
-    _null_vector_normal(At)
-    if F0 is None:
-        start = _robust(u1, u2, mode="lmeds", threshold=1.0, confidence=0.999, max_iterations=2000, seed=0).F
-    else:
-        start = as_up_to_scale(F0, "F0", (3, 3))
-        sv = np.linalg.svd(start, compute_uv=False)
-        if sv[1] <= 1e-12 * sv[0]:
-            raise GeometryError("F0: expected a matrix of rank 2, got rank < 2")
-    Fn = _rank2(np.linalg.inv(T2).T @ start @ np.linalg.inv(T1))
-    Fn /= np.linalg.norm(Fn)
-    floor = _SIGMA_FLOOR / min(s1, s2)
-    # Rousseeuw and Leroy's small-sample correction (as in LMedS): with N close to the 7 degrees of
-    # freedom of F the fit absorbs most of the noise and the raw MAD underestimates sigma.
-    mad_to_sigma = _MAD_TO_SIGMA * (1.0 + 5.0 / (u1.shape[0] - 7))
+    thr = as_positive(threshold, "threshold")
+    return _robust(
+        U1, U2, mode="ransac", threshold=thr, confidence=confidence, max_iterations=max_iterations, seed=seed
+    )
 
-    def reweight(Fn: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        e, den = _residual_parts(Fn, At, s1, s2)
-        r = e / np.sqrt(den)
-        sigma = max(mad_to_sigma * float(np.median(np.abs(r))), floor)
-        return _weights(r, sigma, weight), den, sigma
 
-    done = 0
-    w, den, sigma = reweight(Fn)
-    while done < iters:
-        done += 1
-        keep = w > 0.0
-        if keep.sum() < 8:
-            break
-        try:
-            Fnew = _rank2(_null_vector_normal(At[:, keep] * np.sqrt(w[keep] / den[keep])).reshape(3, 3))
-        except DegenerateConfigurationError:
-            break
-        Fnew /= np.linalg.norm(Fnew)
-        if Fnew.ravel() @ Fn.ravel() < 0:
-            Fnew = -Fnew
-        step = float(np.abs(Fnew - Fn).max())
-        Fn = Fnew
-        w, den, sigma = reweight(Fn)
-        if step < 1e-10:
-            break
-    # The nonlinear step: weighted Sampson minimisation, weights refreshed between passes.
-    for _ in range(3):
-        keep = w > 0.0
-        if keep.sum() < 8:
-            break  # too few weighted points to refine over: F stays the reweighted linear estimate
-        Fn = _refine_sampson(Fn, At[:, keep], s1, s2, w[keep], tol=1e-8)
-        w, den, sigma = reweight(Fn)
-    e, den = _residual_parts(Fn, At, s1, s2)
-    inliers = np.abs(e) / np.sqrt(den) <= _INLIER_SIGMAS * sigma
-    return RobustEstimate(F=_canonical(_denormalize(Fn, T1, T2)), inliers=inliers, iterations=done)
+def fundamental_lmeds(
+    U1: npt.ArrayLike,
+    U2: npt.ArrayLike,
+    *,
+    confidence: float = 0.999,
+    max_iterations: int = 2000,
+    seed: int | None = 0,
+) -> RobustEstimate:
+    r"""Robust ``F`` by least median of squares over 7-point samples (H&Z 2nd ed., section 11.6).
+
+    Each hypothesis is scored by the median of the squared Sampson distances
+    :math:`d_i`; no threshold is needed. From the best median the robust
+    standard deviation (Rousseeuw and Leroy)
+
+    .. math:: \hat\sigma = 1.4826\,\Bigl(1 + \frac{5}{N - 7}\Bigr)\sqrt{\operatorname{med}_i d_i}
+
+    classifies inliers as :math:`d_i \le (2.5 \hat\sigma)^2`; their fraction
+    :math:`w` sets the adaptive number of samples as in :func:`fundamental_ransac`.
+    The inliers are refitted with the normalised 8-point algorithm and two
+    passes of Sampson refinement with Cauchy weights
+    :math:`1 / (1 + d_i / (2\hat\sigma)^2)`. LMedS breaks down with more than
+    50% outliers.
+
+    Args:
+        U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
+        U2: ``(N, 2)`` corresponding pixels in image 2.
+        confidence: probability of drawing one all-inlier sample.
+        max_iterations: upper bound on the number of samples.
+        seed: seed of ``np.random.default_rng``; the result is deterministic.
+
+    Returns:
+        :class:`RobustEstimate` with ``F``, the inlier mask and the number of samples.
+
+    Raises:
+        GeometryError: bad shapes, NaN/inf, ``N < 8``, mismatched ``N`` or bad options.
+        DegenerateConfigurationError: coincident points, or fewer than 8 inliers.
+    """
+    return _robust(
+        U1, U2, mode="lmeds", threshold=1.0, confidence=confidence, max_iterations=max_iterations, seed=seed
+    )
 
 
 def fundamental_mapsac(
@@ -225,7 +394,7 @@ def fundamental_mapsac(
     up to constants; :math:`T` is the 95% quantile of :math:`\chi^2_1` (an
     inlier's squared distance to the codimension-1 manifold of ``F``). The
     search, its adaptive number of samples (H&Z Algorithm 4.5) and the local
-    refits are those of :func:`~egtviz.geometry.estimation.fundamental_ransac`,
+    refits are those of :func:`~fundamental_ransac`,
     whose MSAC cost is the same function; MAPSAC then minimises the plain
     Sampson cost of its inliers :math:`d_i < T` (the maximum-likelihood
     step), twice, the inliers recomputed in between.
@@ -239,7 +408,7 @@ def fundamental_mapsac(
         seed: seed of ``np.random.default_rng``; the result is deterministic.
 
     Returns:
-        :class:`~egtviz.geometry.estimation.RobustEstimate` with ``F``, the
+        :class:`RobustEstimate` with ``F``, the
         inlier mask (:math:`d_i < T`) and the number of samples.
 
     Raises:
@@ -270,7 +439,7 @@ def essential_from_rays_ransac(
     r"""Robust essential matrix from corresponding rays by RANSAC over 8-ray samples (EGT's ``f_panEestim``).
 
     Each sample of 8 correspondences gives one hypothesis by the linear
-    method of :func:`~egtviz.geometry.estimation.essential_from_rays`
+    method of :func:`~egtviz.geometry.essential.essential_from_rays`
     (projected onto the essential matrices). Hypotheses are scored by the
     truncated cost of the squared angular Sampson distances :math:`\delta_i`
     (radians squared; the first-order angle by which the two unit rays must
@@ -294,7 +463,7 @@ def essential_from_rays_ransac(
         seed: seed of ``np.random.default_rng``; the result is deterministic.
 
     Returns:
-        :class:`~egtviz.geometry.estimation.RobustEstimate` whose ``F`` field
+        :class:`RobustEstimate` whose ``F`` field
         holds ``E`` (:math:`d_2^T E d_1 = 0`, singular values
         :math:`(1/\sqrt 2, 1/\sqrt 2, 0)`, largest entry positive), the inlier
         mask and the number of samples.
@@ -308,13 +477,20 @@ def essential_from_rays_ransac(
     if tau >= 1.0:
         raise GeometryError(f"threshold_rad: expected an angle below 1 radian, got {short_repr(threshold_rad)}")
     conf, iters, seed = _check_robust_args(confidence, max_iterations, seed)
-    r1, r2 = _rays_pair(d1, d2, 8)
-    n = r1.shape[0]
-    At = _design(r1.T, r2.T)
-    _null_vector_normal(At, "d1, d2")
-    A = At.T
+    r1, r2 = ray_pairs(d1, d2, 8)
+    At = design_matrix(r1, r2)
+    null_vector(At, "d1, d2")
     th2 = tau * tau
-    rng = np.random.default_rng(seed)
+    E, done = _rays_search(At.T, r1, r2, th2, conf, iters, np.random.default_rng(seed))
+    E, inl = _rays_refit(E, r1, r2, th2)
+    return RobustEstimate(F=canonical_fundamental(E), inliers=inl, iterations=int(done))
+
+
+def _rays_search(
+    A: np.ndarray, r1: np.ndarray, r2: np.ndarray, th2: float, conf: float, iters: int, rng: np.random.Generator
+) -> tuple[np.ndarray, int]:
+    """The sampling loop of :func:`essential_from_rays_ransac`: the best ``E`` and the number of samples."""
+    n = r1.shape[0]
     best_cost, best_E = math.inf, None
     bound, done = math.inf, 0
     while done < min(bound, iters):
@@ -322,16 +498,20 @@ def essential_from_rays_ransac(
         samples = A[_sample(rng, n, k, 8)]  # (k, 8, 9)
         done += k
         vt = np.linalg.svd(samples, full_matrices=True)[2]
-        Es = _essential_projection(vt[:, 8].reshape(k, 3, 3))
-        cost = np.minimum(_ray_sampson(Es, r1, r2), th2).sum(axis=1)
+        Es = essential_projection(vt[:, 8].reshape(k, 3, 3))
+        cost = np.minimum(ray_sampson(Es, r1, r2), th2).sum(axis=1)
         j = int(np.argmin(cost))
         if cost[j] < best_cost:
             best_cost, best_E = float(cost[j]), Es[j]
-            w = float((_ray_sampson(best_E[None], r1, r2)[0] < th2).mean())
+            w = float((ray_sampson(best_E[None], r1, r2)[0] < th2).mean())
             bound = _iteration_bound(w, conf, 8)
     assert best_E is not None
-    E = best_E
-    inl = _ray_sampson(E[None], r1, r2)[0] < th2
+    return best_E, done
+
+
+def _rays_refit(E: np.ndarray, r1: np.ndarray, r2: np.ndarray, th2: float) -> tuple[np.ndarray, np.ndarray]:
+    """Sampson-weighted linear refits of ``E`` on its inliers until they no longer change: ``(E, inliers)``."""
+    inl = ray_sampson(E[None], r1, r2)[0] < th2
     for _ in range(10):
         if inl.sum() < 8:
             raise DegenerateConfigurationError(
@@ -344,11 +524,11 @@ def essential_from_rays_ransac(
         # A ray pair at the epipoles has no gradient: cap its weight at 1e12 times the smallest.
         weights = 1.0 / np.maximum(grad2, 1e-12 * grad2.max())
         try:
-            E = _essential_linear(a, b, weights / weights.max())
+            E = essential_linear(a, b, weights / weights.max())
         except DegenerateConfigurationError:
             break
-        new = _ray_sampson(E[None], r1, r2)[0] < th2
+        new = ray_sampson(E[None], r1, r2)[0] < th2
         if np.array_equal(new, inl):
             break
         inl = new
-    return RobustEstimate(F=_canonical(E), inliers=inl, iterations=int(done))
+    return E, inl

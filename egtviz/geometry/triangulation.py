@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import DegenerateConfigurationError, GeometryError, as_points, as_up_to_scale
+from ._validate import DegenerateConfigurationError, GeometryError, as_up_to_scale
+from .matrices import point_pairs
 
 __all__ = [
     "correct_correspondences",
@@ -26,16 +27,6 @@ __all__ = [
     "triangulate_linear",
     "triangulate_optimal",
 ]
-
-
-def _pair(U1: npt.ArrayLike, U2: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    u1 = as_points(U1, "U1", 2, min_count=1)
-    u2 = as_points(U2, "U2", 2, min_count=1)
-    if u1.shape[0] != u2.shape[0]:
-        raise GeometryError(
-            f"U1, U2: expected the same number of points, got {u1.shape[0]} and {u2.shape[0]}"
-        )
-    return u1, u2
 
 
 def _camera_centre(P: np.ndarray, name: str) -> np.ndarray:
@@ -176,7 +167,7 @@ def triangulate_linear(
         DegenerateConfigurationError: coincident camera centres.
     """
     P1, P2 = _common_scale(P1, P2)
-    u1, u2 = _pair(U1, U2)
+    u1, u2 = point_pairs(U1, U2)
     return _dehomogenize(_dlt(P1, P2, u1, u2))
 
 
@@ -250,7 +241,7 @@ def correct_correspondences(
         GeometryError: bad shapes, NaN/inf, mismatched ``N``, or ``F`` of rank < 2.
     """
     F = as_up_to_scale(F, "F", (3, 3))
-    u1, u2 = _pair(U1, U2)
+    u1, u2 = point_pairs(U1, U2)
     U, S, Vt = np.linalg.svd(F)
     if S[1] <= 1e-12 * S[0]:
         raise GeometryError("F: expected a fundamental matrix of rank 2")
@@ -267,28 +258,44 @@ def correct_correspondences(
     x1, x2 = u1 * k, u2 * k
     n = x1.shape[0]
 
-    # (i)-(iii): translate each pair to the origin; epipoles move to T e.
-    def rotation(e: np.ndarray, x: np.ndarray):
-        ex = e[0] - x[:, 0] * e[2]
-        ey = e[1] - x[:, 1] * e[2]
-        r = np.hypot(ex, ey)
-        ok = r > 1e-300
-        r = np.where(ok, r, 1.0)
-        c = np.where(ok, ex / r, 1.0)
-        s = np.where(ok, ey / r, 0.0)
-        f = e[2] / r
-        R = np.zeros((n, 3, 3))
-        R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
-        return R, f
-
-    R1, f1 = rotation(e1, x1)
-    R2, f2 = rotation(e2, x2)
+    R1, f1 = _epipole_rotation(e1, x1)
+    R2, f2 = _epipole_rotation(e2, x2)
     # (ii), (v): F_i = R2 T2^-T F T1^-1 R1^T.
     G = np.broadcast_to(Fs, (n, 3, 3)).copy()
     G[:, :, 2] += x1[:, 0:1] * Fs[None, :, 0] + x1[:, 1:2] * Fs[None, :, 1]  # F T1^-1
     G[:, 2, :] += x2[:, 0:1] * G[:, 0, :] + x2[:, 1:2] * G[:, 1, :]  # T2^-T (...)
     Fi = R2 @ G @ R1.transpose(0, 2, 1)
-    a, b, c, d = Fi[:, 1, 1], Fi[:, 1, 2], Fi[:, 2, 1], Fi[:, 2, 2]
+    l1, l2 = _optimal_lines(Fi[:, 1, 1], Fi[:, 1, 2], Fi[:, 2, 1], Fi[:, 2, 2], f1, f2)
+    # (x): back to the original coordinates, x = T^-1 R^T x_local.
+    y1 = np.einsum("nji,nj->ni", R1, _foot(l1))
+    y2 = np.einsum("nji,nj->ni", R2, _foot(l2))
+    c1 = y1[:, :2] / y1[:, 2:] + x1
+    c2 = y2[:, :2] / y2[:, 2:] + x2
+    return c1 / k, c2 / k
+
+
+def _epipole_rotation(e: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Steps (i)-(iii) of H&Z Algorithm 12.1: the rotations ``(N, 3, 3)`` taking the epipole, seen from each
+    point moved to the origin, onto the x axis, and the ``f`` of :math:`(1, 0, f)`."""
+    n = x.shape[0]
+    ex = e[0] - x[:, 0] * e[2]
+    ey = e[1] - x[:, 1] * e[2]
+    r = np.hypot(ex, ey)
+    ok = r > 1e-300
+    r = np.where(ok, r, 1.0)
+    c = np.where(ok, ex / r, 1.0)
+    s = np.where(ok, ey / r, 0.0)
+    f = e[2] / r
+    R = np.zeros((n, 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
+    return R, f
+
+
+def _optimal_lines(
+    a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, f1: np.ndarray, f2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Steps (vii)-(ix) of H&Z Algorithm 12.1: the pair of epipolar lines of least cost, ``(N, 3)`` each."""
+    n = a.shape[0]
     # (vii): the sextic g(t), coefficients in increasing powers.
     p1 = np.stack([b, a], axis=1)  # a t + b
     p2 = np.stack([d, c], axis=1)  # c t + d
@@ -299,7 +306,6 @@ def correct_correspondences(
     one_ft[:, 0], one_ft[:, 2] = 1.0, f1**2
     term2 = ((a * d - b * c)[:, None]) * _poly_mul(_poly_mul(one_ft, one_ft), _poly_mul(p1, p2))
     roots = _poly_roots(term1 - term2)
-
     # (viii): cost at the real parts of all roots (the minimum is at a real
     # root, so extra candidates never win wrongly) and at t = infinity.
     t = np.concatenate([roots.real, np.zeros((n, 1))], axis=1)
@@ -314,23 +320,17 @@ def correct_correspondences(
     j = np.argmin(cost, axis=1)
     tb = t[np.arange(n), j]
     use_inf = cost_inf < cost[np.arange(n), j]
-    # (ix): the two epipolar lines and the points on them closest to the origin.
+    # (ix): the two epipolar lines.
     l1 = np.stack([tb * f1, np.ones(n), -tb], axis=1)
     l2 = np.stack([-f2 * (c * tb + d), a * tb + b, c * tb + d], axis=1)
     l1_inf = np.stack([f1, np.zeros(n), -np.ones(n)], axis=1)
     l2_inf = np.stack([-f2 * c, a, c], axis=1)
-    l1 = np.where(use_inf[:, None], l1_inf, l1)
-    l2 = np.where(use_inf[:, None], l2_inf, l2)
+    return np.where(use_inf[:, None], l1_inf, l1), np.where(use_inf[:, None], l2_inf, l2)
 
-    def foot(l: np.ndarray) -> np.ndarray:
-        return np.stack([-l[:, 0] * l[:, 2], -l[:, 1] * l[:, 2], l[:, 0] ** 2 + l[:, 1] ** 2], axis=1)
 
-    # (x): back to the original coordinates, x = T^-1 R^T x_local.
-    y1 = np.einsum("nji,nj->ni", R1, foot(l1))
-    y2 = np.einsum("nji,nj->ni", R2, foot(l2))
-    c1 = y1[:, :2] / y1[:, 2:] + x1
-    c2 = y2[:, :2] / y2[:, 2:] + x2
-    return c1 / k, c2 / k
+def _foot(l: np.ndarray) -> np.ndarray:
+    """Step (ix): the points of the lines ``l`` closest to the origin, homogeneous ``(N, 3)``."""
+    return np.stack([-l[:, 0] * l[:, 2], -l[:, 1] * l[:, 2], l[:, 0] ** 2 + l[:, 1] ** 2], axis=1)
 
 
 def triangulate_optimal(
@@ -360,6 +360,6 @@ def triangulate_optimal(
         DegenerateConfigurationError: coincident camera centres.
     """
     P1, P2, _, _ = _cameras(P1, P2)
-    u1, u2 = _pair(U1, U2)
+    u1, u2 = point_pairs(U1, U2)
     c1, c2 = correct_correspondences(fundamental_from_projections(P1, P2), u1, u2)
     return _dehomogenize(_dlt(P1, P2, c1, c2))

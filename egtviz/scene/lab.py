@@ -4,7 +4,7 @@ Headless: the viewer plots what :func:`run_lab` returns. The true correspondence
 :math:`m_{1i}, m_{2i}` of the scene's points seen inside both images of the drawn pair; the lab adds
 Gaussian noise of standard deviation ``noise_px`` to every pixel of both images, then replaces the image-2
 pixel of ``outlier_percent`` % of them by a uniform random pixel of the image (gross mismatches). Each
-estimator of :mod:`egtviz.geometry.estimation` and :mod:`egtviz.geometry.robust` is run on the same data
+estimator of :mod:`egtviz.geometry.fundamental`, :mod:`egtviz.geometry.robust` and the others is run on the same data
 and compared with the true ``F`` by
 
 * the mean squared Sampson distance (H&Z eq. 11.9)
@@ -32,16 +32,11 @@ import numpy as np
 
 from ..geometry import GeometryError, PinholeCamera, normalize_homogeneous
 from ..geometry.epipolar import epipolar_lines, epipolar_lines_in_first, epipoles_from_fundamental
-from ..geometry.estimation import (
-    fundamental_8point,
-    fundamental_lmeds,
-    fundamental_normalized_8point,
-    fundamental_ransac,
-    fundamental_sampson,
-    sampson_distance,
-    symmetric_epipolar_distance,
-)
-from ..geometry.robust import fundamental_mestimator
+from ..geometry.error_metrics import sampson_distance, symmetric_epipolar_distance
+from ..geometry.fundamental import fundamental_8point, fundamental_normalized_8point
+from ..geometry.mestimator import fundamental_mestimator
+from ..geometry.robust import fundamental_lmeds, fundamental_ransac
+from ..geometry.sampson_refinement import fundamental_sampson
 from .derived import Derived, compute_derived
 from .limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_SEED, LAB_THRESHOLD_PX, Range
 from .scene import Scene

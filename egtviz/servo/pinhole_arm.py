@@ -42,7 +42,7 @@ features), the controller:
 
 F comes either from the true poses (``f_algorithm=None``; the epipole is then
 :math:`R^T (c^* - c)`) or is estimated at every step from the noisy current and
-desired features with :mod:`egtviz.geometry.estimation` (1 linear 8-point,
+desired features with :mod:`egtviz.geometry.fundamental` (1 linear 8-point,
 2 normalised 8-point, 3 Sampson), with ``m_desired^T F m_current = 0``; the
 epipole is the right null vector of F, :math:`\hat e \propto K^{-1} e`.
 The secondary task uses the true camera position, as Rives' simulations do.
@@ -443,7 +443,7 @@ def simulate_pinhole(
         priority: ``"exact"`` (default) solves the priority task exactly each step: the
             rotation :math:`R_{cd}` that puts every feature on its epipolar line, from the
             true poses or, for an estimated F, from :math:`E = K^T F K`
-            (``estimation.pose_from_essential``, cheirality test); ``"linearized"`` uses
+            (``essential.pose_from_essential``, cheirality test); ``"linearized"`` uses
             Rives' first-order step :math:`W^+ e_1`, which can stall in a local minimum of
             :math:`\lVert e_1 \rVert` (about a third of the seeds with ``beta = 0``).
         parallax_min_px: with an estimated F, below this median translation parallax
@@ -570,10 +570,10 @@ def simulate_pinhole(
 
     estimator = None
     if f_algorithm is not None:
-        from egtviz.geometry import estimation
+        from egtviz.geometry import essential, fundamental, sampson_refinement
 
-        estimator = getattr(estimation, ESTIMATORS[f_algorithm])
-        pose_from_essential = estimation.pose_from_essential
+        estimator = getattr(sampson_refinement if f_algorithm == 3 else fundamental, ESTIMATORS[f_algorithm])
+        pose_from_essential = essential.pose_from_essential
     exact = priority == "exact"
     parallax_min = float(parallax_min_px) / float(K[0, 0])
 

@@ -1,0 +1,325 @@
+r"""The fundamental matrix from point correspondences: the linear and minimal solvers.
+
+Hartley & Zisserman, *Multiple View Geometry*, 2nd ed. (H&Z), chapter 11, "Computation of the
+Fundamental Matrix F":
+
+* :func:`fundamental_8point`: the linear, unnormalised 8-point algorithm (section 11.1, "Basic
+  equations").
+* :func:`fundamental_normalized_8point`: Hartley's normalised 8-point algorithm (section 11.2,
+  Algorithm 11.1, "The normalized 8-point algorithm").
+* :func:`fundamental_7point`: the minimal solver (section 11.1.2, "The minimum case - seven point
+  correspondences").
+
+The kernels they share with the other estimators are public here: :func:`design_matrix`,
+:func:`normalized_design`, :func:`null_vector`, :func:`canonical_fundamental` and
+:func:`seven_point_candidates` (used by
+:mod:`egtviz.geometry.robust`, :mod:`egtviz.geometry.sampson_refinement`,
+:mod:`egtviz.geometry.essential`). They take arrays their callers have validated.
+
+Conventions (``docs/conventions.md``): points are rows, pixels ``(N, 2)``;
+:math:`m_2^T F m_1 = 0`. Every estimated ``F`` has rank 2, unit Frobenius norm and a deterministic
+sign: its largest-magnitude entry is positive.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+from scipy.linalg import lapack as _lapack
+
+from ._validate import DegenerateConfigurationError, GeometryError
+from .matrices import hartley_normalization, nearest_rank2, point_pairs
+
+__all__ = [
+    "canonical_fundamental",
+    "design_matrix",
+    "fundamental_7point",
+    "fundamental_8point",
+    "fundamental_normalized_8point",
+    "normalized_design",
+    "null_vector",
+    "seven_point_candidates",
+]
+
+# The second-smallest eigenvalue of A^T A (normalised coordinates) below this
+# fraction of the largest means the design matrix has rank < 8.
+_RANK_TOL_EIG = 1e-13
+# Same test on the singular values of the 7 x 9 design matrix of the 7-point solver.
+_RANK_TOL_SV = 1e-10
+# Largest pixel coordinate, in absolute value, the unnormalised 8-point algorithm can solve (and
+# its inverse the smallest largest one): its design matrix mixes u^2, u and 1, and beyond these
+# the rounding of one kind of term swamps the others.
+_MAX_RAW_PIXEL = 1e6
+
+
+def design_matrix(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
+    r"""Transposed design matrix ``(9, N)`` of the epipolar constraint (H&Z 2nd ed., section 11.1, eq. 11.3).
+
+    Column ``n`` is :math:`m_2 \otimes m_1`, so ``f @ At = m2^T F m1`` with ``f = F.ravel()``.
+    ``x1``, ``x2`` are checked float arrays: ``(N, 2)`` affine points (third coordinate 1; then rows
+    6-8 are :math:`m_1` and rows 2, 5, 8 are :math:`m_2`) or ``(N, 3)`` homogeneous points (rays).
+    Kept transposed: every row is contiguous, which makes the products fast.
+    """
+    n = x1.shape[0]
+    At = np.empty((9, n))
+    if x1.shape[1] == 2 and x2.shape[1] == 2:
+        h1 = At[6:9]
+        h1[:2] = x1.T
+        h1[2] = 1.0
+        np.multiply(h1, x2[:, 0], out=At[0:3])
+        np.multiply(h1, x2[:, 1], out=At[3:6])
+        return At
+    np.multiply(x2.T[:, None, :], x1.T[None, :, :], out=At.reshape(3, 3, n))
+    return At
+
+
+def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(At, T1, T2)``: :func:`design_matrix` of the Hartley-normalised points of two checked ``(N, 2)`` arrays.
+
+    ``T1``, ``T2`` are the similarities of :func:`~egtviz.geometry.matrices.hartley_normalization`
+    (H&Z Algorithm 11.1, step (i)); their scales are ``T[0, 0]``.
+    """
+    n1, T1 = hartley_normalization(u1, "U1", check=False)
+    n2, T2 = hartley_normalization(u2, "U2", check=False)
+    return design_matrix(n1, n2), T1, T2
+
+
+def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
+    r"""Unit ``f`` minimising :math:`\|A f\|` (H&Z 2nd ed., section 11.1): the smallest eigenvector of :math:`A^T A`.
+
+    The 9x9 normal matrix is what OpenCV's 8-point solver decomposes too; for Hartley-normalised
+    coordinates it is well conditioned (H&Z section 11.2).
+
+    Raises:
+        DegenerateConfigurationError: ``rank A < 8`` (the message starts with ``names``).
+    """
+    M = At @ At.T
+    # LAPACK directly: numpy.linalg's wrapper costs more than a 9x9 eigenproblem.
+    w, v, info = _lapack.dsyevd(M)
+    if info != 0:  # pragma: no cover - LAPACK failure
+        w, v = np.linalg.eigh(M)
+    if w[1] <= _RANK_TOL_EIG * w[-1]:
+        raise DegenerateConfigurationError(
+            f"{names}: degenerate configuration, the design matrix has rank < 8 "
+            "(repeated, collinear or coplanar points?)"
+        )
+    return v[:, 0]
+
+
+def canonical_fundamental(F: np.ndarray) -> np.ndarray:
+    """``F`` (a checked, non-zero float 3x3 array) at unit Frobenius norm with its largest-magnitude entry positive."""
+    x = F.ravel()
+    a = np.abs(x)
+    k = int(a.argmax())
+    # Dividing by the signed largest entry first: the sum of squares in the norm cannot overflow.
+    G = F / (a[k] if x[k] > 0 else -a[k])
+    g = G.ravel()
+    return G / math.sqrt(g.dot(g))
+
+
+def _det3(M: np.ndarray) -> np.ndarray:
+    """Determinants of a stack of 3x3 matrices ``(..., 3, 3)``, written out."""
+    return (
+        M[..., 0, 0] * (M[..., 1, 1] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 1])
+        - M[..., 0, 1] * (M[..., 1, 0] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 0])
+        + M[..., 0, 2] * (M[..., 1, 0] * M[..., 2, 1] - M[..., 1, 1] * M[..., 2, 0])
+    )
+
+
+def _real_cubic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Real roots of the monic cubics :math:`x^3 + a x^2 + b x + c` (arrays ``(K,)``).
+
+    Cardano's formula for one real root, the trigonometric form for three,
+    each polished by two Newton steps. Returns roots ``(K, 3)`` and a ``(K, 3)``
+    mask of the valid ones (one or three per cubic).
+    """
+    p = b - a * a / 3.0
+    q = 2.0 * a**3 / 27.0 - a * b / 3.0 + c
+    disc = (q / 2.0) ** 2 + (p / 3.0) ** 3
+    one = disc > 0.0
+    sq = np.sqrt(np.where(one, disc, 0.0))
+    y1 = np.cbrt(-q / 2.0 + sq) + np.cbrt(-q / 2.0 - sq)
+    pn = np.where(one | (p >= 0.0), -1.0, p)  # p < 0 whenever there are three real roots
+    m = 2.0 * np.sqrt(-pn / 3.0)
+    arg = np.clip(3.0 * q / (pn * m), -1.0, 1.0)
+    phi = np.arccos(arg) / 3.0
+    k = np.arange(3) * (2.0 * np.pi / 3.0)
+    y3 = m[:, None] * np.cos(phi[:, None] - k)
+    y3 = np.where((p >= 0.0)[:, None], 0.0, y3)  # triple root
+    y = np.where(one[:, None], y1[:, None], y3)
+    x = y - (a / 3.0)[:, None]
+    for _ in range(2):
+        f = ((x + a[:, None]) * x + b[:, None]) * x + c[:, None]
+        df = (3.0 * x + 2.0 * a[:, None]) * x + b[:, None]
+        step = np.where(df != 0.0, f / np.where(df != 0.0, df, 1.0), 0.0)
+        x = np.where(np.isfinite(step), x - step, x)
+    valid = np.ones(x.shape, bool)
+    valid[:, 1:] = ~one[:, None]
+    return x, valid
+
+
+def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Rank-2 members of the pencils :math:`a F_1 + b F_2` (stacks ``(K, 3, 3)``; H&Z section 11.1.2).
+
+    :math:`\det(a F_1 + b F_2)` is a homogeneous cubic
+    :math:`k_3 a^3 + k_2 a^2 b + k_1 a b^2 + k_0 b^3`; it is solved for
+    :math:`a/b` or :math:`b/a`, whichever end coefficient is larger, so the
+    solver never divides by a vanishing leading coefficient.
+
+    Returns candidates ``(K, 3, 3, 3)`` and a ``(K, 3)`` mask of the real roots
+    (one or three per pencil).
+    """
+    k3 = _det3(F1)
+    k0 = _det3(F2)
+    pp = _det3(F1 + F2)
+    pm = _det3(F1 - F2)
+    k2 = 0.5 * (pp - pm) - k0
+    k1 = 0.5 * (pp + pm) - k3
+    first = np.abs(k3) >= np.abs(k0)  # solve for r = a / b
+    lead = np.where(first, k3, k0)
+    lead = np.where(lead == 0.0, 1e-300, lead)
+    with np.errstate(over="ignore", invalid="ignore"):
+        roots, real = _real_cubic_roots(
+            np.where(first, k2, k1) / lead, np.where(first, k1, k2) / lead, np.where(first, k0, k3) / lead
+        )
+    r = roots[:, :, None, None]
+    cand = np.where(
+        first[:, None, None, None], r * F1[:, None] + F2[:, None], F1[:, None] + r * F2[:, None]
+    )
+    return cand, real & np.isfinite(roots)
+
+
+def seven_point_candidates(A7: np.ndarray) -> np.ndarray:
+    """Real 7-point solutions (H&Z section 11.1.2), unit norm, for a batch of 7x9 design matrices ``(K, 7, 9)``.
+
+    The null space of each is spanned by two vectors found by one batched solve (an SVD where the
+    first 7x7 block is singular); the rank-2 members of each pencil are returned stacked, ``(M, 3, 3)``.
+    """
+    K = A7.shape[0]
+    try:
+        X = np.linalg.solve(A7[:, :, :7], -A7[:, :, 7:])  # (K, 7, 2)
+        N1 = np.zeros((K, 9))
+        N2 = np.zeros((K, 9))
+        N1[:, :7], N1[:, 7] = X[:, :, 0], 1.0
+        N2[:, :7], N2[:, 8] = X[:, :, 1], 1.0
+    except np.linalg.LinAlgError:
+        vt = np.linalg.svd(A7)[2]
+        N1, N2 = vt[:, 7], vt[:, 8]
+    cand, real = _cubic_solutions(N1.reshape(K, 3, 3), N2.reshape(K, 3, 3))
+    cand = cand[real]
+    ok = np.all(np.isfinite(cand.reshape(-1, 9)), axis=1)
+    cand = cand[ok]
+    norms = np.linalg.norm(cand.reshape(-1, 9), axis=1)
+    return cand / np.where(norms > 0, norms, 1.0)[:, None, None]
+
+
+def fundamental_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.ndarray:
+    r"""Linear (unnormalised) 8-point algorithm (H&Z 2nd ed., section 11.1, "Basic equations").
+
+    Each correspondence gives one linear equation in the entries
+    :math:`f = \mathrm{vec}(F)`:
+
+    .. math:: m_2^T F m_1 = (m_2^T \otimes m_1^T) f = 0, \qquad
+              \hat f = \arg\min_{\|f\| = 1} \|A f\|,
+
+    solved by the SVD of the ``(N, 9)`` design matrix ``A`` in raw pixel
+    coordinates; rank 2 is then enforced by zeroing the smallest singular value
+    (H&Z section 11.1.1). Without normalisation ``A`` is badly conditioned
+    (H&Z section 11.2): compare :func:`fundamental_normalized_8point`.
+
+    Args:
+        U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
+        U2: ``(N, 2)`` corresponding pixels in image 2.
+
+    Returns:
+        ``(3, 3)`` ``F`` with :math:`m_2^T F m_1 = 0`, rank 2, unit Frobenius
+        norm, largest-magnitude entry positive.
+
+    Raises:
+        GeometryError: bad types or shapes, NaN/inf, ``N < 8``, mismatched
+            ``N``, or a largest pixel coordinate outside ``[1e-6, 1e6]`` in
+            absolute value (the unnormalised system cannot be solved there).
+        DegenerateConfigurationError: coincident points or a design matrix of
+            rank below 8 (e.g. collinear or coplanar scene points).
+    """
+    u1, u2 = point_pairs(U1, U2, 8)
+    for u, name in ((u1, "U1"), (u2, "U2")):
+        top = float(np.abs(u).max())
+        if not 1.0 / _MAX_RAW_PIXEL <= top <= _MAX_RAW_PIXEL:
+            raise GeometryError(
+                f"{name}: pixel coordinates up to {top:.3g} in absolute value cannot be solved by the "
+                f"unnormalised 8-point algorithm (the largest must be within [{1.0 / _MAX_RAW_PIXEL:.0e}, "
+                f"{_MAX_RAW_PIXEL:.0e}]); fundamental_normalized_8point solves them"
+            )
+    # The rank test is done in normalised coordinates, where it is meaningful.
+    null_vector(normalized_design(u1, u2)[0])
+    A = design_matrix(u1, u2).T
+    f = np.linalg.svd(A, full_matrices=A.shape[0] < 9)[2][-1]  # (9, 9) V^T when N = 8
+    return canonical_fundamental(nearest_rank2(f.reshape(3, 3), check=False))
+
+
+def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.ndarray:
+    r"""Hartley's normalised 8-point algorithm (H&Z 2nd ed., section 11.2, Algorithm 11.1).
+
+    Points are normalised by similarities :math:`\hat m_1 = T_1 m_1`,
+    :math:`\hat m_2 = T_2 m_2` (centroid at the origin, mean distance
+    :math:`\sqrt 2`: :func:`~egtviz.geometry.matrices.hartley_normalization`); the linear solution
+    :math:`\hat F` (smallest eigenvector of the 9x9 matrix :math:`A^T A`) is projected to rank 2
+    and denormalised:
+
+    .. math:: F = T_2^T \hat F T_1 .
+
+    Args:
+        U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
+        U2: ``(N, 2)`` corresponding pixels in image 2.
+
+    Returns:
+        ``(3, 3)`` ``F``, rank 2, unit Frobenius norm, largest entry positive.
+
+    Raises:
+        GeometryError: bad shapes, NaN/inf, ``N < 8`` or mismatched ``N``.
+        DegenerateConfigurationError: coincident points or rank-deficient data.
+    """
+    u1, u2 = point_pairs(U1, U2, 8)
+    At, T1, T2 = normalized_design(u1, u2)
+    Fn = nearest_rank2(null_vector(At).reshape(3, 3), check=False)
+    return canonical_fundamental(T2.T @ Fn @ T1)
+
+
+def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]:
+    r"""Minimal 7-point solver (H&Z 2nd ed., section 11.1.2).
+
+    Seven correspondences leave a two-dimensional null space
+    :math:`\alpha F_1 + \beta F_2` of the 7x9 design matrix; the singularity
+    constraint
+
+    .. math:: \det(\alpha F_1 + \beta F_2) = 0
+
+    is a cubic with one or three real roots, each giving a solution. The
+    computation runs in Hartley-normalised coordinates.
+
+    Args:
+        U1: exactly seven pixels ``(7, 2)`` in image 1.
+        U2: the seven corresponding pixels in image 2.
+
+    Returns:
+        A list of one or three ``(3, 3)`` matrices, each rank 2, unit
+        Frobenius norm, largest entry positive.
+
+    Raises:
+        GeometryError: bad shapes, NaN/inf, or not exactly seven points.
+        DegenerateConfigurationError: the null space has dimension above 2.
+    """
+    u1, u2 = point_pairs(U1, U2, 7)
+    if u1.shape[0] != 7:
+        raise GeometryError(f"U1: the 7-point algorithm needs exactly 7 points, got {u1.shape[0]}")
+    At, T1, T2 = normalized_design(u1, u2)
+    _, s, vt = np.linalg.svd(At.T)
+    if s[6] <= _RANK_TOL_SV * s[0]:
+        raise DegenerateConfigurationError(
+            "U1, U2: degenerate configuration, the 7x9 design matrix has rank < 7"
+        )
+    cand, real = _cubic_solutions(vt[7].reshape(1, 3, 3), vt[8].reshape(1, 3, 3))
+    return [canonical_fundamental(nearest_rank2(T2.T @ Fn @ T1, check=False)) for Fn in cand[0][real[0]]]

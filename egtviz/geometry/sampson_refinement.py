@@ -1,0 +1,197 @@
+r"""Iterative estimation of the fundamental matrix: minimisation of the Sampson distance.
+
+Hartley & Zisserman, *Multiple View Geometry*, 2nd ed. (H&Z), section 11.4.3 ("The Sampson
+distance") over the minimal parameterisation of a rank-2 ``F`` of section 11.4.2
+("Parametrization of rank-2 matrices"): :func:`fundamental_sampson` (EGT's ``f_Festim`` algorithm 3),
+and :func:`refine_sampson`, the same minimisation in Hartley-normalised coordinates with optional
+weights, which the robust estimators of :mod:`egtviz.geometry.robust` and
+:mod:`egtviz.geometry.mestimator` use as their last step.
+
+Conventions (``docs/conventions.md``): pixels as rows ``(N, 2)``; :math:`m_2^T F m_1 = 0`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+from scipy.optimize import least_squares
+
+from ._validate import GeometryError, as_up_to_scale
+from .fundamental import canonical_fundamental, normalized_design, null_vector
+from .matrices import nearest_rank2, point_pairs
+
+__all__ = ["fundamental_sampson", "refine_sampson"]
+
+
+def _skew_stack(c: np.ndarray) -> np.ndarray:
+    """Cross-product matrices ``(K, 3, 3)`` of vectors ``(K, 3)``."""
+    W = np.zeros((c.shape[0], 3, 3))
+    W[:, 0, 1], W[:, 0, 2], W[:, 1, 2] = -c[:, 2], c[:, 1], -c[:, 0]
+    W[:, 1, 0], W[:, 2, 0], W[:, 2, 1] = c[:, 2], -c[:, 1], c[:, 0]
+    return W
+
+
+def _rodrigues_jr(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Rotation :math:`R(\omega)` and right Jacobian :math:`J_r(\omega)`.
+
+    :math:`R(\omega + \delta) \approx R(\omega) \exp([J_r(\omega) \delta]_\times)`.
+    """
+    th = float(np.linalg.norm(w))
+    W = _skew_stack(w[None])[0]
+    W2 = W @ W
+    if th < 1e-8:
+        return np.eye(3) + W + 0.5 * W2, np.eye(3) - 0.5 * W + W2 / 6.0
+    a = math.sin(th) / th
+    b = (1.0 - math.cos(th)) / th**2
+    c = (th - math.sin(th)) / th**3
+    return np.eye(3) + a * W + b * W2, np.eye(3) - b * W + c * W2
+
+
+class _SampsonProblem:
+    r"""Sampson residuals over the rank-2 parameterisation used by :func:`fundamental_sampson`.
+
+    :math:`F = U_0 R(\omega_1)\,\mathrm{diag}(1, \sigma, 0)\,R(\omega_2)^T V_0^T`, ``p = (w1, w2, sigma)``,
+    in Hartley-normalised coordinates; the residuals are pixel Sampson distances
+    (see :func:`~egtviz.geometry.error_metrics.sampson_distances_normalized`), optionally weighted.
+    """
+
+    def __init__(
+        self, Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, weights: np.ndarray | None = None
+    ) -> None:
+        U0, S, V0t = np.linalg.svd(Fn0)
+        self.sw = None if weights is None else np.sqrt(weights)
+        self.U0, self.V0t = U0, V0t
+        self.p0 = np.zeros(7)
+        self.p0[6] = S[1] / S[0]
+        self.At = At
+        self.h1 = At[6:9]  # m1 as rows (3, N)
+        self.h2 = np.ascontiguousarray(At[2::3])  # m2 as rows (3, N)
+        self.q1, self.q2 = s1 * s1, s2 * s2
+        self._key: bytes | None = None
+
+    def F(self, p: np.ndarray) -> np.ndarray:
+        return self._eval(p)[0]
+
+    def _eval(self, p: np.ndarray):
+        key = p.tobytes()
+        if key != self._key:
+            R1, J1 = _rodrigues_jr(p[:3])
+            R2, J2 = _rodrigues_jr(p[3:6])
+            L = self.U0 @ R1
+            Rt = R2.T @ self.V0t
+            F = (L[:, :2] * np.array([1.0, p[6]])) @ Rt[:2]
+            l2 = F[:2] @ self.h1  # (F m1)_{1,2}: lines in image 2, (2, N)
+            l1 = F[:, :2].T @ self.h2  # (F^T m2)_{1,2}: lines in image 1
+            e = F.ravel() @ self.At
+            den = self.q2 * (l2[0] ** 2 + l2[1] ** 2) + self.q1 * (l1[0] ** 2 + l1[1] ** 2)
+            np.maximum(den, 1e-300, out=den)
+            self._cache = (F, l1, l2, e, den, L, Rt, J1, J2)
+            self._key = key
+        return self._cache
+
+    def residuals(self, p: np.ndarray) -> np.ndarray:
+        e, den = self._eval(p)[3:5]
+        r = e / np.sqrt(den)
+        return r if self.sw is None else r * self.sw
+
+    def jacobian(self, p: np.ndarray) -> np.ndarray:
+        _, l1, l2, e, den, L, Rt, J1, J2 = self._eval(p)
+        dF = np.empty((7, 3, 3))
+        D = np.diag([1.0, p[6], 0.0])
+        dF[0:3] = L @ _skew_stack(J1.T) @ (D @ Rt)
+        dF[3:6] = -((L @ D) @ _skew_stack(J2.T) @ Rt)
+        dF[6] = np.outer(L[:, 1], Rt[1])
+        # r = e / sqrt(den): dr = de / sqrt(den) - e / (2 den^1.5) d(den), with
+        # de = m2^T dF m1, d(den) = 2 q2 (F m1)_i (dF m1)_i + 2 q1 (F^T m2)_j (dF^T m2)_j (i, j < 2).
+        N = e.shape[0]
+        de = dF.reshape(7, 9) @ self.At
+        P = (dF[:, :2, :].reshape(14, 3) @ self.h1).reshape(7, 2, N)
+        Q = (dF[:, :, :2].transpose(0, 2, 1).reshape(14, 3) @ self.h2).reshape(7, 2, N)
+        dden = self.q2 * (P[:, 0] * l2[0] + P[:, 1] * l2[1]) + self.q1 * (Q[:, 0] * l1[0] + Q[:, 1] * l1[1])
+        rs = 1.0 / np.sqrt(den)
+        g = e * rs / den
+        J = de * rs - dden * g
+        if self.sw is not None:
+            J *= self.sw
+        return J.T
+
+
+def refine_sampson(
+    Fn0: np.ndarray,
+    At: np.ndarray,
+    s1: float,
+    s2: float,
+    weights: np.ndarray | None = None,
+    tol: float = 1e-10,
+) -> np.ndarray:
+    r"""Minimise the (weighted) pixel Sampson distance over rank-2 ``F`` in normalised coordinates (H&Z 11.4.3).
+
+    Args:
+        Fn0: (3, 3) rank-2 start in normalised coordinates, unit Frobenius norm.
+        At: (9, N) design matrix of the normalised points
+            (:func:`~egtviz.geometry.fundamental.normalized_design`).
+        s1, s2: the normalisations' scales, so that the residuals are pixel distances.
+        weights: optional (N,) non-negative weights of the squared residuals.
+        tol: relative tolerance of ``scipy.optimize.least_squares``.
+
+    Returns:
+        The refined ``F`` (unit Frobenius norm); ``Fn0`` itself if the minimisation did not lower
+        the cost by a factor 2 or gave a non-finite matrix.
+    """
+    prob = _SampsonProblem(Fn0, At, s1, s2, weights)
+    r0 = prob.residuals(prob.p0)
+    cost0 = float(r0 @ r0)
+    res = least_squares(
+        prob.residuals, prob.p0, jac=prob.jacobian, method="lm", xtol=tol, ftol=tol, gtol=1e-12, max_nfev=50
+    )
+    F = prob.F(res.x)
+    if not (np.all(np.isfinite(F)) and 2.0 * res.cost <= cost0):
+        return Fn0
+    return F / np.linalg.norm(F)
+
+
+def fundamental_sampson(
+    U1: npt.ArrayLike, U2: npt.ArrayLike, F0: npt.ArrayLike | None = None
+) -> np.ndarray:
+    r"""Iterative minimisation of the Sampson distance (H&Z 2nd ed., section 11.4.3).
+
+    Minimises the first-order geometric error (H&Z eq. 11.9)
+
+    .. math:: \sum_i \frac{(m_{2i}^T F m_{1i})^2}
+              {(F m_{1i})_1^2 + (F m_{1i})_2^2 + (F^T m_{2i})_1^2 + (F^T m_{2i})_2^2}
+
+    with ``scipy.optimize.least_squares`` (Levenberg-Marquardt, analytic
+    Jacobian) over a minimal rank-2 parameterisation: in Hartley-normalised
+    coordinates :math:`F = U R(\omega_1)\,\mathrm{diag}(1, \sigma, 0)\,R(\omega_2)^T V^T`
+    (7 parameters, H&Z section 11.4.2). The result is exactly rank 2 and its
+    Sampson cost never exceeds that of the start.
+
+    Args:
+        U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.
+        U2: ``(N, 2)`` corresponding pixels in image 2.
+        F0: optional ``(3, 3)`` starting estimate (projected to rank 2);
+            default :func:`fundamental_normalized_8point`.
+
+    Returns:
+        ``(3, 3)`` ``F``, rank 2, unit Frobenius norm, largest entry positive.
+
+    Raises:
+        GeometryError: bad shapes, NaN/inf, ``N < 8``, mismatched ``N``, or a
+            rank < 2 ``F0``.
+        DegenerateConfigurationError: coincident points or rank-deficient data.
+    """
+    u1, u2 = point_pairs(U1, U2, 8)
+    At, T1, T2 = normalized_design(u1, u2)
+    if F0 is None:
+        Fn0 = nearest_rank2(null_vector(At).reshape(3, 3), check=False)
+    else:
+        F0 = as_up_to_scale(F0, "F0", (3, 3))
+        Fn0 = np.linalg.inv(T2).T @ F0 @ np.linalg.inv(T1)
+        sv = np.linalg.svd(Fn0, compute_uv=False)
+        if sv[1] <= 1e-12 * sv[0]:
+            raise GeometryError("F0: expected a matrix of rank 2, got rank < 2")
+        Fn0 = nearest_rank2(Fn0, check=False)
+    Fn0 = Fn0 / np.linalg.norm(Fn0)
+    return canonical_fundamental(T2.T @ refine_sampson(Fn0, At, T1[0, 0], T2[0, 0]) @ T1)
