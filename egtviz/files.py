@@ -13,7 +13,7 @@ import tempfile
 import unicodedata
 from pathlib import Path
 
-__all__ = ["FileSafetyError", "check_write_target", "printable", "read_limited", "write_atomic"]
+__all__ = ["FileSafetyError", "check_write_target", "printable", "read_limited", "too_large", "write_atomic"]
 
 
 class FileSafetyError(OSError):
@@ -58,8 +58,9 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def _megabytes(n: int) -> str:
-    return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
+def too_large(size: int, limit: int) -> str:
+    """``"1,000,001 bytes, more than the 1,000,000-byte limit"``: exact sizes, so a file one byte over says so."""
+    return f"{size:,} bytes, more than the {limit:,}-byte limit"
 
 
 def read_limited(path: str | os.PathLike, max_bytes: int) -> bytes:
@@ -87,7 +88,7 @@ def read_limited(path: str | os.PathLike, max_bytes: int) -> bytes:
     if not stat.S_ISREG(before.st_mode):
         raise FileSafetyError(f"{shown}: not a regular file ({_kind(before.st_mode)})")
     if before.st_size > max_bytes:
-        raise FileSafetyError(f"{shown}: {_megabytes(before.st_size)}, more than the {_megabytes(max_bytes)} limit")
+        raise FileSafetyError(f"{shown}: {too_large(before.st_size, max_bytes)}")
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except OSError as exc:
@@ -112,7 +113,7 @@ def read_limited(path: str | os.PathLike, max_bytes: int) -> bytes:
         os.close(fd)
     data = b"".join(chunks)
     if len(data) > max_bytes:
-        raise FileSafetyError(f"{shown}: more than the {_megabytes(max_bytes)} limit")
+        raise FileSafetyError(f"{shown}: grew while it was read to more than the {max_bytes:,}-byte limit")
     return data
 
 

@@ -164,7 +164,8 @@ def test_scene_check_refuses_devices_fifos_and_big_files_at_once(tmp_path, capsy
         fh.truncate(50_000_000)
     t0 = time.monotonic()
     for path, why in (("/dev/zero", "not a regular file (a device)"), (fifo, "not a regular file (a FIFO"),
-                      (big, "50 MB, more than the 2 MB limit"), (tmp_path, "not a regular file (a directory)"),
+                      (big, "50,000,000 bytes, more than the 2,000,000-byte limit"),
+                      (tmp_path, "not a regular file (a directory)"),
                       (tmp_path / "missing.json", "no such file")):
         assert main(["scene", "check", str(path)]) == 2
         err = capsys.readouterr().err

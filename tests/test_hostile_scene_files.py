@@ -203,7 +203,7 @@ REFUSED = [
     ("points-object", mutated(top("points", {"0": [0, 0, 0]})), r"points: expected a list"),
     ("points-string", mutated(top("points", "abc")), r"points: expected a list"),
     ("too-many-points", mutated(top("points", [[0, 0, 0]] * 2001)), r"points: at most 2000 entries, got 2001"),
-    ("million-points", mutated(top("points", [[0, 0, 0]] * 10**6)), r"MB, more than the 2 MB limit"),
+    ("million-points", mutated(top("points", [[0, 0, 0]] * 10**6)), r"bytes, more than the 2,000,000-byte limit"),
     ("point-string", mutated(lambda d: d["points"].__setitem__(3, "1,2,3")), r"points\[3\]: expected three numbers, got '1,2,3'"),
     ("point-mixed", mutated(lambda d: d["points"].append([1, "x", 2])), r"points\[8\]: expected three numbers, got 'x'"),
     ("point-two", mutated(lambda d: d["points"].append([1, 2])), r"points\[8\]: expected three finite numbers, got 2"),

@@ -258,7 +258,8 @@ def test_html_in_a_step_is_written_as_text_and_formulas_become_mathml():
     out = render_markdown("a <script>alert(1)</script> & $x < y$ and `a<b`")
     assert "<script>" not in out and "&lt;script&gt;" in out and "&amp;" in out
     assert re.search(r"<math[^>]*display=\"inline\"[^>]*><mrow><mi>x</mi><mo>&lt;</mo><mi>y</mi></mrow></math>", out)
-    assert "`a<b`" in out  # code is left to Markdown, which shows it as text
+    # Code is an element whose text is all character references: neither HTML nor Markdown syntax.
+    assert "<code>a&#60;b</code>" in out
 
 
 def test_display_formulas_and_escaped_dollars():

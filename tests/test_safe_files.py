@@ -58,7 +58,7 @@ def test_oversized_file_refused_before_reading(tmp_path):
     sparse = tmp_path / "sparse.json"
     with open(sparse, "wb") as fh:  # 3 GB by its size, nothing on disk: refused from the size alone
         fh.truncate(3 * 10**9)
-    with pytest.raises(SceneFileError, match="3 GB, more than the 2 MB limit"):
+    with pytest.raises(SceneFileError, match="3,000,000,000 bytes, more than the 2,000,000-byte limit"):
         load_scene_file(sparse)
 
 

@@ -6,9 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..files import FileSafetyError, printable, read_limited
 from ..resources import shipped_folder
-from .errors import LessonError
 from ..scene.limits import MAX_LESSON_FILE_BYTES
+from .errors import LessonError
 from .format import Lesson, parse_lesson
 
 __all__ = ["LessonInfo", "lessons_folder", "list_lessons", "load"]
@@ -32,7 +33,7 @@ def _files() -> dict[str, Path]:
     folder = lessons_folder()
     if not folder.is_dir():
         return {}
-    return {f.name[: -len(".toml")]: f for f in folder.iterdir() if f.name.endswith(".toml") and f.is_file()}
+    return {f.stem: f for f in folder.iterdir() if f.suffix.lower() == ".toml" and f.is_file()}
 
 
 def list_lessons() -> list[LessonInfo]:
@@ -48,12 +49,15 @@ def load(name: str) -> Lesson:
     """The shipped lesson ``name`` (its file name without ``.toml``), validated.
 
     Raises:
-        LessonError: no such lesson, or the file is invalid.
+        LessonError: no such lesson, or the file is invalid. A name is shown with its control characters
+            written out (``\\x1b``), as typed on a command line.
     """
     files = _files()
     if name not in files:
-        raise LessonError(str(name)[:80], 1, f"no lesson of that name (have: {', '.join(sorted(files))})")
-    data = files[name].read_bytes()
-    if len(data) > MAX_LESSON_FILE_BYTES:
-        raise LessonError(name, 1, f"more than the {MAX_LESSON_FILE_BYTES / 1e6:g} MB limit")
-    return parse_lesson(data, source=f"lessons/{name}.toml", name=name, known_lessons=frozenset(files))
+        raise LessonError(printable(str(name)[:80]), 1, f"no lesson of that name (have: {', '.join(sorted(files))})")
+    source = f"lessons/{files[name].name}"
+    try:
+        data = read_limited(files[name], MAX_LESSON_FILE_BYTES)
+    except FileSafetyError as exc:
+        raise LessonError(source, 1, str(exc).removeprefix(f"{printable(str(files[name]))}: ")) from None
+    return parse_lesson(data, source=source, name=name, known_lessons=frozenset(files), folder=files[name].parent)

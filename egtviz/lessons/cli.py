@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 
 from ..files import FileSafetyError, printable, read_limited
@@ -99,13 +100,14 @@ def add_check_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def check_file(path: str) -> str | None:
-    """None if ``path`` is a valid lesson (``.toml``) or scene file (anything else), else ``file:line: reason``.
+    """None if ``path`` is a valid lesson (``.toml``, any case) or scene file (anything else), else
+    ``file:line: reason``.
 
     Scene files go through the scene layer's own reader (``scene_from_bytes``, as ``load_scene_file``); the line
     of a refused entry is found in the JSON text (:func:`~egtviz.lessons.locate.json_locator`).
     """
     shown = printable(path)
-    if path.endswith(".toml"):
+    if path.lower().endswith(".toml"):
         from .format import load_lesson
 
         try:
@@ -123,10 +125,9 @@ def check_file(path: str) -> str | None:
         scene_from_bytes(data, "scene")
     except SceneFileError as exc:
         reason = str(exc).removeprefix("scene: ")
-        line = 1
-        if reason.startswith("line "):  # JSON syntax: "line L, column C: ..."
-            head = reason.split(",", 1)[0]
-            line = int(head[5:]) if head[5:].isdigit() else 1
+        at = re.match(r"line (\d+)\b", reason)  # JSON syntax, nesting: "line L[, column C]: ..."
+        if at:
+            line = int(at.group(1))
         else:
             text = data.decode("utf-8", errors="replace")
             line = json_locator(text).line(*scene_entry_path(reason))

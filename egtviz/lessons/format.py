@@ -20,15 +20,24 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..files import FileSafetyError, printable, read_limited
+from ..files import FileSafetyError, printable, read_limited, too_large
 from ..scene import SCENES, Scene, SceneError, SceneFileError, SceneModel
 from ..scene.io import scene_from_dict
 from ..scene.lab import LabSettings, make_correspondences
-from ..scene.limits import MAX_CHANGES, MAX_LESSON_FILE_BYTES, MAX_PREREQUISITES, MAX_STEPS, MAX_TASKS
+from ..scene.limits import (
+    MAX_CHANGES,
+    MAX_LESSON_FILE_BYTES,
+    MAX_LESSON_SERVO_STEPS,
+    MAX_PREREQUISITES,
+    MAX_STEPS,
+    MAX_TASKS,
+)
 from . import fields
+from .bounds import check_lesson_work, check_toml_text
 from .changes import Change, OpenDemo, SetField, parse_change
 from .changes import apply as apply_change
 from .errors import EntryError, LessonError
+from .images import LessonImages
 from .locate import Locator, scene_entry_path, toml_locator
 from .markup import MarkupError, render_markdown
 from .tasks import (
@@ -98,14 +107,23 @@ def load_lesson(path: str | os.PathLike, *, known_lessons: frozenset[str] | None
     if known_lessons is None:
         folder = Path(path).parent
         try:
-            known_lessons = frozenset(p.stem for p in folder.glob("*.toml"))
+            known_lessons = frozenset(p.stem for p in folder.iterdir() if p.suffix.lower() == ".toml")
         except OSError:
             known_lessons = frozenset()
-    return parse_lesson(data, source=shown, name=Path(path).stem, known_lessons=known_lessons)
+    return parse_lesson(data, source=shown, name=Path(path).stem, known_lessons=known_lessons,
+                        folder=Path(path).parent)
 
 
-def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: frozenset[str] | None = None) -> Lesson:
+def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: frozenset[str] | None = None,
+                 folder: Path | None = None) -> Lesson:
     """A lesson from the text of a lesson file (see :func:`load_lesson`).
+
+    Args:
+        data: the file's bytes (UTF-8), or its text.
+        source: what to call the file in messages.
+        name: the lesson's name.
+        known_lessons: names a prerequisite may take (None: any).
+        folder: the lesson file's folder, where its texts' images are (None: only the package's assets).
 
     Raises:
         LessonError: ``file:line: reason``.
@@ -113,16 +131,21 @@ def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: fr
     source = printable(source)
     if isinstance(data, (bytes, bytearray)):
         if len(data) > MAX_LESSON_FILE_BYTES:
-            raise LessonError(source, 1, f"more than the {MAX_LESSON_FILE_BYTES / 1e6:g} MB limit")
+            raise LessonError(source, 1, too_large(len(data), MAX_LESSON_FILE_BYTES))
         try:
             text = bytes(data).decode("utf-8")
         except UnicodeDecodeError as exc:
             raise LessonError(source, bytes(data)[: exc.start].count(b"\n") + 1, "not UTF-8 text") from None
     else:
         text = data
+        # A character is at least one byte: only a text short enough in characters is measured in bytes.
+        size = len(text) if len(text) > MAX_LESSON_FILE_BYTES else len(text.encode("utf-8", "surrogatepass"))
+        if size > MAX_LESSON_FILE_BYTES:
+            raise LessonError(source, 1, too_large(size, MAX_LESSON_FILE_BYTES))
     text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     if not _LESSON_NAME.fullmatch(name):
         raise LessonError(source, 1, f"lesson name {printable(name)!r}: expected lower-case letters, digits and '-'")
+    check_toml_text(text, source)
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -132,19 +155,24 @@ def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: fr
         raise LessonError(source, line, f"not valid TOML: {reason}") from None
     except RecursionError:
         raise LessonError(source, 1, "not valid TOML: nested too deeply") from None
-    return _Reader(source, name, toml_locator(text), known_lessons).lesson(doc)
+    return _Reader(source, name, toml_locator(text), known_lessons, LessonImages(folder)).lesson(doc)
 
 
 class _Reader:
     """Turns the parsed TOML into a :class:`Lesson`, every error located."""
 
-    def __init__(self, source: str, name: str, where: Locator, known: frozenset[str] | None) -> None:
+    def __init__(self, source: str, name: str, where: Locator, known: frozenset[str] | None,
+                 images: LessonImages) -> None:
         self.source = source
+        self.images = images
         self.name = name
         self.where = where
         self.known = known
         self.demo: OpenDemo | None = None
         """The servo run the steps read so far offer (the last ``open_demo``), for ``servo_number`` tasks."""
+        self.simulated: set[OpenDemo] = set()
+        self.servo_steps = 0
+        """Steps of the distinct runs in :attr:`simulated`."""
 
     def error(self, path: tuple, reason: str) -> LessonError:
         return LessonError(self.source, self.where.line(*path), reason)
@@ -170,6 +198,7 @@ class _Reader:
         steps_data = doc.get("steps")
         if not isinstance(steps_data, list) or not steps_data or len(steps_data) > MAX_STEPS:
             raise self.error(("steps",), f"steps: expected 1 to {MAX_STEPS} [[steps]] tables")
+        check_lesson_work(steps_data, self.source, self.where)
         model = SceneModel(scene)
         steps = tuple(self.step(i, s, model) for i, s in enumerate(steps_data))
         return Lesson(self.name, title, summary, prerequisites, scene, steps, self.source)
@@ -201,7 +230,7 @@ class _Reader:
         except EntryError as exc:
             raise self.entry(at, exc, f"steps[{i}]") from None
         try:
-            html = render_markdown(text)
+            html = render_markdown(text, self.images.data_url)
         except MarkupError as exc:
             raise self.error(at + ("text",), f"steps[{i}].text: {exc}") from None
         changes = self.changes(at, data.get("changes", []), model)
@@ -233,6 +262,18 @@ class _Reader:
         except SceneError as exc:
             raise self.error(here + _offending_key(change, table, str(exc)), f"{what}: {exc}") from None
 
+    def budget_run(self, here: tuple, what: str) -> None:
+        """Count the servo run a ``servo_number`` task measures (simulated once per distinct run) before it is
+        simulated: all of a lesson's runs together take at most :data:`MAX_LESSON_SERVO_STEPS` steps."""
+        if self.demo is None or self.demo in self.simulated:
+            return
+        self.simulated.add(self.demo)
+        self.servo_steps += int(self.demo.simulation_kwargs()["steps"])
+        if self.servo_steps > MAX_LESSON_SERVO_STEPS:
+            raise self.error(here, f"{what}: the lesson's servo_number tasks measure runs of {self.servo_steps:,} "
+                                   f"steps in all, more than the {MAX_LESSON_SERVO_STEPS:,} simulated when a lesson "
+                                   "is loaded (fewer steps, or fewer different runs)")
+
     def tasks(self, at: tuple, value: object, model: SceneModel) -> tuple[Task, ...]:
         if not isinstance(value, list) or len(value) > MAX_TASKS:
             raise self.error(at + ("tasks",), f"tasks: expected at most {MAX_TASKS} [[steps.tasks]] tables")
@@ -246,6 +287,7 @@ class _Reader:
                     raise EntryError("id", f"another task of this step has the id {task.id!r}")
                 task.validate(model.scene)
                 if isinstance(task, ServoNumberTask):
+                    self.budget_run(here, what)
                     task.validate_run(self.demo)
             except EntryError as exc:
                 raise self.entry(here, exc, what) from None

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..files import FileSafetyError, printable, read_limited, write_atomic
+from ..files import FileSafetyError, printable, read_limited, too_large, write_atomic
 from .limits import (
     MAX_CAMERAS,
     MAX_JSON_DEPTH,
@@ -90,6 +90,26 @@ def _nesting_depth(value: Any) -> int:
     return deepest
 
 
+def _too_deep(data: bytes) -> int | None:
+    """The line where a JSON text first nests lists or objects more than ``MAX_JSON_DEPTH`` deep, or None.
+
+    Read from the bytes before the text is parsed, in a few array operations (linear in the size, whatever the
+    text): brackets inside strings, between quotes that no odd run of backslashes escapes, do not count.
+    """
+    if data.count(b"[") + data.count(b"{") <= MAX_JSON_DEPTH:
+        return None
+    b = np.frombuffer(data, dtype=np.uint8)
+    index = np.arange(b.size, dtype=np.int32)
+    last_other = np.maximum.accumulate(np.where(b == ord("\\"), np.int32(-1), index))
+    quote = b == ord('"')
+    quote[1:] &= (index[:-1] - last_other[:-1]) % 2 == 0  # an even run of backslashes (or none) before it
+    outside = np.cumsum(quote, dtype=np.int32) % 2 == 0
+    step = (((b == ord("[")) | (b == ord("{"))) & outside).astype(np.int8)
+    step -= (((b == ord("]")) | (b == ord("}"))) & outside).astype(np.int8)
+    deeper = np.flatnonzero(np.cumsum(step, dtype=np.int32) > MAX_JSON_DEPTH)
+    return data.count(b"\n", 0, int(deeper[0])) + 1 if deeper.size else None
+
+
 def scene_from_bytes(data: bytes, source: str) -> Scene:
     """A scene from the bytes of a scene file, checked completely (what an upload and the CLI use).
 
@@ -104,7 +124,10 @@ def scene_from_bytes(data: bytes, source: str) -> Scene:
     if not isinstance(data, (bytes, bytearray)):
         raise SceneFileError(f"{source}: expected the bytes of a file, got {type(data).__name__}")
     if len(data) > MAX_SCENE_FILE_BYTES:
-        raise SceneFileError(f"{source}: {len(data) / 1e6:.3g} MB, more than the {MAX_SCENE_FILE_BYTES / 1e6:g} MB limit")
+        raise SceneFileError(f"{source}: {too_large(len(data), MAX_SCENE_FILE_BYTES)}")
+    deep = _too_deep(bytes(data))
+    if deep is not None:
+        raise SceneFileError(f"{source}: line {deep}: lists or objects nested more than {MAX_JSON_DEPTH} levels deep")
     try:
         text = bytes(data).decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -214,3 +214,22 @@ MAX_TASKS = 20
 """Tasks of one step."""
 MAX_PREREQUISITES = 20
 """Prerequisites of one lesson."""
+MAX_LESSON_KEY_PARTS = 8
+"""Parts of one dotted key (``a.b.c = 1``) or table header (``[a.b.c]``) of a lesson file (the course uses 2).
+Checked by scanning the text before it is parsed: a TOML parser's work grows with the square of a key's parts."""
+MAX_LESSON_NESTING = 8
+"""Arrays and inline tables nested in one value of a lesson file (the course uses 3)."""
+MAX_LESSON_KEYS = 20_000
+"""Keys and table headers of a lesson file, inline tables' keys included (the longest lesson has about 170)."""
+MAX_LESSON_CHANGES = 1_000
+"""Changes of a whole lesson: every step's changes and every task's solution (the course uses at most 12)."""
+MAX_LESSON_POINTS = 20_000
+"""Points the changes of a lesson place in all (``random_points`` ``n``, ``set_points``), solutions included:
+ten full scenes (the course places at most 100)."""
+MAX_LESSON_SERVO_STEPS = 10_000
+"""Steps of all the servo runs a lesson's ``servo_number`` tasks measure, simulated when the lesson is loaded:
+one run of the longest a demo allows (the course simulates at most 2,000)."""
+MAX_LESSON_IMAGE_BYTES = 1_000_000
+"""Largest image a lesson's text shows (embedded in the text the server sends)."""
+MAX_LESSON_IMAGES_BYTES = 4_000_000
+"""All the images of a lesson's texts, each use counted."""
