@@ -368,6 +368,22 @@ def test_a_task_whose_camera_was_removed_says_so_at_check(store):
                                            "press \u201creset step\u201d to start this step again.")
 
 
+def test_a_mirrors_virtual_camera_follows_its_camera_without_breaking_its_lock():
+    from egtviz.scene import SCENES, SceneModel
+    from egtviz.viewer.lesson_view import lock_refusal
+
+    model = SceneModel(SCENES["mirror"]())  # cam_virtual: locked by the scene, the reflection of cam
+    model.set_undo_barrier("Undo stops here.")
+    run = types.SimpleNamespace(model=model)
+    before = model.scene.camera("cam_virtual").position
+    model.update_camera("cam", position=(-2.0, -8.0, 1.5))
+    assert model.scene.camera("cam_virtual").position != before and lock_refusal(run) is None
+    model.lock("cam")
+    model.set_undo_barrier("Undo stops here.")
+    model.load_scene(SCENES["mirror"]())
+    assert lock_refusal(run).startswith("cam must stay where this step put it (it is locked)")
+
+
 def test_lessons_use_the_instruments_their_changes_and_tasks_name():
     assert lesson_instruments(load("07-fundamental-and-essential")) == (False, True)
     assert lesson_instruments(load("09-estimating-f")) == (True, False)

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..lessons import Lesson, LessonRun, ProgressStore
+from ..lessons.answers import EXAMPLE
 from ..lessons.changes import RANGED_FIELDS, SetLab, SetLens, SetRange
 from ..lessons.progress import LearnerNameError, learner_key
 from ..lessons.runner import ResolvedTask
@@ -104,7 +105,9 @@ def lock_refusal(run: LessonRun) -> str | None:
     if start is None:
         return None
     scene = run.model.scene
-    for name in sorted(start.locked):
+    # A mirror's virtual camera is locked by its scene and follows the camera it reflects: it moves lawfully.
+    derived = {m.virtual for m in start.annotations.mirrors} | {m.virtual for m in scene.annotations.mirrors}
+    for name in sorted(start.locked - derived):
         if name.startswith("point:"):
             i = int(name[6:])
             if i >= len(scene.points):
@@ -228,7 +231,8 @@ class TaskRow:
         elif task.question:
             unit = getattr(task, "unit", "")
             self.answer = gui.add_text(f"answer {number}" + (f" ({unit})" if unit else ""), "",
-                                       hint="A number" + (f", in {unit}" if unit else "") + ".")
+                                       hint=f"One number, e.g. {EXAMPLE}" + (f", in {unit} (the unit may follow it)"
+                                                                         if unit else "") + ".")
         self.button = gui.add_button(f"Check task {number}")
         self.feedback = gui.add_markdown("\u2713 passed before." if passed_before else "")
 
