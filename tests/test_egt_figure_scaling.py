@@ -22,7 +22,7 @@ import egtviz.egt_figure as ef
 from egtviz.egt import eye, f_3Dframe, f_epipline, f_epipole, f_panproj, f_perspproj, f_Rt2H, f_scenepnt, rotoz
 from egtviz.egt_figure import _builder
 from egtviz.egt_figure._publisher import Publisher
-from egtviz.egt_figure._server import on_cell_end
+from egtviz.egt_figure._server import FigureServer, on_cell_end
 from egtviz.scene.limits import MAX_PLOT_ITEMS
 
 K = np.array([[500.0, 0.0, 320.0], [0.0, 500.0, 240.0], [0.0, 0.0, 1.0]])
@@ -172,6 +172,9 @@ class _CountingServer:
             time.sleep(self.cost)
             tab.append(scene)
 
+    def catch_up(self) -> None:
+        pass
+
     def stop(self) -> None:
         pass
 
@@ -253,6 +256,47 @@ def test_notebook_cells_flush_at_their_end():
     assert on_cell_end(callback, {"IPython": types.SimpleNamespace(get_ipython=lambda: shell)}) is True
     assert registered == [("post_run_cell", callback)]
     assert on_cell_end(callback, {}) is False
+
+
+class _FakeView:
+    def __init__(self, scene) -> None:
+        self.model = types.SimpleNamespace(scene=scene, load_scene=self.load)
+        self.loads = 0
+
+    def load(self, scene) -> None:
+        self.model.scene = scene
+        self.loads += 1
+
+
+def test_a_tab_that_opens_during_a_push_is_brought_up_to_date():
+    late: list[_FakeView] = []
+
+    def show_scene(scene):
+        for view in list(app.views.values()):
+            view.load(scene)
+        # A tab built on the scene before this push, registered after the loop above listed the tabs.
+        app.views[2] = late_view = _FakeView("old")
+        late.append(late_view)
+
+    app = types.SimpleNamespace(views={1: _FakeView("old")}, show_scene=show_scene)
+    server = FigureServer(viewer=(types.SimpleNamespace(get_port=lambda: 1), app))
+    server.show("new")
+    assert app.views[1].model.scene == "new" and late[0].model.scene == "old"
+    server.catch_up()
+    assert late[0].model.scene == "new" and late[0].loads == 1
+    server.catch_up()
+    assert app.views[1].loads == 1 and late[0].loads == 1  # each tab is given the scene once
+
+
+def test_the_publisher_settles_a_while_after_the_last_push():
+    settled = threading.Event()
+    publisher = Publisher(lambda state: None, coalesce=0.0, settle=settled.set)
+    try:
+        assert not settled.wait(0.2)  # nothing pushed yet: nothing to settle
+        publisher.submit(1)
+        assert settled.wait(5.0)
+    finally:
+        publisher.close()
 
 
 def test_real_tabs_get_few_pushes_and_end_with_the_last_state(monkeypatch):

@@ -100,7 +100,7 @@ def _publish(fig: Figure) -> None:
         return
     if _running is None:
         _running = FigureServer()
-        _publisher = Publisher(_running.show)
+        _publisher = Publisher(_running.show, settle=_running.catch_up)
         if in_jupyter():
             on_cell_end(lambda *_: flush())
         print(f"egtviz figure: {_running.url}", flush=True)
@@ -115,8 +115,12 @@ def _publish(fig: Figure) -> None:
 def flush(timeout: float | None = 30.0) -> bool:
     """Wait until every open tab shows the last drawing; True if it did within ``timeout`` seconds (or no
     server runs)."""
-    publisher = _publisher
-    return True if publisher is None else publisher.flush(timeout)
+    publisher, running = _publisher, _running
+    if publisher is None or running is None:
+        return True
+    done = publisher.flush(timeout)
+    running.catch_up()
+    return done
 
 
 @atexit.register

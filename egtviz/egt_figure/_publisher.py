@@ -6,6 +6,8 @@ way replace each other (the latest wins), so 300 drawings in a loop cost a handf
 number of tabs. Between two pushes the thread rests at least as long as the last push took: the script's own
 thread keeps at least half of the interpreter while tabs are open. :meth:`Publisher.flush` waits until the
 tabs show the last state (the end of a script, :func:`egtviz.egt_figure.show`, a notebook cell's end).
+A while after the last push the thread calls ``settle`` once (the figure server brings a tab that opened during
+a push up to date).
 """
 
 from __future__ import annotations
@@ -16,12 +18,14 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["COALESCE_SECONDS", "MAX_REST_SECONDS", "Publisher"]
+__all__ = ["COALESCE_SECONDS", "MAX_REST_SECONDS", "SETTLE_SECONDS", "Publisher"]
 
 #: How long the thread waits after the first new state before pushing, so a loop's drawings go out together.
 COALESCE_SECONDS = 0.05
 #: The longest rest between two pushes (a slow push with many tabs does not hold the next one back longer).
 MAX_REST_SECONDS = 1.0
+#: Seconds without a new state after a push before ``settle`` is called.
+SETTLE_SECONDS = 0.5
 
 
 class Publisher:
@@ -30,10 +34,14 @@ class Publisher:
     Args:
         show: pushes one state to every open tab (called in the publisher's thread only).
         coalesce: seconds to wait after a new state before pushing it (:data:`COALESCE_SECONDS`).
+        settle: called once in the publisher's thread when :data:`SETTLE_SECONDS` pass without a new state
+            after a push.
     """
 
-    def __init__(self, show: Callable[[Any], None], *, coalesce: float = COALESCE_SECONDS) -> None:
+    def __init__(self, show: Callable[[Any], None], *, coalesce: float = COALESCE_SECONDS,
+                 settle: Callable[[], None] | None = None) -> None:
         self._show = show
+        self._settle = settle
         self._coalesce = coalesce
         self._cond = threading.Condition()
         self._pending: Any = None
@@ -81,21 +89,25 @@ class Publisher:
         self._cond.wait_for(lambda: self._urgent or self._closing, seconds)
 
     def _run(self) -> None:
+        settled = True
         while True:
             with self._cond:
-                self._cond.wait_for(lambda: self._pending is not None or self._closing)
-                if self._pending is None:
+                arrived = self._cond.wait_for(lambda: self._pending is not None or self._closing,
+                                              None if settled or self._settle is None else SETTLE_SECONDS)
+                if self._closing and self._pending is None:
                     return
-                self._pause(self._coalesce)
-                state, number = self._pending, self._submitted
-                self._pending = None
-                self._urgent = False
+                if arrived:
+                    self._pause(self._coalesce)
+                    state, number = self._pending, self._submitted
+                    self._pending = None
+                    self._urgent = False
+            if not arrived:
+                settled = True
+                self._call(self._settle)
+                continue
+            settled = False
             start = time.perf_counter()
-            try:
-                self._show(state)
-            except Exception as exc:  # noqa: BLE001 - a tab that cannot be updated must not stop the figures
-                print(f"egtviz figure: the browser tabs were not updated ({type(exc).__name__}: {exc})",
-                      file=sys.stderr, flush=True)
+            self._call(self._show, state)
             elapsed = time.perf_counter() - start
             with self._cond:
                 self.pushes += 1
@@ -103,3 +115,12 @@ class Publisher:
                 self._cond.notify_all()
                 if self._pending is not None:
                     self._pause(min(elapsed, MAX_REST_SECONDS))
+
+    @staticmethod
+    def _call(fn: Callable[..., None] | None, *args: Any) -> None:
+        try:
+            if fn is not None:
+                fn(*args)
+        except Exception as exc:  # noqa: BLE001 - a tab that cannot be updated must not stop the figures
+            print(f"egtviz figure: the browser tabs were not updated ({type(exc).__name__}: {exc})",
+                  file=sys.stderr, flush=True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
+import threading
 from collections.abc import Mapping
 from typing import Any
 
@@ -68,15 +69,36 @@ class FigureServer:
     the scene last given to :meth:`show`.
     """
 
-    def __init__(self, port: int | None = None) -> None:
-        from ..viewer.cli import start
+    def __init__(self, port: int | None = None, *, viewer: tuple[Any, Any] | None = None) -> None:
+        """Start the viewer on ``port`` (None: :data:`FIRST_PORT` or the next free one); ``viewer``: an already
+        started ``(server, app)`` pair instead (tests)."""
+        if viewer is None:
+            from ..viewer.cli import start
 
-        self.server, self.app = start("127.0.0.1", FIRST_PORT if port is None else port)
+            viewer = start("127.0.0.1", FIRST_PORT if port is None else port)
+        self.server, self.app = viewer
         self.url = f"http://127.0.0.1:{self.server.get_port()}"
+        self._lock = threading.Lock()
+        self._latest: Any = None
+        self._given: set[int] = set()
+        """The tabs :meth:`show` gave the latest scene to (or that opened on it)."""
 
     def show(self, scene: Any) -> None:
         """Show ``scene`` in every open tab and in tabs opened later."""
-        self.app.show_scene(scene)
+        with self._lock:
+            given = set(self.app.views)  # before show_scene lists them: each of these is given the scene
+            self._latest = scene
+            self.app.show_scene(scene)
+            self._given = given
+
+    def catch_up(self) -> None:
+        """Give the latest scene to a tab that opened while :meth:`show` ran (it started on the scene before)."""
+        with self._lock:
+            for client_id, view in list(self.app.views.items()):
+                if client_id not in self._given:
+                    if self._latest is not None and view.model.scene is not self._latest:
+                        view.model.load_scene(self._latest)
+                    self._given.add(client_id)
 
     def stop(self) -> None:
         self.server.stop()

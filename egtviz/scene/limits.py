@@ -44,6 +44,7 @@ __all__ = [
     "PRINCIPAL_POINT",
     "SERVO_DEMO_STEPS",
     "SERVO_HEADLESS_STEPS",
+    "SERVO_SERVER_FRAMES",
     "SKEW",
     "SKEW_OVER_FOCAL",
     "SURFACE_SAMPLES",
@@ -201,6 +202,11 @@ SERVO_DEMO_STEPS = Range(1, 10_000, "", integer=True)
 times fewer than :data:`SERVO_HEADLESS_STEPS` because the server derives every frame's geometry and keeps it
 for playback, per tab, in the one process every tab shares (about 17 kB a frame for the panoramic demo's sampled
 bi-conics: 170 MB at this bound)."""
+SERVO_SERVER_FRAMES = 20_000
+"""Frames of servo runs all tabs of one server keep together for playback (two runs of
+:data:`SERVO_DEMO_STEPS`' bound, or dozens of the demos' default runs, which converge in a few hundred steps). A run
+reserves ``steps + 1`` frames when it starts and keeps the frames it has once drawn; a run that does not fit is
+refused in its tab with a notification naming how many other runs hold the budget (``egtviz.viewer.servo_budget``)."""
 
 # -- lesson files (egtviz.lessons) --------------------------------------------------------------------
 

@@ -51,6 +51,7 @@ from .fields import (
     parse_numbers,
 )
 from .palette import hex_to_rgb, point_colour
+from .servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy, notify_busy
 from .servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
 
 __all__ = ["FIELD_DELAY", "PANEL_WIDTH", "RUN_RULES", "SPEEDS", "ServoPlayer"]
@@ -130,6 +131,7 @@ class ServoPlayer(ABC):
         on_back: Callable[[], None] | None = None,
         show_panel: bool = True,
         field_delay: float = FIELD_DELAY,
+        budget: ServoBudget | None = None,
         **params: Any,
     ) -> None:
         given = {"seed": seed, "noise_px": noise_px, "steps": self.DEFAULT_STEPS if steps is None else steps,
@@ -148,6 +150,8 @@ class ServoPlayer(ABC):
         self._play_thread: threading.Thread | None = None
         self._listeners: list[Callable[[ServoResult], None]] = []
         self._on_back = on_back
+        #: The server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo_budget`).
+        self.budget = SERVER_BUDGET if budget is None else budget
         #: The last finished run (``None`` before the first one or after a failed one).
         self.result: ServoResult | None = None
         #: Its per-frame geometry.
@@ -453,11 +457,17 @@ class ServoPlayer(ABC):
         with self.lock:
             if self._closed.is_set() or self.running:
                 return False
+            kw = self.params()
+            try:
+                self.budget.reserve(self, int(kw["steps"]) + 1)
+            except ServoBusy as exc:
+                self.status.content = self._status_html("warn", str(exc))
+                notify_busy(self.client, exc)
+                return False
             self.pause()
             self.running = True
             self._sim_gen += 1
             gen = self._sim_gen
-            kw = self.params()
             self.btn_run.disabled = True
             self.progress.value = 0.0
             self.progress.visible = True
@@ -534,6 +544,7 @@ class ServoPlayer(ABC):
             if self._closed.is_set():
                 return
             self._closed.set()
+            self.budget.release(self)
             self._typing.close()
             self._play_gen += 1
             self._sim_gen += 1
@@ -583,6 +594,7 @@ class ServoPlayer(ABC):
                 self.btn_run.disabled = False
                 self.progress.visible = False
                 if error:
+                    self.budget.release(self)
                     self.error = error
                     self.result = None
                     self.frames = None
@@ -591,6 +603,7 @@ class ServoPlayer(ABC):
                 else:
                     self.error = ""
                     self.result, self.frames = result, frames
+                    self.budget.shrink(self, result.n_samples)
                     self._install_result()
             if error:
                 try:

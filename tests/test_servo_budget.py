@@ -1,0 +1,130 @@
+"""The server's budget of servo-run frames (egtviz.viewer.servo_budget) and the demos that reserve from it.
+
+Demos run on a real viser server with websocket stand-ins (FakeTab) as tabs; a small budget stands for the
+server's (the same code, fewer frames), so runs of a few dozen steps fill it.
+"""
+
+from __future__ import annotations
+
+import gc
+import re
+import time
+
+import pytest
+import viser
+
+from egtviz.scene.limits import SERVO_DEMO_STEPS, SERVO_SERVER_FRAMES
+from egtviz.viewer.headless import FakeTab
+from egtviz.viewer.servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy
+from egtviz.viewer.servo_demo import make_servo_demo
+
+STEPS = 40
+"""Steps of the test runs: too few for the pin-hole demo to converge, so each run has STEPS + 1 frames."""
+
+
+@pytest.fixture(scope="module")
+def clients():
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    got = []
+    server.on_client_connect(got.append)
+    tabs = [FakeTab(server.get_port()) for _ in range(3)]
+    deadline = time.time() + 10
+    while len(got) < 3 and time.time() < deadline:
+        time.sleep(0.02)
+    assert len(got) == 3
+    yield got
+    for tab in tabs:
+        tab.close()
+    server.stop()
+
+
+@pytest.fixture
+def notes(clients, monkeypatch):
+    got: dict[int, list[tuple[str, str]]] = {i: [] for i in range(len(clients))}
+    for i, client in enumerate(clients):
+        monkeypatch.setattr(client, "add_notification",
+                            lambda title, body, _i=i, **kw: got[_i].append((title, body)))
+    return got
+
+
+def test_the_budget_refuses_what_does_not_fit_and_frees_on_release():
+    budget = ServoBudget(frames=100)
+    a, b, c = object.__new__(type("A", (), {})), object.__new__(type("B", (), {})), object.__new__(type("C", (), {}))
+    budget.reserve(a, 60)
+    budget.reserve(b, 40)
+    with pytest.raises(ServoBusy, match=r"busy with 2 other servo runs \(100 of its 100 frames\); this run needs "
+                                        r"up to 1\. Try again in a moment"):
+        budget.reserve(c, 1)
+    assert budget.held(c) == 0 and budget.held() == 100  # a refusal changes nothing
+    budget.reserve(a, 30)  # a's next run replaces its last one
+    budget.reserve(c, 30)
+    with pytest.raises(ServoBusy, match="busy with 2 other servo runs"):
+        budget.reserve(b, 41)  # b's own 40 count as free for its next run, a's and c's 60 do not
+    budget.shrink(b, 10)
+    budget.shrink(b, 99)  # never grows
+    assert budget.held(b) == 10 and budget.held() == 70
+    budget.release(a)
+    budget.release(a)
+    assert budget.held() == 40
+    del c
+    gc.collect()
+    assert budget.held() == 10  # an owner that is garbage holds nothing
+
+
+def test_the_server_budget_is_the_named_limit():
+    assert SERVER_BUDGET.frames == SERVO_SERVER_FRAMES == 2 * SERVO_DEMO_STEPS.high
+
+
+def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another_closes(clients, notes):
+    budget = ServoBudget(frames=2 * (STEPS + 1))
+    demos = []
+    try:
+        for client in clients[:2]:
+            demo = make_servo_demo(client, "pinhole", steps=STEPS, autoplay=False, budget=budget)
+            demos.append(demo)
+            assert demo.wait(60) and demo.result is not None and demo.result.n_samples == STEPS + 1
+        third = make_servo_demo(clients[2], "pinhole", steps=STEPS, autoplay=False, budget=budget)
+        demos.append(third)
+        assert not third.running and third.result is None  # refused: nothing simulated
+        assert notes[2] == [("Server busy", notes[2][0][1])]
+        assert re.search(r"busy with 2 other servo runs .*Try again in a moment", notes[2][0][1])
+        assert "busy with 2 other servo runs" in third.status.content
+        assert notes[0] == notes[1] == []  # the other tabs are not told anything
+        assert budget.held() == 2 * (STEPS + 1)
+        demos[0].close()  # a tab closes: its frames are free
+        assert budget.held() == STEPS + 1
+        assert third.run(wait=True) and third.result is not None and third.result.n_samples == STEPS + 1
+        assert budget.held() == 2 * (STEPS + 1)
+    finally:
+        for demo in demos:
+            demo.close()
+    assert budget.held() == 0
+
+
+def test_a_run_replaced_by_a_shorter_one_or_failing_frees_its_frames(clients, notes, monkeypatch):
+    from egtviz.viewer import servo_pinhole_demo
+
+    budget = ServoBudget(frames=STEPS + 1)
+    demo = make_servo_demo(clients[0], "pinhole", steps=STEPS, autoplay=False, budget=budget)
+    try:
+        assert demo.wait(60) and budget.held(demo) == STEPS + 1
+        demo.set_params(steps=10)
+        assert demo.run(wait=True) and budget.held(demo) == 11  # the new run replaced the old one's frames
+
+        def refuse(**kw):
+            raise ValueError("the simulation refused it")
+
+        monkeypatch.setattr(servo_pinhole_demo, "simulate_pinhole", refuse)
+        assert demo.run(wait=True) and demo.result is None and budget.held(demo) == 0
+    finally:
+        demo.close()
+
+
+def test_a_converged_run_keeps_only_the_frames_it_has(clients):
+    budget = ServoBudget(frames=SERVO_DEMO_STEPS.high + 1)
+    demo = make_servo_demo(clients[0], "pinhole", steps=SERVO_DEMO_STEPS.high, autoplay=False, budget=budget)
+    try:
+        assert demo.wait(120) and demo.result is not None and demo.result.converged
+        assert budget.held(demo) == demo.result.n_samples < SERVO_DEMO_STEPS.high
+    finally:
+        demo.close()
