@@ -128,3 +128,23 @@ def test_a_converged_run_keeps_only_the_frames_it_has(clients):
         assert budget.held(demo) == demo.result.n_samples < SERVO_DEMO_STEPS.high
     finally:
         demo.close()
+
+
+def test_the_lessons_measured_runs_are_cached_within_the_frame_budget(monkeypatch):
+    from egtviz.lessons import servo_runs
+
+    simulated = []
+    real = servo_runs.simulate_pinhole
+    monkeypatch.setattr(servo_runs, "simulate_pinhole", lambda **kw: simulated.append(kw["seed"]) or real(**kw))
+    monkeypatch.setattr(servo_runs, "_RUNS", servo_runs._RunCache(samples=2 * (STEPS + 1)))
+    runs = [servo_runs.DemoRun("pinhole", (("seed", seed), ("steps", STEPS))) for seed in range(3)]
+    first = servo_runs.simulate(runs[0])
+    assert servo_runs.simulate(runs[0]) is first and simulated == [0]  # cached
+    servo_runs.simulate(runs[1])
+    servo_runs.simulate(runs[2])  # three runs do not fit: the oldest is dropped
+    assert simulated == [0, 1, 2]
+    again = servo_runs.simulate(runs[0])
+    assert simulated == [0, 1, 2, 0] and again is not first
+    assert again.time.tolist() == first.time.tolist()  # simulated again, the same run
+    servo_runs.simulate(runs[2])
+    assert simulated == [0, 1, 2, 0]  # the newest are kept

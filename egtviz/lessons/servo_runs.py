@@ -23,14 +23,15 @@ The measures (:data:`MEASURES`), each in the unit the demo's read-out shows:
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-from ..scene.limits import SERVO_DEMO_STEPS, Range
+from ..scene.limits import SERVO_DEMO_STEPS, SERVO_SERVER_FRAMES, Range
 from ..servo import ServoResult, simulate_panoramic, simulate_pinhole
 from ..servo.pinhole_arm import ESTIMATOR_NAMES
 from . import fields
@@ -109,13 +110,52 @@ def parse_run_fields(table: dict, demo: str) -> tuple[tuple[str, Any], ...]:
     return tuple(sorted(out.items()))
 
 
-@lru_cache(maxsize=16)
+class _RunCache:
+    """The newest runs simulated, at most ``samples`` samples in all (a 10,000-step run is about 8 MB)."""
+
+    def __init__(self, samples: int) -> None:
+        self.samples = samples
+        self._runs: OrderedDict[DemoRun, ServoResult] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, run: DemoRun) -> ServoResult | None:
+        with self._lock:
+            result = self._runs.get(run)
+            if result is not None:
+                self._runs.move_to_end(run)
+            return result
+
+    def put(self, run: DemoRun, result: ServoResult) -> None:
+        with self._lock:
+            self._runs[run] = result
+            self._runs.move_to_end(run)
+            while len(self._runs) > 1 and sum(r.n_samples for r in self._runs.values()) > self.samples:
+                self._runs.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._runs.clear()
+
+
+_RUNS = _RunCache(SERVO_SERVER_FRAMES)
+
+
 def simulate(run: DemoRun) -> ServoResult:
-    """The run the demo shows for ``run`` (deterministic: the same keywords give the same result; cached)."""
+    """The run the demo shows for ``run`` (deterministic: the same keywords give the same result).
+
+    The newest runs are kept, at most :data:`~egtviz.scene.limits.SERVO_SERVER_FRAMES` samples in all (the
+    demos' frame budget): a run dropped from the cache is simulated again. ``simulate.cache_clear()`` empties it.
+    """
+    cached = _RUNS.get(run)
+    if cached is not None:
+        return cached
     kwargs = run.simulation_kwargs()
-    if run.demo == "pinhole":
-        return simulate_pinhole(**kwargs)
-    return simulate_panoramic(**kwargs)
+    result = simulate_pinhole(**kwargs) if run.demo == "pinhole" else simulate_panoramic(**kwargs)
+    _RUNS.put(run, result)
+    return result
+
+
+simulate.cache_clear = _RUNS.clear  # type: ignore[attr-defined]  # as functools' caches offer
 
 
 def _first_time(result: ServoResult, below: np.ndarray) -> float:
