@@ -184,6 +184,15 @@ def test_a_data_folder_that_is_a_file_is_named(tmp_path, monkeypatch):
     assert target.read_text() == "my notes" and sorted(tmp_path.iterdir()) == [target]
 
 
+def test_a_data_folder_below_a_file_is_named(tmp_path, monkeypatch):
+    target = tmp_path / "notes.txt"
+    target.write_text("my notes")
+    monkeypatch.setenv("EGTVIZ_DATA_DIR", str(target / "egtviz"))
+    store = ProgressStore()
+    assert store.fault == f"the data folder {target / 'egtviz'} cannot be made (a part of its path is a file)"
+    assert target.read_text() == "my notes"
+
+
 def fill_to_the_brim(path: Path) -> None:
     """Fill the task table's page so that one more row of a real learner needs a new page (with the page count
     capped: SQLITE_FULL, a full disk)."""

@@ -190,6 +190,8 @@ def _file_problem(path: Path) -> str | None:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
         return None
+    except NotADirectoryError as exc:
+        raise _Unusable(f"the data folder {_shown(folder)} cannot be made (a part of its path is a file)") from exc
     except OSError as exc:
         raise _Unusable(f"{_shown(path)} cannot be read ({exc.strerror})") from exc
     for test, kind in _FILE_KINDS:
@@ -208,6 +210,9 @@ def _read_only(path: Path) -> sqlite3.Connection:
     try:
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    except sqlite3.OperationalError as exc:  # locked by another program, or not readable: not a wrong file
+        conn.close()
+        raise _Unusable(f"{_shown(path)} cannot be read ({exc})") from exc
     except sqlite3.DatabaseError as exc:
         conn.close()
         raise _Unusable(f"{_shown(path)} is not a progress database ({exc})") from exc

@@ -51,7 +51,7 @@ from ..lessons.tasks import RESET_ADVICE
 from ..scene import SceneError
 from .camera_fields import field_of_spec
 from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
-from .progress_notice import progress_notice_html
+from .progress_notice import progress_notice_html, show_name_in_use
 
 __all__ = [
     "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "lock_refusal",
@@ -483,7 +483,7 @@ class LessonPanel:
         try:
             key = typed_learner_key(name)
         except FieldError:
-            self.learner.value = self.run.learner
+            show_name_in_use(self.learner, self.run.learner)
             raise
         if key == self.run.learner:
             return

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from html import escape
+from typing import Any
 
-__all__ = ["progress_notice_html"]
+__all__ = ["progress_notice_html", "show_name_in_use"]
 
 
 def progress_notice_html(problem: str | None) -> str:
@@ -14,3 +15,13 @@ def progress_notice_html(problem: str | None) -> str:
         return ""
     return ('<div style="font-size:0.85em;padding:0.3em 0.6em;margin:0.2em 0;background:#fff4d6;'
             f'border-left:3px solid #c98a00" data-egtviz="progress-notice">{escape(problem)}</div>')
+
+
+def show_name_in_use(field: Any, name: str) -> None:
+    """After a refused name: ``field`` (a *your name* text field) shows the name still in use, not the refused
+    text (the notification says why it was refused). A field a raw client gave a value of another type (a
+    number) cannot hold text again: it is left as it is."""
+    try:
+        field.value = name
+    except (TypeError, ValueError):
+        pass

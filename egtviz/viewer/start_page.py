@@ -24,7 +24,7 @@ from ..lessons.progress import LessonProgress
 from ..scene import SceneModel
 from .fields import Debouncer, FieldError, on_event
 from .lesson_view import LESSON_ORDER, LessonPanel, typed_learner_key
-from .progress_notice import progress_notice_html
+from .progress_notice import progress_notice_html, show_name_in_use
 
 __all__ = ["Course", "LessonStatus", "StartPage", "course_statuses", "lesson_status"]
 
@@ -149,7 +149,7 @@ class StartPage:
         try:
             key = typed_learner_key(name)
         except FieldError:
-            self.name.value = self.learner  # the field shows the name in use, the notification why
+            show_name_in_use(self.name, self.learner)
             raise
         if key != self.learner:
             self.learner = key
