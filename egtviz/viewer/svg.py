@@ -36,11 +36,17 @@ Testability contract (the browser tests rely on it):
   ``epipolar-line`` (with ``data-index``, one per drawn line),
   ``epipolar-conic`` (with ``data-index``; a conic may have several pieces),
   ``rim``, ``horizon`` (a camera's horizon, one polyline per arc), ``message``,
-  ``hidden-count``, ``numbering-note``;
+  ``hidden-count``, ``numbering-note``, ``crowded-note`` (with ``data-unnumbered``:
+  how many point numbers found no free place and are not drawn), ``label-leader``
+  (with ``data-index``: a line from a point number's box to its point);
 * every text that labels a mark (point numbers, epipole labels) is placed by
   :func:`~egtviz.viewer.panel_view.place_labels` clear of the marks, arrows and
   other labels, and carries ``data-box="x0 y0 x1 y1"``: the box it was placed
-  in (image pixels).
+  in (image pixels);
+* a point number is never free-floating: its box is within ``NUMBER_NEAR`` times
+  (its mark's radius plus the gap, ``0.3 * label_px``) of its point, or a
+  ``label-leader`` in its point's group ends at the point's centre, or it is not
+  drawn and counted in the ``crowded-note``.
 
 Point labels are 1-based, like EGT's ``f_3Dwfenum``; ``data-index`` is 0-based.
 Above ``MAX_NUMBERED_POINTS`` points in an image only the selected and
@@ -66,6 +72,12 @@ __all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "empty_svg", "image
 
 #: Above this many points in an image only the selected and highlighted points are numbered (more are unreadable).
 MAX_NUMBERED_POINTS = 40
+
+#: A point number whose box is farther from its point than this many times the mark's radius plus the gap gets a
+#: leader line (the nearest candidate boxes lie within sqrt 2 of it, the next ring at twice that).
+NUMBER_NEAR = 1.5
+#: ... and so does one with another point less than this many times as far from its box as its own point.
+NUMBER_CLEAR = 1.25
 
 #: Most conic vertices drawn in one panel (200 conics x 129 samples would be ~260 kB of SVG per update).
 CONIC_VERTEX_BUDGET = 10_000
@@ -464,6 +476,55 @@ def _label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> 
             f'data-box="{_f(x0)} {_f(y0)} {_f(x1)} {_f(y1)}"{attrs}>{text}</text>')
 
 
+def _number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
+                  obstacles: np.ndarray, shown: np.ndarray) -> tuple[list[bool], list[bool]]:
+    """Which placed point numbers are drawn, and which of those need a leader line to their point.
+
+    A number whose box still overlaps a mark, an arrow or an earlier drawn label (the placement found no free
+    box: a crowd) is not drawn; the panel says how many. A drawn number farther from its point than
+    ``NUMBER_NEAR`` times the mark's reach (radius + gap; the first ring of candidates is within sqrt 2 of it),
+    or with another point less than ``NUMBER_CLEAR`` times as far from it as its own, gets a leader line.
+
+    Args:
+        boxes: (n, 4) the placed boxes: first ``n_first`` epipole labels (always drawn), then the numbers.
+        n_first: how many leading boxes are epipole labels.
+        anchors: (n, 2) the marks' centres.
+        reach: (n,) each mark's radius plus the placement gap.
+        obstacles: (m, 4) the marks' and arrows' boxes.
+        shown: (k, 2) every drawn point.
+    """
+    keep: list[bool] = []
+    far: list[bool] = []
+    B = boxes[n_first:]
+    if len(B) == 0:
+        return keep, far
+    tiny = 1e-6 * (B[:, 2] - B[:, 0]) * (B[:, 3] - B[:, 1])  # rounding, not an overlap
+    if len(obstacles):
+        ow = np.minimum(B[:, None, 2], obstacles[None, :, 2]) - np.maximum(B[:, None, 0], obstacles[None, :, 0])
+        oh = np.minimum(B[:, None, 3], obstacles[None, :, 3]) - np.maximum(B[:, None, 1], obstacles[None, :, 1])
+        blocked = ((ow > 0) & (oh > 0) & (ow * oh > tiny[:, None])).any(axis=1).tolist()
+    else:
+        blocked = [False] * len(B)
+    drawn = [tuple(b) for b in boxes[:n_first].tolist()]
+    for j, (x0, y0, x1, y1), t, hit in zip(range(n_first, len(boxes)), B.tolist(), tiny.tolist(), blocked):
+        hit = hit or any((w := min(x1, o[2]) - max(x0, o[0])) > 0 and (h := min(y1, o[3]) - max(y0, o[1])) > 0
+                         and w * h > t for o in drawn)
+        keep.append(not hit)
+        if hit:
+            far.append(False)
+            continue
+        drawn.append((x0, y0, x1, y1))
+        ax, ay = anchors[j].tolist()
+        own = math.hypot(max(x0 - ax, 0.0, ax - x1), max(y0 - ay, 0.0, ay - y1))
+        dx = np.maximum(np.maximum(x0 - shown[:, 0], shown[:, 0] - x1), 0.0)
+        dy = np.maximum(np.maximum(y0 - shown[:, 1], shown[:, 1] - y1), 0.0)
+        d = np.hypot(dx, dy)
+        others = d[(shown[:, 0] != ax) | (shown[:, 1] != ay)]
+        far.append(own > NUMBER_NEAR * float(reach[j])
+                   or bool(len(others)) and float(others.min()) < NUMBER_CLEAR * own)
+    return keep, far
+
+
 @dataclass(frozen=True)
 class _EpipoleLabel:
     """An epipole's label to place: its anchor (the cross, or the arrow's tail) and what to keep clear."""
@@ -516,9 +577,14 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     radii = [e.radius for e in epipoles] + [ring_r if i in marked else r_pt for i in numbered]
     sizes = ([(_text_px(e.text, style.label_px) * k + halo, 0.95 * size + halo) for e in epipoles]
              + [(_text_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in numbered])
-    boxes = place_labels(anchors, radii, sizes, O, bounds, gap=0.3 * size) if anchors else np.zeros((0, 4))
+    gap = 0.3 * size
+    boxes = place_labels(anchors, radii, sizes, O, bounds, gap=gap) if anchors else np.zeros((0, 4))
     ep_boxes = tuple(tuple(b) for b in boxes[: len(epipoles)])
-    label_of = dict(zip(numbered, boxes[len(epipoles):]))
+    keep, far = _number_fates(boxes, len(epipoles), np.asarray(anchors, float).reshape(-1, 2),
+                              np.asarray(radii, float) + gap, O, shown)
+    label_of = {i: b for i, b, ok in zip(numbered, boxes[len(epipoles):], keep) if ok}
+    leader_of = {i: b for i, b, ok, f in zip(numbered, boxes[len(epipoles):], keep, far) if ok and f}
+    n_unnumbered = len(numbered) - len(label_of)
     disc = f'" r="{_f(r_pt)}" fill="'
     halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}"'
     rows = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
@@ -539,15 +605,21 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
         if i in marked:
             ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(ring_r)}" fill="none" stroke="{style.ink}" '
                     f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if i == selected_point else "false"}"/>')
-        label = ""
+        label = leader = ""
         if i in label_of:
             label = _label_text(label_of[i], size, str(i + 1), halo_attr, x)
-        group = (f'<g data-kind="{kind}" data-index="{i}">{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
+        if i in leader_of:
+            # From the box's nearest point to the disc's centre, under the disc: it ends at the point.
+            x0, y0, x1, y1 = (float(b) for b in leader_of[i])
+            lx, ly = min(max(x, x0), x1), min(max(y, y0), y1)
+            leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{_f(lx)}" y1="{_f(ly)}" x2="{c % x}" '
+                      f'y2="{c % y}" stroke="{style.ink}" stroke-width="{_f(lw * 0.6)}"/>')
+        group = (f'<g data-kind="{kind}" data-index="{i}">{leader}{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
                  f'{stroke}/>{label}</g>')
         rows[row] = (group, "", "", "", "", "", "")
     body = (f'<g stroke="{style.ink}" stroke-width="{_f(lw * 0.5)}" font-size="{_f(size)}" font-weight="bold" '
             f'fill="{style.ink}" paint-order="stroke">{"".join(rows.ravel().tolist())}</g>')
-    return body, ep_boxes
+    return body, ep_boxes, n_unnumbered
 
 
 @lru_cache(maxsize=16)
@@ -809,9 +881,12 @@ def image_plane_svg(
             ep_marks.append((ep, where, "arrow", f'<g data-kind="epipole-arrow">{svg}</g>'))
 
     in_view = np.ascontiguousarray(view.contains(P))
-    points_svg, ep_boxes = _marks(P.tobytes(), in_image.tobytes(), in_view.tobytes(), selected_point,
-                                  frozenset(highlighted), show_labels, style, k, dp,
-                                  (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
+    points_svg, ep_boxes, n_unnumbered = _marks(P.tobytes(), in_image.tobytes(), in_view.tobytes(), selected_point,
+                                                frozenset(highlighted), show_labels, style, k, dp,
+                                                (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
+    if n_unnumbered:  # one more status row (the scale, and so every size drawn so far, does not depend on the rows)
+        lay = panel_layout(view, style, panel_px, len(lay.rows_y) + 1)
+        out[0] = _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height)
     out.append(points_svg)
     out.append("</g>")  # end of clipped group
 
@@ -841,6 +916,13 @@ def image_plane_svg(
             f'<text data-kind="numbering-note" x="{_f(view.u1)}" y="{_f(next(row))}" text-anchor="end" '
             f'font-size="{_f(st)}" fill="{style.ink}">numbers: selected point only '
             f"(over {MAX_NUMBERED_POINTS} points)</text>"
+        )
+    if n_unnumbered:
+        what = "number" if n_unnumbered == 1 else "numbers"
+        out.append(
+            f'<text data-kind="crowded-note" data-unnumbered="{n_unnumbered}" x="{_f(view.u1)}" '
+            f'y="{_f(lay.rows_y[-1])}" text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">'
+            f"{n_unnumbered} point {what} not shown (crowded: zoom in)</text>"
         )
     if plane.message:
         cu, cv = view.centre
