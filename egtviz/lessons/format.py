@@ -155,16 +155,18 @@ def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: fr
         raise LessonError(source, line, f"not valid TOML: {reason}") from None
     except RecursionError:
         raise LessonError(source, 1, "not valid TOML: nested too deeply") from None
-    return _Reader(source, name, toml_locator(text), known_lessons, LessonImages(folder)).lesson(doc)
+    reader = _Reader(source, name, toml_locator(text), known_lessons, LessonImages(folder), text.splitlines())
+    return reader.lesson(doc)
 
 
 class _Reader:
     """Turns the parsed TOML into a :class:`Lesson`, every error located."""
 
     def __init__(self, source: str, name: str, where: Locator, known: frozenset[str] | None,
-                 images: LessonImages) -> None:
+                 images: LessonImages, lines: list[str]) -> None:
         self.source = source
         self.images = images
+        self.lines = lines
         self.name = name
         self.where = where
         self.known = known
@@ -232,10 +234,19 @@ class _Reader:
         try:
             html = render_markdown(text, self.images.data_url)
         except MarkupError as exc:
-            raise self.error(at + ("text",), f"steps[{i}].text: {exc}") from None
+            raise LessonError(self.source, self.text_line(at, text, exc.offset), f"steps[{i}].text: {exc}") from None
         changes = self.changes(at, data.get("changes", []), model)
         tasks = self.tasks(at, data.get("tasks", []), model)
         return Step(title, text, html, changes, tasks)
+
+    def text_line(self, at: tuple, text: str, offset: int) -> int:
+        """The line of character ``offset`` of a step's ``text``: counted from its key in a multi-line string."""
+        line = self.where.line(*at, "text")
+        value = self.lines[line - 1].partition("=")[2].strip() if line <= len(self.lines) else ""
+        if value[:3] not in ('"""', "'''"):
+            return line
+        first = line + 1 if value == value[:3] else line  # TOML drops a newline right after the opening quotes
+        return first + text.count("\n", 0, offset)
 
     def changes(self, at: tuple, value: object, model: SceneModel) -> tuple[Change, ...]:
         if not isinstance(value, list) or len(value) > MAX_CHANGES:

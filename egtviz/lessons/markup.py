@@ -30,6 +30,8 @@ from collections.abc import Callable
 
 from latex2mathml.converter import convert
 
+from ..files import printable
+
 __all__ = ["ImageSource", "MarkupError", "formula_to_mathml", "render_markdown"]
 
 ImageSource = Callable[[str], str]
@@ -155,7 +157,7 @@ def formula_to_mathml(latex: str, *, display: bool, offset: int = 0) -> str:
             not know or a fraction, script or root without one of its parts, or produces markup outside the
             MathML allow-list. The message always says why.
     """
-    shown = repr(latex[:40])
+    shown = f"'{printable(latex[:40])}'"  # as written: repr() would double every backslash
     unbalanced = _unbalanced(latex)
     if unbalanced:
         raise MarkupError(offset, f"cannot render the formula {shown}: {unbalanced}")
