@@ -23,8 +23,10 @@ def _add_bench(subparsers) -> None:
         help="measure speed and print a table (ours vs OpenCV where it has the same function)",
         description="Time the numeric core, the viewer's update path or the servo simulations; prints medians.",
     )
-    p.add_argument("suite", nargs="?", default="all", choices=["core", "viewer", "servo", "classroom", "all"],
-                   help="what to measure (default all; classroom: many tabs on one server, not in all)")
+    p.add_argument("suite", nargs="?", default="all",
+                   choices=["core", "viewer", "servo", "classroom", "figures", "all"],
+                   help="what to measure (default all; classroom: many tabs on one server, figures: EGT's plots "
+                        "and drawing loops with tabs open, neither in all)")
     p.add_argument("--repeats", type=whole_number_in(1, 10_000), default=20,
                    help="timed repetitions per case, 1..10000 (median is reported; default 20)")
 

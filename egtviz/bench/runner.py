@@ -21,6 +21,10 @@ def _suites(name: str, repeats: int):
         from .servo import run_servo_bench
 
         yield "servo", run_servo_bench
+    if name == "figures":  # EGT's figures: plots at up to a million points, drawing loops with tabs open
+        from .figures import run_figures_bench
+
+        yield "figures", run_figures_bench
 
 
 def format_table(rows: list[dict]) -> str:

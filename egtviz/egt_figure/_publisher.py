@@ -3,11 +3,11 @@
 A drawing call only records the figure's state (an immutable :class:`~egtviz.scene.Scene`) and returns; the
 publisher's thread shows the newest recorded state in every open tab. States recorded while a push is under
 way replace each other (the latest wins), so 300 drawings in a loop cost a handful of pushes whatever the
-number of tabs. Between two pushes the thread rests at least as long as the last push took: the script's own
-thread keeps at least half of the interpreter while tabs are open. :meth:`Publisher.flush` waits until the
-tabs show the last state (the end of a script, :func:`egtviz.egt_figure.show`, a notebook cell's end).
-A while after the last push the thread calls ``settle`` once (the figure server brings a tab that opened during
-a push up to date).
+number of tabs. Between two pushes of a burst the thread rests :data:`REST_PER_PUSH` times as long as the last
+push took: the script's own thread keeps most of the interpreter while tabs are open. :meth:`Publisher.flush`
+waits until the tabs show the last state (the end of a script, :func:`egtviz.egt_figure.show`, a notebook
+cell's end). A while after the last push the thread calls ``settle`` once (the figure server brings a tab that
+opened during a push up to date).
 """
 
 from __future__ import annotations
@@ -18,12 +18,16 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["COALESCE_SECONDS", "MAX_REST_SECONDS", "SETTLE_SECONDS", "Publisher"]
+__all__ = ["COALESCE_SECONDS", "MAX_REST_SECONDS", "REST_PER_PUSH", "SETTLE_SECONDS", "Publisher"]
 
 #: How long the thread waits after the first new state before pushing, so a loop's drawings go out together.
 COALESCE_SECONDS = 0.05
+#: Rest between two pushes of a burst, in multiples of the last push's time: the push shares the interpreter
+#: with the script while it runs, so the script keeps at least ``(1 + REST_PER_PUSH / 2) / (1 + REST_PER_PUSH)``
+#: of it (5/6 with 2).
+REST_PER_PUSH = 2.0
 #: The longest rest between two pushes (a slow push with many tabs does not hold the next one back longer).
-MAX_REST_SECONDS = 1.0
+MAX_REST_SECONDS = 2.0
 #: Seconds without a new state after a push before ``settle`` is called.
 SETTLE_SECONDS = 0.5
 
@@ -114,7 +118,7 @@ class Publisher:
                 self._shown = max(self._shown, number)
                 self._cond.notify_all()
                 if self._pending is not None:
-                    self._pause(min(elapsed, MAX_REST_SECONDS))
+                    self._pause(min(REST_PER_PUSH * elapsed, MAX_REST_SECONDS))
 
     @staticmethod
     def _call(fn: Callable[..., None] | None, *args: Any) -> None:
