@@ -167,8 +167,9 @@ def test_an_unknown_built_in_scene_is_refused():
         ('within_px = 3', 'within_px = 3\nwithin_deg = 3', "within_deg", "within_deg: unknown key for a 'epipole_near'"),
         ('prompt = "Put e1 at ({u}, {v})."', 'prompt = "Put e1 at ({u.__class__})."', "prompt =", "placeholder {u.__class__}"),
         ('prompt = "Put e1 at ({u}, {v})."', 'prompt = "Put e1 at ({w})."', "prompt =", "placeholder {w}: expected one of {u}, {v}"),
-        ("The constraint $m_2^T F m_1 = 0$.", "The constraint $\\nonsense x$.", "text = '''", "unknown LaTeX command"),
-        ("The constraint $m_2^T F m_1 = 0$.", "It costs $5.", "text = '''", "never closed"),
+        # A formula is refused at its own line inside a multi-line text, not at the text's key.
+        ("The constraint $m_2^T F m_1 = 0$.", "The constraint $\\nonsense x$.", "nonsense", "unknown LaTeX command"),
+        ("The constraint $m_2^T F m_1 = 0$.", "It costs $5.", "It costs", "never closed"),
     ],
 )
 def test_unknown_keys_kinds_placeholders_and_formulas_are_refused_at_their_line(old, new, fragment, words):
