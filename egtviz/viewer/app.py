@@ -57,6 +57,7 @@ from ..scene import (
     scene_to_bytes,
 )
 from ..scene.derived import shown_value
+from ..scene.shown_numbers import format_value, format_vector
 from ..scene.specs import OutOfRangeError, model_choices
 from .camera_fields import CameraField, camera_fields
 from .fields import (
@@ -110,7 +111,8 @@ def _fmt_matrix(M: np.ndarray) -> str:
     """A matrix's rows; an entry below ``ZERO_FRACTION`` of the matrix's norm is rounding and shown as 0."""
     M = np.asarray(M, float)
     norm = float(np.linalg.norm(M))
-    rows = ["  ".join(" 0" if shown_value(v, norm) == 0.0 else f"{v: .4e}" for v in row) for row in M.tolist()]
+    rows = ["  ".join(" 0" if shown_value(v, norm) == 0.0 else format_value(v, " .4e") for v in row)
+            for row in M.tolist()]
     return "\n".join(rows)
 
 
@@ -119,8 +121,8 @@ def _fmt_vec(v: np.ndarray | None) -> str:
         return "-"
     v = np.asarray(v, float)
     if abs(v[2]) < 1e-12:
-        return f"({v[0]:.3g}, {v[1]:.3g}, 0) (at infinity)"
-    return f"({v[0] / v[2]:.1f}, {v[1] / v[2]:.1f}) px"
+        return f"({format_vector(v[:2], '.3g')}, 0) (at infinity)"
+    return f"({format_vector(v[:2] / v[2], '.1f')}) px"
 
 
 def pair_html(derived: Any) -> str:

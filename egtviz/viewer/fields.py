@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..scene import SceneError
-from ..scene.derived import shown_value
+from ..scene.shown_numbers import shown_components
 
 __all__ = [
     "FieldError",
@@ -110,9 +110,7 @@ def format_number(value: float) -> str:
 def format_numbers(values: Any) -> str:
     """A vector as a field shows it: ``"1.5, -4, 1.2"``. A component below ``ZERO_FRACTION`` of the vector's
     largest is rounding and is shown as 0, as in the read-out (a gizmo's turn gives a roll of 4e-15 degrees)."""
-    numbers = [float(v) for v in values]
-    largest = max((abs(v) for v in numbers if math.isfinite(v)), default=0.0)
-    return ", ".join(format_number(shown_value(v, largest)) for v in numbers)
+    return ", ".join(format_number(v) for v in shown_components(values))
 
 
 def _show(text: str) -> str:

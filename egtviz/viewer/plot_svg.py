@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..scene import Epipole, ImagePlane
+from ..scene.shown_numbers import shown_components
 from .panel_view import FIT_MARGIN, FIT_MAX_EXTENT, ViewBox, aspect_box
 from .svg import NORMAL, PanelStyle, image_plane_svg, panel_layout
 
@@ -75,7 +76,7 @@ def _epipole(label: str, e: Any, size: tuple[int, int] | None) -> Epipole:
         d = e[:2] / float(np.hypot(e[0], e[1]))
         return Epipole(label, None, d, True, False)
     xy = e[:2] / e[2]
-    xy = np.where(np.abs(xy) < 1e-9 * max(1.0, float(np.abs(xy).max())), 0.0, xy)  # rounding dust, not -6e-17
+    xy = np.array(shown_components(xy))  # rounding dust is 0, not -6e-17: the one rule of every shown number
     inside = size is not None and 0.0 <= xy[0] <= size[0] and 0.0 <= xy[1] <= size[1]
     return Epipole(label, xy, None, False, bool(inside))
 

@@ -65,6 +65,7 @@ from typing import Any
 
 import numpy as np
 
+from ..scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
 from .panel_view import ViewBox, image_view, place_labels, tick_values
 
@@ -163,8 +164,8 @@ class PanelLayout:
 
 
 def _tick_labels(values: Any, decimals: int) -> list[str]:
-    """Tick labels; ``-0`` is written ``0``."""
-    return [f"{v:.{decimals}f}" if abs(v) >= 0.5 * 10.0 ** -decimals else f"{0:.{decimals}f}" for v in values]
+    """Tick labels by the one rule of :mod:`egtviz.scene.shown_numbers` (``-0`` is written ``0``)."""
+    return [format_value(v, f".{decimals}f") for v in values]
 
 
 @lru_cache(maxsize=64)
@@ -862,21 +863,21 @@ def image_plane_svg(
             tip, dd = _border_exit(view, np.array(view.centre) + d * 1e6 * max(view.width, view.height), 0.3 * a)
             svg, _ = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
             text = (f'<text x="{_f(view.u0)}" y="{_f(next(row))}" font-size="{_f(st)}" fill="{EPIPOLE_COLOUR}">'
-                    f"{escape(label)} at infinity, direction ({d[0]:.2f}, {d[1]:.2f})</text>")
+                    f"{escape(label)} at infinity, direction ({format_vector(d[:2], '.2f')})</text>")
             ep_marks.append((ep, "infinity", "arrow", f'<g data-kind="epipole-arrow">{svg}</g>{text}'))
             continue
         x, y = (float(v) for v in ep.xy)
         if view.contains([x, y])[0]:
             svg = (f'<path d="M{_f(x - a)} {_f(y - a)}L{_f(x + a)} {_f(y + a)}M{_f(x - a)} {_f(y + a)}'
                    f'L{_f(x + a)} {_f(y - a)}" stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 1.8)}"/>')
-            text = label if ep.inside else f"{label} ({x:.4g}, {y:.4g})"
+            text = label if ep.inside else f"{label} ({format_vector((x, y))})"
             ep_labels.append(_EpipoleLabel(text, (x, y), a, (x - a, y - a, x + a, y + a)))
             ep_marks.append((ep, where, "mark", svg))
         else:
             tip, dd = _border_exit(view, np.array([x, y]), 0.3 * a)
             svg, box = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
             tail = tip - dd * arrow_len
-            ep_labels.append(_EpipoleLabel(f"{label} ({x:.4g}, {y:.4g})", (float(tail[0]), float(tail[1])),
+            ep_labels.append(_EpipoleLabel(f"{label} ({format_vector((x, y))})", (float(tail[0]), float(tail[1])),
                                            0.2 * size, tuple(float(b) for b in box)))
             ep_marks.append((ep, where, "arrow", f'<g data-kind="epipole-arrow">{svg}</g>'))
 
