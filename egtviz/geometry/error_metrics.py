@@ -65,7 +65,7 @@ def sampson_distances_normalized(Fs: np.ndarray, At: np.ndarray, s1: float, s2: 
         np.matmul(G[i : i + step], At, out=V[i : i + step])
     Q = V.reshape(M, 5, N)
     np.multiply(Q, Q, out=Q)
-    den = np.einsum("mkn,k->mn", Q[:, 1:], np.array([s2 * s2, s2 * s2, s1 * s1, s1 * s1]))
+    den = np.array([s2 * s2, s2 * s2, s1 * s1, s1 * s1]) @ Q[:, 1:]  # (M, N): a batched product, not einsum
     np.maximum(den, 1e-300, out=den)
     d = np.divide(Q[:, 0], den, out=den)
     return d

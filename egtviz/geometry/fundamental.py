@@ -81,9 +81,9 @@ def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.nd
     ``T1``, ``T2`` are the similarities of :func:`~egtviz.geometry.matrices.hartley_normalization`
     (H&Z Algorithm 11.1, step (i)); their scales are ``T[0, 0]``.
     """
-    n1, T1 = hartley_normalization(u1, "U1", check=False)
-    n2, T2 = hartley_normalization(u2, "U2", check=False)
-    return design_matrix(n1, n2), T1, T2
+    n = u1.shape[0]
+    Un, T = hartley_normalization(np.concatenate((u1, u2)).reshape(2, n, 2), ("U1", "U2"), check=False)
+    return design_matrix(Un[0], Un[1]), T[0], T[1]
 
 
 def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
@@ -110,11 +110,8 @@ def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
 
 def canonical_fundamental(F: np.ndarray) -> np.ndarray:
     """``F`` (a checked, non-zero float 3x3 array) at unit Frobenius norm with its largest-magnitude entry positive."""
-    x = F.ravel()
-    a = np.abs(x)
-    k = int(a.argmax())
     # Dividing by the signed largest entry first: the sum of squares in the norm cannot overflow.
-    G = F / (a[k] if x[k] > 0 else -a[k])
+    G = F / max(F.ravel().tolist(), key=abs)
     g = G.ravel()
     return G / math.sqrt(g.dot(g))
 
@@ -171,10 +168,7 @@ def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> tuple[np.ndarray, np.nda
     Returns candidates ``(K, 3, 3, 3)`` and a ``(K, 3)`` mask of the real roots
     (one or three per pencil).
     """
-    k3 = _det3(F1)
-    k0 = _det3(F2)
-    pp = _det3(F1 + F2)
-    pm = _det3(F1 - F2)
+    k3, k0, pp, pm = _det3(np.stack((F1, F2, F1 + F2, F1 - F2)))  # one pass over the four stacks
     k2 = 0.5 * (pp - pm) - k0
     k1 = 0.5 * (pp + pm) - k3
     first = np.abs(k3) >= np.abs(k0)  # solve for r = a / b

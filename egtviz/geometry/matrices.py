@@ -6,6 +6,7 @@ Points are rows, ``(N, 2)`` pixels; conventions: ``docs/conventions.md``.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -85,7 +86,7 @@ def unstack_columns(v: npt.ArrayLike, columns: int) -> np.ndarray:
 
 
 def hartley_normalization(
-    U: npt.ArrayLike, name: str = "U", *, check: bool = True
+    U: npt.ArrayLike, name: str | Sequence[str] = "U", *, check: bool = True
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Hartley's isotropic normalisation of pixels (H&Z 2nd ed., section 4.4.4 and Algorithm 11.1).
 
@@ -97,38 +98,64 @@ def hartley_normalization(
     root-mean-square distance). ``docs/conventions.md`` states the choice.
 
     Args:
-        U: (N, 2) pixels.
-        name: the argument's name in error messages.
-        check: validate ``U``; ``False`` for a float64 (N, 2) array the caller has checked.
+        U: (N, 2) pixels, or a stack (K, N, 2) of K images, each normalised on its own (the two images
+            of an estimator: one pass over both).
+        name: the argument's name in error messages; for a stack, one name per image.
+        check: validate ``U``; ``False`` for a float64 array the caller has checked.
 
     Returns:
-        ``(Un, T)``: (N, 2) normalised pixels and the (3, 3) similarity ``T``.
+        ``(Un, T)``: (N, 2) normalised pixels and the (3, 3) similarity ``T``; for a stack, (K, N, 2)
+        and (K, 3, 3).
 
     Raises:
         DegenerateConfigurationError: all points coincide (to 1e-9 of their distance from the origin).
         GeometryError: a bad ``U``, or points spread over less than 1e-100 (rescale the coordinates).
     """
-    u = as_points(U, name, 2) if check else U
-    n = u.shape[0]
-    # Coordinate-major (2, N): every reduction runs over contiguous memory, several times faster than
-    # over the columns of (N, 2); the (N, 2) result is a transposed view of it.
-    d = np.empty((2, n))
-    d[...] = u.T
-    c = np.add.reduce(d, axis=1) / n
-    d -= c[:, None]
+    names = [name] if isinstance(name, str) else list(name)
+    if check:
+        if isinstance(name, str):
+            U = as_points(U, name, 2)
+        else:
+            U = as_array(U, ", ".join(names))
+            if U.ndim != 3 or U.shape[0] != len(names) or U.shape[2] != 2:
+                raise GeometryError(f"{', '.join(names)}: expected shape ({len(names)}, N, 2), got {U.shape}")
+    u = U if U.ndim == 3 else U[None]
+    k, n = u.shape[0], u.shape[1]
+    # Coordinate-major (K, 2, N): every reduction runs over contiguous memory, several times faster than
+    # over the columns of (N, 2); the (N, 2) result is a transposed view of it. The scalars are handled
+    # as Python floats: numpy's per-call cost dominates on these few numbers.
+    d = np.empty((k, 2, n))
+    d[...] = u.transpose(0, 2, 1)
+    c = np.add.reduce(d, axis=2)
+    c /= n
+    d -= c[:, :, None]
     sq = d * d
-    mean = float(np.add.reduce(np.sqrt(sq[0] + sq[1]))) / n
-    if not mean > 1e-9 * max(abs(float(c[0])), abs(float(c[1]))) or mean == 0.0:
+    mean = np.add.reduce(np.sqrt(sq[:, 0] + sq[:, 1]), axis=1).tolist()
+    centre = c.tolist()
+    scales = []
+    for i in range(k):
+        m = mean[i] / n
+        _check_spread(m, centre[i], names[i])
+        scales.append(math.sqrt(2.0) / m)
+    d *= np.array(scales)[:, None, None] if k > 1 else scales[0]
+    flat = []
+    for si, (cx, cy) in zip(scales, centre):
+        flat += [si, 0.0, -si * cx, 0.0, si, -si * cy, 0.0, 0.0, 1.0]
+    T = np.array(flat).reshape(k, 3, 3)
+    if U.ndim == 3:
+        return d.transpose(0, 2, 1), T
+    return d[0].T, T[0]
+
+
+def _check_spread(mean: float, centroid: list[float], name: str) -> None:
+    """Refuse coincident points and a spread below ``_MIN_SPREAD``, naming the image."""
+    if not mean > 1e-9 * max(abs(centroid[0]), abs(centroid[1])) or mean == 0.0:
         raise DegenerateConfigurationError(f"{name}: all points coincide; no normalisation exists")
     if mean < _MIN_SPREAD:
         raise GeometryError(
             f"{name}: the points spread over {mean:.3g} only; below a spread of {_MIN_SPREAD:.0e} they cannot be "
             "normalised and F cannot be computed (rescale the coordinates)"
         )
-    s = math.sqrt(2.0) / mean
-    d *= s
-    T = np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
-    return d.T, T
 
 
 def full_angle(y: npt.ArrayLike, x: npt.ArrayLike) -> np.ndarray:

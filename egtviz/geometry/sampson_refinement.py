@@ -25,28 +25,45 @@ from .matrices import nearest_rank2, point_pairs
 __all__ = ["fundamental_sampson", "refine_sampson"]
 
 
+# The generators of so(3): [c]_x = sum_i c_i _GENERATORS[i]. A contraction with them builds a stack of
+# cross-product matrices in one product (each entry is one +-c_i: the same numbers as writing them out).
+_GENERATORS = np.array(
+    [
+        [[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]],
+        [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]],
+        [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+    ]
+)
+
+
 def _skew_stack(c: np.ndarray) -> np.ndarray:
     """Cross-product matrices ``(K, 3, 3)`` of vectors ``(K, 3)``."""
-    W = np.zeros((c.shape[0], 3, 3))
-    W[:, 0, 1], W[:, 0, 2], W[:, 1, 2] = -c[:, 2], c[:, 1], -c[:, 0]
-    W[:, 1, 0], W[:, 2, 0], W[:, 2, 1] = c[:, 2], -c[:, 1], c[:, 0]
-    return W
+    return (c @ _GENERATORS.reshape(3, 9)).reshape(-1, 3, 3)
 
 
 def _rodrigues_jr(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r"""Rotation :math:`R(\omega)` and right Jacobian :math:`J_r(\omega)`.
 
-    :math:`R(\omega + \delta) \approx R(\omega) \exp([J_r(\omega) \delta]_\times)`.
+    :math:`R(\omega + \delta) \approx R(\omega) \exp([J_r(\omega) \delta]_\times)`, with
+    :math:`W = [\omega]_\times`, :math:`R = I + a W + b W^2`, :math:`J_r = I - b W + c W^2`,
+    :math:`a = \sin\theta / \theta`, :math:`b = (1 - \cos\theta) / \theta^2`,
+    :math:`c = (\theta - \sin\theta) / \theta^3`. Written with Python floats: numpy's per-call
+    cost would dominate on these 3x3 matrices, which the Levenberg-Marquardt loop builds at every step.
     """
-    th = float(np.linalg.norm(w))
-    W = _skew_stack(w[None])[0]
-    W2 = W @ W
+    x, y, z = w.tolist()
+    th = math.sqrt(x * x + y * y + z * z)
     if th < 1e-8:
-        return np.eye(3) + W + 0.5 * W2, np.eye(3) - 0.5 * W + W2 / 6.0
-    a = math.sin(th) / th
-    b = (1.0 - math.cos(th)) / th**2
-    c = (th - math.sin(th)) / th**3
-    return np.eye(3) + a * W + b * W2, np.eye(3) - b * W + c * W2
+        a, b, c = 1.0, 0.5, 1.0 / 6.0
+    else:
+        a = math.sin(th) / th
+        b = (1.0 - math.cos(th)) / th**2
+        c = (th - math.sin(th)) / th**3
+    W = ((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0))
+    # W @ W, entry by entry as the product computes it.
+    W2 = ((-z * z - y * y, y * x, z * x), (x * y, -z * z - x * x, z * y), (x * z, y * z, -y * y - x * x))
+    R = [[(i == j) + a * W[i][j] + b * W2[i][j] for j in range(3)] for i in range(3)]
+    J = [[(i == j) - b * W[i][j] + c * W2[i][j] for j in range(3)] for i in range(3)]
+    return np.array(R), np.array(J)
 
 
 class _SampsonProblem:
