@@ -11,8 +11,8 @@ shared between people, so nothing else in a step's text may become HTML, a link 
   Markdown and viser's image loader, which reads any ``![...](path)`` of the text on the server, see no
   syntax in it);
 * an image ``![text](name.png)`` is a file of the lesson's folder or of the package's assets
-  (:class:`~egtviz.lessons.images.LessonImages`), read by the server and embedded as a ``data:`` URL; any
-  other image is refused;
+  (:class:`~egtviz.lessons.images.LessonImages`), read by the server and embedded as an ``<img>`` with a
+  ``data:`` URL; any other image is refused;
 * the MathML is parsed and rebuilt from an allow-list of MathML elements and attributes (``latex2mathml``
   copies ``\text{...}`` verbatim), and a formula with unbalanced braces, a command missing an argument or a
   fraction, script or root missing a part is refused with the reason.
@@ -199,7 +199,8 @@ def _image(token: str, offset: int, images: ImageSource | None) -> str:
         url = images(target)
     except ValueError as exc:
         raise MarkupError(offset, str(exc)) from None
-    return f"![{alt.translate(_ALL_PUNCTUATION)}]({url})"
+    # An element, not Markdown: viser's handle would try to read a Markdown image's address as a file.
+    return f'<img src="{url}" alt="{alt.translate(_ALL_PUNCTUATION)}">'
 
 
 def render_markdown(text: str, images: ImageSource | None = None) -> str:
