@@ -12,14 +12,9 @@ from hypothesis import strategies as st
 
 from egtviz.geometry import PinholeCamera, Pose
 from egtviz.geometry.catadioptric import CatadioptricCamera
-from egtviz.geometry.epipolar import (
-    _epipolar_normals,
-    _matrix_rank3,
-    epipolar_pair,
-    epipolar_planes,
-    epipole_of_centre,
-    lines_of_planes,
-)
+from egtviz.geometry._shared import epipolar_normals_columns as _epipolar_normals
+from egtviz.geometry._shared import matrix_rank3 as _matrix_rank3
+from egtviz.geometry.epipolar import epipolar_pair, epipolar_planes, epipole_of_centre, lines_of_planes
 from egtviz.geometry.homogeneous import _clip_lines, clip_lines_to_rect, normalize_homogeneous
 from egtviz.geometry.panoramic_epipolar import _sample_circles, sample_plane_conics
 from egtviz.geometry.unified_sphere import great_circle_arcs

@@ -1,4 +1,4 @@
-"""Column/row conversion, argument checks and the drawing hook shared by the facade's modules."""
+"""Column/row conversion, argument checks and the drawing hook (:func:`draw`) shared by the facade's modules."""
 
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def pinhole(
     """
     Kc = as_calibration(K, name)
     pose, flipped = split_virtual_pose(H, pose_name)
-    camera = PinholeCamera(pose, Intrinsics.from_K(Kc))
+    camera = PinholeCamera(pose, Intrinsics.from_K(Kc, check=False))  # Kc: checked just above
     flip = Kc @ np.diag([-1.0, 1.0, 1.0]) @ np.linalg.inv(Kc) if flipped else None
     return camera, flip
 
@@ -113,7 +113,7 @@ def style(values: tuple[Any, ...]) -> str | None:
     return next((v for v in values if isinstance(v, str)), None)
 
 
-def _draw(kind: str, **data: Any) -> Any:
+def draw(kind: str, **data: Any) -> Any:
     """Hand one drawing to the figure front-end, if it is installed; otherwise nothing happens.
 
     The facade never draws itself: EGT's plotting arguments become one call

@@ -1,7 +1,7 @@
 """EGT's drawing functions and figure commands: they draw into an egtviz figure in the browser.
 
 Each function hands one drawing to the figure front-end (``egtviz.egt_figure``,
-through :func:`~egtviz.egt._convert._draw`); MATLAB colour/line styles
+through :func:`~egtviz.egt._convert.draw`); MATLAB colour/line styles
 (``'r'``, ``'b:'``, ``'g*'``) set the colour of what is not a scene camera or
 point. Cameras become scene cameras: a pin-hole camera is drawn like every
 camera of the workbench (frustum, gizmo, image panel) whatever ``color``,
@@ -17,7 +17,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ..geometry._validate import GeometryError, as_matrix, as_scalar, as_vector
-from ._convert import _draw, world_columns
+from ._convert import draw as _draw
+from ._convert import world_columns
 
 __all__ = [
     "clf",

@@ -9,8 +9,9 @@ import numpy.typing as npt
 
 from ..geometry._validate import GeometryError, as_count, as_scalar, as_vector
 from ..geometry.planar_mirror import PlaneMirror, fundamental_from_reflections
-from ._convert import _draw, flag, pixels, style, world_columns
-from ._pinhole import _project
+from ._convert import draw as _draw
+from ._convert import flag, pixels, style, world_columns
+from ._pinhole import project_pixels
 
 
 def f_reflmatrix(normal: npt.ArrayLike, distance: float) -> np.ndarray:
@@ -99,7 +100,7 @@ def f_reflpersproj(
     mirror = PlaneMirror(normal, distance)
     X = world_columns(points, "points")
     tol = as_scalar(precision, "precision")
-    U = _project(mirror.reflect_points(X), H, K)  # checks H and K
+    U = project_pixels(mirror.reflect_points(X), H, K)  # checks H and K
     centre = np.asarray(H, dtype=np.float64)[:3, 3]
     M = mirror.mirror_points(centre, X)
     same_side = (X @ mirror.normal - mirror.distance) * (centre @ mirror.normal - mirror.distance) > 0.0

@@ -13,7 +13,8 @@ from ..geometry.mirror_roots import line_quadric_roots
 from ..geometry.panoramic_epipolar import conic_from_plane, epipolar_conics, panoramic_epipoles, panoramic_essential
 from ..geometry.poses import Pose
 from ..geometry.unified_sphere import sphere_back_project, sphere_project
-from ._convert import _draw, catadioptric, columns, flag, mirror, pixels, style, world_columns
+from ._convert import draw as _draw
+from ._convert import catadioptric, columns, flag, mirror, pixels, style, world_columns
 
 
 def f_panproj(

@@ -12,7 +12,8 @@ from ..geometry.epipolar import epipolar_lines, epipolar_lines_in_first, epipola
 from ..geometry.homogeneous import normalize_homogeneous
 from ..geometry.lines3d import image_of_line, image_of_plucker_line
 from ..geometry.poses import Pose
-from ._convert import _draw, columns, flag, pinhole, pixels, style, world_columns
+from ._convert import draw as _draw
+from ._convert import columns, flag, pinhole, pixels, style, world_columns
 
 
 def f_Rt2H(R: npt.ArrayLike, t: npt.ArrayLike) -> np.ndarray:
@@ -24,10 +25,11 @@ def f_Rt2H(R: npt.ArrayLike, t: npt.ArrayLike) -> np.ndarray:
     return Pose.from_egt(R, t).matrix
 
 
-def _project(Xw: np.ndarray, H: npt.ArrayLike, K: npt.ArrayLike) -> np.ndarray:
-    """(N, 2) pixels of (N, 3) world points; a reflected camera's pixels are mirrored back."""
+def project_pixels(Xw: np.ndarray, H: npt.ArrayLike, K: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+    """(N, 2) pixels of (N, 3) world points (float64 rows, ``world_columns``); a reflected camera's pixels are
+    mirrored back. ``H`` and ``K`` are checked; the points too unless ``check=False`` (the caller checked them)."""
     camera, flip = pinhole(H, K)
-    px = camera.project(Xw).pixels
+    px = camera.project(Xw, check=check).pixels
     if flip is not None:
         px = px @ flip[:2, :2].T + flip[:2, 2]
     return px
@@ -52,7 +54,7 @@ def f_perspproj(Xw: npt.ArrayLike, H: npt.ArrayLike, K: npt.ArrayLike, *plot: An
         ``u, v = f_perspproj(...)``.
     """
     X = world_columns(Xw, "Xw")
-    U = _project(X, H, K).T
+    U = project_pixels(X, H, K, check=False).T  # X checked once, by world_columns
     level = flag(plot[0]) if plot else 0
     if level >= 1:
         _draw("image_points", pixels=U, H=np.asarray(H, dtype=float), K=np.asarray(K, dtype=float), figure=None,

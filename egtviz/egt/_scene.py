@@ -10,7 +10,8 @@ import numpy.typing as npt
 from ..geometry._validate import GeometryError, as_count
 from ..geometry.planes import plane_normals, point_plane_distance
 from ..geometry.shapes import SURFACE_KINDS, random_points_in_ball, sample_surface_grid
-from ._convert import _draw, flag, world_columns
+from ._convert import draw as _draw
+from ._convert import flag, world_columns
 
 #: EGT 2.0's ``f_3Dsurface`` object numbers that exist here (its code's numbering: 1 sphere, 2 torus, 6 "cone").
 SURFACE_NUMBERS = {1: "sphere", 2: "torus", 6: "cone"}

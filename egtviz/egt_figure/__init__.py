@@ -34,7 +34,7 @@ limits) never raises into the student's script: the figure stays as it was,
 the reason is added to the figure's messages (shown by the viewer) and issued
 as a ``RuntimeWarning``.
 
-Kinds handled: those of ``egtviz.egt._convert._draw`` (``image_points``,
+Kinds handled: those of ``egtviz.egt._convert.draw`` (``image_points``,
 ``projection_rays``, ``epipolar_lines``, ``panoramic_points``,
 ``sphere_model``, ``circle``, ``normal``, ``line3d``, ``scene_points``,
 ``camera``, ``surface``) and the front-end's own, used by EGT's drawing

@@ -12,9 +12,18 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import as_calibration
+from ._validate import DegenerateConfigurationError, as_calibration
 
-__all__ = ["AT_INFINITY_TOL", "inverse_calibration", "normalize_homogeneous3"]
+__all__ = [
+    "AT_INFINITY_TOL",
+    "COINCIDENT_CENTRES_TOL",
+    "centres_coincide",
+    "epipolar_normals_columns",
+    "inverse_calibration",
+    "matrix_rank3",
+    "normalize_homogeneous3",
+    "skew3",
+]
 
 #: A homogeneous point whose last coordinate is below this fraction of its norm is at infinity.
 AT_INFINITY_TOL = 1e-12
@@ -54,3 +63,94 @@ def _inverse_of(K_bytes: bytes, name: str) -> np.ndarray:
     inv = np.linalg.inv(as_calibration(np.frombuffer(K_bytes).reshape(3, 3), name))
     inv.setflags(write=False)
     return inv
+
+
+#: Two centres closer than this (relative to the scene scale 1) have no epipolar geometry.
+COINCIDENT_CENTRES_TOL = 1e-9
+
+
+def centres_coincide(c1: np.ndarray, c2: np.ndarray) -> bool:
+    """``|c1 - c2| <= COINCIDENT_CENTRES_TOL * max(1, |c1|, |c2|)``; plain floats for two 3-vectors (every drag)."""
+    if c1.shape == c2.shape == (3,):
+        a, b = c1.tolist(), c2.tolist()
+        scale = max(1.0, math.hypot(*a), math.hypot(*b))
+        return math.dist(a, b) <= COINCIDENT_CENTRES_TOL * scale
+    scale = max(1.0, float(np.linalg.norm(c1)), float(np.linalg.norm(c2)))
+    return bool(np.linalg.norm(c1 - c2) <= COINCIDENT_CENTRES_TOL * scale)
+
+
+def skew3(x: float, y: float, z: float) -> np.ndarray:
+    """:func:`~egtviz.geometry.poses.skew` of an already checked vector."""
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def matrix_rank3(M: np.ndarray, tol: float) -> int:
+    r"""``np.linalg.matrix_rank(M, tol)`` of a 3x3 matrix, decided from its invariants when that is conclusive.
+
+    The singular values :math:`\sigma_1 \ge \sigma_2 \ge \sigma_3` satisfy
+    :math:`\|M\|_F / \sqrt 3 \le \sigma_1 \le \|M\|_F`,
+    :math:`\|\mathrm{adj}\,M\|_F / \sqrt 3 \le \sigma_1 \sigma_2 \le \|\mathrm{adj}\,M\|_F` (the singular
+    values of the adjugate are :math:`\sigma_1\sigma_2, \sigma_1\sigma_3, \sigma_2\sigma_3`) and
+    :math:`\sigma_1\sigma_2\sigma_3 = |\det M|`, which bound each :math:`\sigma_k`. When every bound,
+    widened by generous rounding allowances, is on one side of ``tol`` by a factor 2, the rank follows
+    without an SVD (a fundamental matrix on every drag: rank 2 with :math:`\sigma_3` at rounding level);
+    otherwise the SVD decides.
+    """
+    (a, b, c), (d, e, f), (g, h, i) = M.tolist()
+    # Adjugate entries (cofactors, p - q) and the determinant along the first row, with the sizes |p| + |q|
+    # of their terms for the rounding allowances (over ten times the worst case of these formulas).
+    pairs = ((e * i, f * h), (f * g, d * i), (d * h, e * g),
+             (c * h, b * i), (a * i, c * g), (b * g, a * h),
+             (b * f, c * e), (c * d, a * f), (a * e, b * d))
+    cof = [p - q for p, q in pairs]
+    size = [abs(p) + abs(q) for p, q in pairs]
+    norm = math.sqrt(a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i)
+    adj = math.sqrt(sum(x * x for x in cof))
+    det = abs(a * cof[0] + b * cof[1] + c * cof[2])
+    err_adj = 1e-14 * sum(size)
+    err_det = 1e-14 * (abs(a) * size[0] + abs(b) * size[1] + abs(c) * size[2])
+    r3 = math.sqrt(3.0)
+    bounds = [(norm / r3, norm)]  # sigma_1
+    if adj > err_adj:
+        bounds.append(((adj - err_adj) / (r3 * norm), r3 * (adj + err_adj) / norm))  # sigma_1 sigma_2 / sigma_1
+        bounds.append(((det - err_det) / (adj + err_adj), r3 * (det + err_det) / (adj - err_adj)))  # det / (s1 s2)
+    # The SVD's own singular values are off by up to a few ulps of |M|: decide only beyond that as well.
+    above, below = 2.0 * tol + 1e-13 * norm, 0.5 * tol - 1e-13 * norm
+    rank = 0
+    for lo, hi in bounds:  # sigma_1, sigma_2, sigma_3 in turn
+        if lo > above:
+            rank += 1
+        elif hi < below:
+            return rank  # this and every smaller singular value are below tol
+        else:
+            break  # too close to tol to tell
+    else:
+        if len(bounds) == 3:
+            return rank
+    # Inconclusive (or adj M at rounding level: sigma_2 not bounded away from 0): the SVD decides.
+    return int(np.linalg.matrix_rank(M, tol=tol))
+
+
+def epipolar_normals_columns(c1: np.ndarray, c2: np.ndarray, XT: np.ndarray) -> np.ndarray:
+    r"""The unit normals of :func:`~egtviz.geometry.epipolar.epipolar_planes`, coordinate-major: (3, N) from checked ``c1``, ``c2`` (3,)
+    and the points as ``XT`` (3, N) (best contiguous).
+
+    :math:`n = [b]_\times v` with :math:`b = c_2 - c_1`, :math:`v = X - c_1` (one matrix product for all
+    points). NaN columns for points on the baseline, :math:`|n| \le 10^{-12} |b|\,|v|`.
+
+    Raises:
+        DegenerateConfigurationError: the centres coincide.
+    """
+    if centres_coincide(c1, c2):
+        raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
+    bx, by, bz = (c2 - c1).tolist()
+    v = XT - c1[:, None]
+    n = skew3(bx, by, bz) @ v
+    norm2 = np.add.reduce(n * n, axis=0)
+    # Points on the baseline: |n| <= 1e-12 |b| |v|, compared squared.
+    on_baseline = norm2 <= np.add.reduce(v * v, axis=0) * (1e-24 * (bx * bx + by * by + bz * bz))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n /= np.sqrt(norm2)
+    if on_baseline.any():
+        n[:, on_baseline] = np.nan
+    return n

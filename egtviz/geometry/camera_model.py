@@ -23,6 +23,12 @@ sphere models). Everything the rest of egtviz needs from a camera goes through :
 - ``PARAMETERS``, ``parameters()``, ``from_parameters(pose, **values)``: the model's scalar parameters with
   their ranges; ``pose``, ``centre``, ``moved(pose)``, ``width``, ``height``.
 
+The methods a drag calls (``project``, ``light_paths``, ``baseline_images``, ``plane_image_conics``,
+``plane_image_lines``, ``plane_image_arcs``) take a keyword ``check`` (default True): ``check=False`` skips the
+conversion and checks of arguments the caller has checked once (float64 arrays of the documented shapes, finite;
+normals finite or all NaN), with the same arithmetic; anything else gives an undefined result
+(``docs/conventions.md``, "Checked at the edge, fast inside").
+
 :data:`CAMERA_MODELS` maps each kind name to a :class:`CameraModelInfo` (its class, label and parameter
 ranges), one registration line per model. How to add a model: ``docs/camera_models.md``.
 
@@ -71,6 +77,7 @@ __all__ = [
     "normals_with_planes",
     "parameters_from_specs",
     "rectangle_rim",
+    "unchecked_normals",
 ]
 
 
@@ -205,7 +212,7 @@ class CameraModel(Protocol):
         """The same camera at another pose: the fast path for a drag (only the pose is new and checked)."""
         ...
 
-    def project(self, X_world: npt.ArrayLike) -> Projection:
+    def project(self, X_world: npt.ArrayLike, *, check: bool = True) -> Projection:
         """Project world points (N, 3)."""
         ...
 
@@ -213,26 +220,27 @@ class CameraModel(Protocol):
         """Unit world rays (N, 3) of pixels (N, 2); NaN rows for pixels that are no ray's image."""
         ...
 
-    def light_paths(self, X_world: npt.ArrayLike) -> np.ndarray:
+    def light_paths(self, X_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         """(N, k, 3) world polylines of the light from each point to the sensor (point, ..., sensor end); NaN
         rows for points that have no image."""
         ...
 
-    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
+    def baseline_images(self, direction_world: npt.ArrayLike, *, check: bool = True) -> DirectionImages:
         """Images of the line through the centre along ``direction_world`` (3,)."""
         ...
 
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
+    def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         """Exact image conics (N, 3, 3) of planes through the centre, unit Frobenius norm; NaN rows for zero or
         NaN normals."""
         ...
 
-    def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray | None:
+    def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:
         """Exact image lines (N, 3) of planes through the centre; None if the model does not image planes to
         lines."""
         ...
 
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[Sequence[np.ndarray]]:
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96, *,
+                         check: bool = True) -> list[Sequence[np.ndarray]]:
         """Per normal, a sequence (list or tuple) of the visible arcs (k, 2) of the plane's image inside the drawn
         region (empty: none)."""
         ...
@@ -322,6 +330,14 @@ def normals_with_planes(normals_world: npt.ArrayLike) -> tuple[np.ndarray, np.nd
     out = n / top[:, None]
     out[nan_rows] = np.nan
     return out, np.flatnonzero(good)
+
+
+def unchecked_normals(normals_world: np.ndarray) -> np.ndarray:
+    """:func:`as_normals` of a float64 (N, 3) array whose rows are finite or all NaN, unchecked: each row divided by
+    its largest absolute entry (the same arithmetic), zero and NaN rows NaN. The ``check=False`` path of the
+    models' plane images."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return normals_world / np.abs(normals_world).max(axis=1, keepdims=True)
 
 
 

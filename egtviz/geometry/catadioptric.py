@@ -55,6 +55,7 @@ from .camera_model import (
     check_sample_count,
     finite_nonzero_rows,
     parameters_from_specs,
+    unchecked_normals,
 )
 from .homogeneous import normalize_homogeneous
 from .mirrors import HyperbolicMirror, Mirror, ParabolicMirror
@@ -179,9 +180,12 @@ class CatadioptricCamera:
         """None: a mirror images lines to conics, not linearly."""
         return None
 
-    def light_paths(self, X_world: npt.ArrayLike) -> np.ndarray:
-        """(N, 3, 3) polylines point -> mirror point -> CCD (:attr:`ccd_center_world`); NaN rows where not visible."""
-        X = as_points(X_world, "X_world", 3)
+    def light_paths(self, X_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+        """(N, 3, 3) polylines point -> mirror point -> CCD (:attr:`ccd_center_world`); NaN rows where not visible.
+
+        ``check=False``: as for :meth:`project`.
+        """
+        X = as_points(X_world, "X_world", 3) if check else X_world
         proj = self._project_world(X)
         out = np.empty((len(X), 3, 3))
         out[:, 0] = X
@@ -191,34 +195,49 @@ class CatadioptricCamera:
         out[~proj.visible] = np.nan
         return out
 
-    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
+    def baseline_images(self, direction_world: npt.ArrayLike, *, check: bool = True) -> DirectionImages:
         r"""The images of :math:`\pm R^T d` by the unified model, :math:`K_g (F \hat d + (0, 0, \xi))`, visible where
-        the mirror shows the ray (both are on every image conic of a plane containing the line)."""
-        d = self.pose.R.T @ as_direction(direction_world)
+        the mirror shows the ray (both are on every image conic of a plane containing the line).
+
+        ``check=False``: the caller promises a float64 (3,) finite, non-zero ``direction_world`` (not checked).
+        """
+        d = self.pose.R.T @ (as_direction(direction_world) if check else direction_world)
         dirs = np.stack([d, -d])
         s = (dirs / np.linalg.norm(d)) @ UNIFIED_FLIP.T
         s[:, 2] += self.mirror.xi
         m = s @ self.unified_calibration.T
         return DirectionImages(normalize_homogeneous(m), self._project_mirror_frame(dirs).visible)
 
-    def plane_image_lines(self, normals_world: npt.ArrayLike) -> None:
-        """None (once the normals are checked): a mirror images planes to conics."""
-        as_normals(normals_world)
+    def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> None:
+        """None (once the normals are checked, unless ``check=False``): a mirror images planes to conics."""
+        if check:
+            as_normals(normals_world)
 
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
+    def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         """Image conics (N, 3, 3) of planes through the focus with world normals (N, 3) (of their mirror-frame normals
-        :math:`R^T n`, ``panoramic_epipolar.conic_from_plane``); NaN rows for zero or NaN normals."""
-        n = as_normals(normals_world)
+        :math:`R^T n`, ``panoramic_epipolar.conic_from_plane``); NaN rows for zero or NaN normals.
+
+        ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN.
+        """
+        n = as_normals(normals_world) if check else unchecked_normals(normals_world)
         C = np.full((len(n), 3, 3), np.nan)
         good = finite_nonzero_rows(n)
         if len(good):
             C[good] = self._mirror_plane_conics(n[good] @ self.pose.R)
         return C
 
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[tuple[np.ndarray, ...]]:
-        """Per world normal, the arcs of its plane's image that the mirror shows (ends on the rim's image)."""
-        n_samples = check_sample_count(n_samples, "n_samples", 3)
-        n = as_normals(normals_world)
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96, *,
+                         check: bool = True) -> list[tuple[np.ndarray, ...]]:
+        """Per world normal, the arcs of its plane's image that the mirror shows (ends on the rim's image).
+
+        ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN and a whole
+        number ``n_samples`` in ``3..MAX_SAMPLES``; nothing is checked.
+        """
+        if check:
+            n_samples = check_sample_count(n_samples, "n_samples", 3)
+            n = as_normals(normals_world)
+        else:
+            n = unchecked_normals(normals_world)
         # Each normal's arcs as a tuple (a sequence, as the interface asks): no copy of hundreds of small lists.
         return great_circle_arcs(np.ascontiguousarray((n @ self.pose.R).T), n_samples, self.mirror.rim_cosine,
                                  self._unit_ray_pixels)
@@ -260,7 +279,7 @@ class CatadioptricCamera:
         return self.K @ np.diag([g, -g, 1.0])
 
     # -------------------------------------------------------------- projection
-    def project(self, X_world: npt.ArrayLike) -> PanoramicProjection:
+    def project(self, X_world: npt.ArrayLike, *, check: bool = True) -> PanoramicProjection:
         r"""Project world points through the mirror onto the CCD.
 
         .. math:: X = R^T (X_w - t), \quad X_h = \lambda X, \quad
@@ -268,12 +287,15 @@ class CatadioptricCamera:
 
         Args:
             X_world: (N, 3) world points (a single (3,) point is N = 1).
+            check: convert and check ``X_world`` (default). ``check=False``: the caller promises a float64 (N, 3)
+                array of finite values within ``MAX_MAGNITUDE``; nothing is converted or checked, and anything else
+                gives an undefined result (never a ``GeometryError``).
 
         Returns:
             A :class:`PanoramicProjection`; points in the blind cone, above the
             rim or at the focus itself have NaN pixels and ``visible = False``.
         """
-        return self._project_world(as_points(X_world, "X_world", 3))
+        return self._project_world(as_points(X_world, "X_world", 3) if check else X_world)
 
     def _project_world(self, X: np.ndarray) -> PanoramicProjection:
         """:meth:`project` of checked (N, 3) float64 world points (internal: no conversion, no check)."""

@@ -22,7 +22,14 @@ from ._validate import (
     as_up_to_scale_rows,
     as_vector,
 )
-from ._shared import inverse_calibration, normalize_homogeneous3
+from ._shared import (
+    COINCIDENT_CENTRES_TOL,
+    centres_coincide,
+    epipolar_normals_columns,
+    inverse_calibration,
+    normalize_homogeneous3,
+    skew3,
+)
 from .homogeneous import clip_lines_to_rect, homogeneous, normalize_homogeneous
 from .pinhole import PinholeCamera
 from .poses import Pose
@@ -48,10 +55,6 @@ __all__ = [
     "unit_frobenius",
 ]
 
-#: Two centres closer than this (relative to the scene scale 1) have no epipolar geometry.
-COINCIDENT_CENTRES_TOL = 1e-9
-
-
 def _check_pose(pose: object, name: str) -> Pose:
     if not isinstance(pose, Pose):
         raise GeometryError(f"{name}: expected a Pose, got {type(pose).__name__}")
@@ -75,18 +78,8 @@ def relative_pose(pose1: Pose, pose2: Pose) -> tuple[np.ndarray, np.ndarray]:
 
 def check_distinct_centres(c1: np.ndarray, c2: np.ndarray) -> None:
     """Raise :class:`DegenerateConfigurationError` when two centres (3-vectors) coincide."""
-    if _centres_coincide(as_vector(c1, "c1", 3), as_vector(c2, "c2", 3)):
+    if centres_coincide(as_vector(c1, "c1", 3), as_vector(c2, "c2", 3)):
         raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
-
-
-def _centres_coincide(c1: np.ndarray, c2: np.ndarray) -> bool:
-    """``|c1 - c2| <= COINCIDENT_CENTRES_TOL * max(1, |c1|, |c2|)``; plain floats for two 3-vectors (every drag)."""
-    if c1.shape == c2.shape == (3,):
-        a, b = c1.tolist(), c2.tolist()
-        scale = max(1.0, math.hypot(*a), math.hypot(*b))
-        return math.dist(a, b) <= COINCIDENT_CENTRES_TOL * scale
-    scale = max(1.0, float(np.linalg.norm(c1)), float(np.linalg.norm(c2)))
-    return bool(np.linalg.norm(c1 - c2) <= COINCIDENT_CENTRES_TOL * scale)
 
 
 def unit_frobenius(M: npt.ArrayLike) -> np.ndarray:
@@ -116,23 +109,30 @@ def _frobenius(M: np.ndarray) -> float:
     return math.sqrt(x.dot(x))
 
 
-def _skew(x: float, y: float, z: float) -> np.ndarray:
-    """:func:`~egtviz.geometry.poses.skew` of an already checked vector."""
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+def essential_from_poses(pose1: Pose, pose2: Pose, *, check: bool = True) -> np.ndarray:
+    r""":math:`E = [t]_\times R` with ``(R, t)`` from :func:`relative_pose`, unit Frobenius norm.
 
+    Args:
+        pose1, pose2: the two frames.
+        check: check the arguments (default). ``check=False``: the caller promises two :class:`Pose` objects
+            (checked when they were made); coincident centres still raise.
 
-def essential_from_poses(pose1: Pose, pose2: Pose) -> np.ndarray:
-    r""":math:`E = [t]_\times R` with ``(R, t)`` from :func:`relative_pose`, unit Frobenius norm."""
-    _check_pose(pose1, "pose1")
-    _check_pose(pose2, "pose2")
-    check_distinct_centres(pose1.t, pose2.t)
+    Raises:
+        DegenerateConfigurationError: the two centres coincide.
+    """
+    if check:
+        _check_pose(pose1, "pose1")
+        _check_pose(pose2, "pose2")
+        check_distinct_centres(pose1.t, pose2.t)
+    elif centres_coincide(pose1.t, pose2.t):
+        raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
     return _essential(pose1, pose2)
 
 
 def _essential(pose1: Pose, pose2: Pose) -> np.ndarray:
     """:func:`essential_from_poses` of poses whose centres are known to be distinct."""
     R, t = relative_pose(pose1, pose2)
-    return _unit_frobenius(_skew(*t.tolist()) @ R)
+    return _unit_frobenius(skew3(*t.tolist()) @ R)
 
 
 def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
@@ -156,7 +156,8 @@ def essential_from_fundamental(F: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
     return E / n
 
 
-def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike) -> np.ndarray:
+def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.ArrayLike, *,
+                               check: bool = True) -> np.ndarray:
     r"""Fundamental matrix from ``E`` and the calibrations (H&Z 2nd ed., eq. 9.12).
 
     .. math:: F = K_2^{-T} E K_1^{-1}
@@ -167,8 +168,12 @@ def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
         E: ``(3, 3)`` essential matrix, ``x2^T E x1 = 0`` in normalised coordinates.
         K1: ``(3, 3)`` calibration of camera 1.
         K2: ``(3, 3)`` calibration of camera 2.
+        check: check the arguments (default). ``check=False`` (a drag, with the cameras' matrices): the caller
+            promises ``E`` a finite, non-zero float64 (3, 3) array and ``K1``, ``K2`` float64 (3, 3) calibration
+            matrices (upper triangular, ``K[2, 2] = 1``, invertible); the arithmetic is the checked call's, and
+            anything else gives an undefined result.
     """
-    E = as_up_to_scale(E, "E", (3, 3))
+    E = as_up_to_scale(E, "E", (3, 3)) if check else E / np.abs(E).max()
     F = inverse_calibration(K2, "K2").T @ E @ inverse_calibration(K1, "K1")
     F = F / np.abs(F).max()  # K^-1 may be small (1e-3 per entry): keep the norm's squares in range
     n = np.linalg.norm(F)
@@ -218,10 +223,10 @@ def epipolar_pair(cam1: PinholeCamera, cam2: PinholeCamera) -> EpipolarPair:
     _check_pinhole(cam1, "cam1")
     _check_pinhole(cam2, "cam2")
     c1, c2 = cam1.center, cam2.center
-    if _centres_coincide(c1, c2):
+    if centres_coincide(c1, c2):
         raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
     b = c1 - c2
-    EF = np.matmul(cam2.ray_frames.transpose(0, 2, 1) @ _skew(*b.tolist()), cam1.ray_frames)  # (E, F) unscaled
+    EF = np.matmul(cam2.ray_frames.transpose(0, 2, 1) @ skew3(*b.tolist()), cam1.ray_frames)  # (E, F) unscaled
     flat = EF.reshape(2, 9)
     norm = np.sqrt(np.einsum("ij,ij->i", flat, flat))
     largest = flat[(0, 1), np.abs(flat).argmax(axis=1)]
@@ -257,53 +262,6 @@ def epipole_of_centre(camera: PinholeCamera, other_centre: npt.ArrayLike) -> tup
     c = as_vector(other_centre, "other_centre", 3)
     check_distinct_centres(camera.center, c)
     return _epipole_of_centre(camera, c)
-
-
-def _matrix_rank3(M: np.ndarray, tol: float) -> int:
-    r"""``np.linalg.matrix_rank(M, tol)`` of a 3x3 matrix, decided from its invariants when that is conclusive.
-
-    The singular values :math:`\sigma_1 \ge \sigma_2 \ge \sigma_3` satisfy
-    :math:`\|M\|_F / \sqrt 3 \le \sigma_1 \le \|M\|_F`,
-    :math:`\|\mathrm{adj}\,M\|_F / \sqrt 3 \le \sigma_1 \sigma_2 \le \|\mathrm{adj}\,M\|_F` (the singular
-    values of the adjugate are :math:`\sigma_1\sigma_2, \sigma_1\sigma_3, \sigma_2\sigma_3`) and
-    :math:`\sigma_1\sigma_2\sigma_3 = |\det M|`, which bound each :math:`\sigma_k`. When every bound,
-    widened by generous rounding allowances, is on one side of ``tol`` by a factor 2, the rank follows
-    without an SVD (a fundamental matrix on every drag: rank 2 with :math:`\sigma_3` at rounding level);
-    otherwise the SVD decides.
-    """
-    (a, b, c), (d, e, f), (g, h, i) = M.tolist()
-    # Adjugate entries (cofactors, p - q) and the determinant along the first row, with the sizes |p| + |q|
-    # of their terms for the rounding allowances (over ten times the worst case of these formulas).
-    pairs = ((e * i, f * h), (f * g, d * i), (d * h, e * g),
-             (c * h, b * i), (a * i, c * g), (b * g, a * h),
-             (b * f, c * e), (c * d, a * f), (a * e, b * d))
-    cof = [p - q for p, q in pairs]
-    size = [abs(p) + abs(q) for p, q in pairs]
-    norm = math.sqrt(a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i)
-    adj = math.sqrt(sum(x * x for x in cof))
-    det = abs(a * cof[0] + b * cof[1] + c * cof[2])
-    err_adj = 1e-14 * sum(size)
-    err_det = 1e-14 * (abs(a) * size[0] + abs(b) * size[1] + abs(c) * size[2])
-    r3 = math.sqrt(3.0)
-    bounds = [(norm / r3, norm)]  # sigma_1
-    if adj > err_adj:
-        bounds.append(((adj - err_adj) / (r3 * norm), r3 * (adj + err_adj) / norm))  # sigma_1 sigma_2 / sigma_1
-        bounds.append(((det - err_det) / (adj + err_adj), r3 * (det + err_det) / (adj - err_adj)))  # det / (s1 s2)
-    # The SVD's own singular values are off by up to a few ulps of |M|: decide only beyond that as well.
-    above, below = 2.0 * tol + 1e-13 * norm, 0.5 * tol - 1e-13 * norm
-    rank = 0
-    for lo, hi in bounds:  # sigma_1, sigma_2, sigma_3 in turn
-        if lo > above:
-            rank += 1
-        elif hi < below:
-            return rank  # this and every smaller singular value are below tol
-        else:
-            break  # too close to tol to tell
-    else:
-        if len(bounds) == 3:
-            return rank
-    # Inconclusive (or adj M at rounding level: sigma_2 not bounded away from 0): the SVD decides.
-    return int(np.linalg.matrix_rank(M, tol=tol))
 
 
 def lines_of_planes(camera: PinholeCamera, normals_world: npt.ArrayLike) -> np.ndarray:
@@ -373,33 +331,8 @@ def epipolar_planes(c1: npt.ArrayLike, c2: npt.ArrayLike, X_world: npt.ArrayLike
     c2 = as_vector(c2, "c2", 3)
     check_distinct_centres(c1, c2)
     X = as_points(X_world, "X_world", 3)
-    n = _epipolar_normals(c1, c2, X.T).T
+    n = epipolar_normals_columns(c1, c2, X.T).T
     return np.column_stack([n, -n @ c1])
-
-
-def _epipolar_normals(c1: np.ndarray, c2: np.ndarray, XT: np.ndarray) -> np.ndarray:
-    r"""The unit normals of :func:`epipolar_planes`, coordinate-major: (3, N) from checked ``c1``, ``c2`` (3,)
-    and the points as ``XT`` (3, N) (best contiguous).
-
-    :math:`n = [b]_\times v` with :math:`b = c_2 - c_1`, :math:`v = X - c_1` (one matrix product for all
-    points). NaN columns for points on the baseline, :math:`|n| \le 10^{-12} |b|\,|v|`.
-
-    Raises:
-        DegenerateConfigurationError: the centres coincide.
-    """
-    if _centres_coincide(c1, c2):
-        raise DegenerateConfigurationError("no epipolar geometry: the centres coincide")
-    bx, by, bz = (c2 - c1).tolist()
-    v = XT - c1[:, None]
-    n = _skew(bx, by, bz) @ v
-    norm2 = np.add.reduce(n * n, axis=0)
-    # Points on the baseline: |n| <= 1e-12 |b| |v|, compared squared.
-    on_baseline = norm2 <= np.add.reduce(v * v, axis=0) * (1e-24 * (bx * bx + by * by + bz * bz))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        n /= np.sqrt(norm2)
-    if on_baseline.any():
-        n[:, on_baseline] = np.nan
-    return n
 
 
 def clipped_epipolar_lines(lines: npt.ArrayLike, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:

@@ -25,6 +25,7 @@ import numpy.typing as npt
 
 from ._validate import GeometryError, as_points
 from .camera_model import CameraModel, check_sample_count
+from ._shared import epipolar_normals_columns
 from .epipolar import epipolar_planes
 
 __all__ = ["EpipolarCurvePair", "EpipolarCurves", "epipolar_curves", "epipolar_plane_normals"]
@@ -87,7 +88,7 @@ def epipolar_plane_normals(cam1: CameraModel, cam2: CameraModel, X_world: npt.Ar
 
 def epipolar_curves(
     cam1: CameraModel, cam2: CameraModel, X_world: npt.ArrayLike, *, n_samples: int = 96, conics: bool = True,
-    arcs: bool = True,
+    arcs: bool = True, check: bool = True,
 ) -> EpipolarCurvePair:
     """Epipolar curves of scene points in both cameras, and the epipoles, for any two camera models.
 
@@ -98,6 +99,10 @@ def epipolar_curves(
         n_samples: samples per curve for the arcs (>= 3).
         conics: compute the exact conics (False: ``conics`` is None; a viewer that draws the arcs needs none).
         arcs: sample the arcs (False: ``arcs`` is empty; a viewer that draws a pin-hole's lines clips them itself).
+        check: check the arguments (default). ``check=False`` is the per-drag fast path: the caller promises two
+            camera models, ``X_world`` a float64 (N, 3) array of finite values within ``MAX_MAGNITUDE`` and
+            ``n_samples`` a whole number in ``3..MAX_SAMPLES``; nothing is converted or checked, and anything else
+            gives an undefined result. Coincident centres still raise.
 
     Returns:
         An :class:`EpipolarCurvePair`. A point on the baseline (the centres included) has no unique epipolar
@@ -107,22 +112,26 @@ def epipolar_curves(
         DegenerateConfigurationError: if the two centres coincide.
         GeometryError: on a camera that is not a camera model, or bad points.
     """
-    n_samples = check_sample_count(n_samples, "n_samples", 3)
-    normals = epipolar_plane_normals(cam1, cam2, X_world)
+    if check:
+        n_samples = check_sample_count(n_samples, "n_samples", 3)
+        normals = epipolar_plane_normals(cam1, cam2, X_world)
+    else:
+        # Coordinate-major normals of the checked points (one product for all of them), back to rows.
+        normals = epipolar_normals_columns(cam1.centre, cam2.centre, X_world.T).T
     baseline = cam2.centre - cam1.centre
     return EpipolarCurvePair(
-        normals, _curves(cam1, normals, baseline, n_samples, conics, arcs),
-        _curves(cam2, normals, -baseline, n_samples, conics, arcs),
+        normals, _curves(cam1, normals, baseline, n_samples, conics, arcs, check),
+        _curves(cam2, normals, -baseline, n_samples, conics, arcs, check),
     )
 
 
 def _curves(camera: CameraModel, normals: np.ndarray, towards_other: np.ndarray, n_samples: int,
-            conics: bool, arcs: bool) -> EpipolarCurves:
-    epipoles = camera.baseline_images(towards_other)
+            conics: bool, arcs: bool, check: bool) -> EpipolarCurves:
+    epipoles = camera.baseline_images(towards_other, check=check)
     return EpipolarCurves(
-        conics=camera.plane_image_conics(normals) if conics else None,
-        lines=camera.plane_image_lines(normals),
-        arcs=camera.plane_image_arcs(normals, n_samples) if arcs else [],
+        conics=camera.plane_image_conics(normals, check=check) if conics else None,
+        lines=camera.plane_image_lines(normals, check=check),
+        arcs=camera.plane_image_arcs(normals, n_samples, check=check) if arcs else [],
         epipoles=epipoles.points,
         epipoles_visible=epipoles.visible,
     )

@@ -9,7 +9,7 @@ r"""Pin-hole camera: intrinsics, projection with visibility, back-projection, fr
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import InitVar, dataclass
 from functools import cached_property
 from typing import ClassVar
 
@@ -37,6 +37,7 @@ from .camera_model import (
     double_line_conics,
     finite_nonzero_rows,
     normals_with_planes,
+    unchecked_normals,
     parameters_from_specs,
     rectangle_rim,
 )
@@ -80,8 +81,20 @@ class Intrinsics:
     """Image width in pixels."""
     height: int = 480
     """Image height in pixels."""
+    check: InitVar[bool] = True
+    """``False``: the fields are trusted (plain numbers that a checked ``Intrinsics`` or ``as_calibration`` gave);
+    they are only converted to ``float`` and ``int``, not checked (:meth:`from_K` of a checked ``K``)."""
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, check: bool) -> None:
+        if not check:
+            set_ = object.__setattr__
+            set_(self, "focal_length", float(self.focal_length))
+            set_(self, "pixels_per_metre", tuple(float(x) for x in self.pixels_per_metre))
+            set_(self, "principal_point", tuple(float(x) for x in self.principal_point))
+            set_(self, "skew", float(self.skew))
+            set_(self, "width", int(self.width))
+            set_(self, "height", int(self.height))
+            return
         object.__setattr__(self, "focal_length", as_positive(self.focal_length, "focal_length"))
         ku, kv = as_vector(self.pixels_per_metre, "pixels_per_metre", 2).tolist()
         if not (ku > 0 and kv > 0):
@@ -102,13 +115,22 @@ class Intrinsics:
             ) from None
 
     @classmethod
-    def from_K(cls, K: npt.ArrayLike, width: int = 640, height: int = 480, focal_length: float = 1.0) -> Intrinsics:
-        """Intrinsics whose matrix is ``K``; ``focal_length`` only splits ``ku f`` into its factors."""
-        K = as_calibration(K, "K")
-        f = as_positive(focal_length, "focal_length")
+    def from_K(cls, K: npt.ArrayLike, width: int = 640, height: int = 480, focal_length: float = 1.0, *,
+               check: bool = True) -> Intrinsics:
+        """Intrinsics whose matrix is ``K``; ``focal_length`` only splits ``ku f`` into its factors.
+
+        ``check=False``: the caller promises ``K`` is what ``as_calibration`` returned (float64, upper triangular,
+        ``K[2, 2] = 1``, invertible), ``width`` and ``height`` whole numbers in range and ``focal_length`` a
+        positive float; positive focal lengths are still required. Anything else gives an undefined result.
+        """
+        if check:
+            K = as_calibration(K, "K")
+            f = as_positive(focal_length, "focal_length")
+        else:
+            f = float(focal_length)
         if K[0, 0] <= 0 or K[1, 1] <= 0:
             raise GeometryError("K: expected positive focal lengths K[0,0], K[1,1]")
-        return cls(f, (K[0, 0] / f, K[1, 1] / f), (K[0, 2], K[1, 2]), K[0, 1], width, height)
+        return cls(f, (K[0, 0] / f, K[1, 1] / f), (K[0, 2], K[1, 2]), K[0, 1], width, height, check=check)
 
     @property
     def K(self) -> np.ndarray:
@@ -145,8 +167,20 @@ class PinholeProjection:
     """(N,) z in the camera frame (negative or zero: behind)."""
     in_front: np.ndarray
     """(N,) bool, ``depth > 0``: the point has an image."""
-    in_image: np.ndarray
-    """(N,) bool, in front and inside ``[0, width] x [0, height]``."""
+    image_size: tuple[int, int]
+    """``(width, height)`` of the image, in pixels."""
+
+    @cached_property
+    def in_image(self) -> np.ndarray:
+        """(N,) bool, in front and inside ``[0, width] x [0, height]`` (computed when first read)."""
+        w, h = self.image_size
+        u, v = self.pixels[:, 0], self.pixels[:, 1]
+        with np.errstate(invalid="ignore"):
+            in_image = u >= 0  # NaN compares False: points behind are never in the image
+            in_image &= u <= w
+            in_image &= v >= 0
+            in_image &= v <= h
+        return in_image
 
     @property
     def visible(self) -> np.ndarray:
@@ -234,25 +268,42 @@ class PinholeCamera:
         """:math:`K`: a pin-hole camera images every point linearly."""
         return self.K
 
-    def light_paths(self, X_world: npt.ArrayLike) -> np.ndarray:
-        """(N, 2, 3) segments point -> centre; NaN rows for points behind the camera."""
-        X = as_points(X_world, "X_world", 3)
+    def light_paths(self, X_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+        """(N, 2, 3) segments point -> centre; NaN rows for points behind the camera.
+
+        ``check=False``: as for :meth:`project`.
+        """
+        X = as_points(X_world, "X_world", 3) if check else X_world
         out = np.empty((len(X), 2, 3))
         out[:, 0] = X
         out[:, 1] = self.pose.t
-        out[~self._project(X).in_front] = np.nan
+        # The depth exactly as :meth:`project` computes it (the same product), without the pixels.
+        M = self.K_Rt
+        behind = (X @ M.T)[:, 2] <= (M @ self.pose.t)[2]
+        if behind.any():
+            out[behind] = np.nan
         return out
 
-    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
+    def baseline_images(self, direction_world: npt.ArrayLike, *, check: bool = True) -> DirectionImages:
         """The one image :math:`K R^T d` of the line through the centre along ``d`` (both directions image to it),
-        normalised (``normalize_homogeneous``); shown when :math:`(R^T d)_z > 0` (the direction is in front)."""
-        m = self.K_Rt @ as_direction(direction_world)
+        normalised (``normalize_homogeneous``); shown when :math:`(R^T d)_z > 0` (the direction is in front).
+
+        ``check=False``: the caller promises a float64 (3,) finite, non-zero ``direction_world``; nothing is checked
+        (anything else gives an undefined result).
+        """
+        m = self.K_Rt @ (as_direction(direction_world) if check else direction_world)
         x, y, z = m.tolist()
         return DirectionImages(normalize_homogeneous3(x, y, z)[None, :], np.array([z > 0]))
 
-    def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray:
+    def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         r"""Image lines :math:`l = K^{-T} R^T n` (N, 3) of planes through the centre; NaN rows for zero or NaN
-        normals."""
+        normals.
+
+        ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN (each is still
+        divided by its largest entry, as in the checked call); anything else gives an undefined result.
+        """
+        if not check:
+            return unchecked_normals(normals_world) @ self.plane_to_line.T
         n, good = normals_with_planes(normals_world)
         if len(good) == len(n):
             return n @ self.plane_to_line.T
@@ -261,14 +312,19 @@ class PinholeCamera:
             lines[good] = n[good] @ self.plane_to_line.T
         return lines
 
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
-        """The double lines :math:`l l^T / |l|^2` of :meth:`plane_image_lines`."""
-        return double_line_conics(self.plane_image_lines(normals_world))
+    def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+        """The double lines :math:`l l^T / |l|^2` of :meth:`plane_image_lines` (``check`` as there)."""
+        return double_line_conics(self.plane_image_lines(normals_world, check=check))
 
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[list[np.ndarray]]:
-        """Per normal, its image line clipped to the image rectangle as one (2, 2) segment (or none)."""
-        check_sample_count(n_samples, "n_samples", 2)
-        lines = self.plane_image_lines(normals_world)
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96, *,
+                         check: bool = True) -> list[list[np.ndarray]]:
+        """Per normal, its image line clipped to the image rectangle as one (2, 2) segment (or none).
+
+        ``check=False``: as for :meth:`plane_image_lines`, and ``n_samples`` (not needed here) is not checked.
+        """
+        if check:
+            check_sample_count(n_samples, "n_samples", 2)
+        lines = self.plane_image_lines(normals_world, check=check)
         out: list[list[np.ndarray]] = [[] for _ in range(len(lines))]
         good = finite_nonzero_rows(lines)
         if len(good):
@@ -331,17 +387,27 @@ class PinholeCamera:
     def with_intrinsics(self, intrinsics: Intrinsics) -> PinholeCamera:
         return dataclasses.replace(self, intrinsics=intrinsics)
 
-    def project(self, X_world: npt.ArrayLike) -> PinholeProjection:
+    def project(self, X_world: npt.ArrayLike, *, check: bool = True) -> PinholeProjection:
         r"""Project world points (N, 3): :math:`m \sim K R^T (X_w - t)`.
 
         Points with :math:`z_c \le 0` are behind the camera: NaN pixel, ``in_front`` False.
+
+        Args:
+            X_world: (N, 3) world points (a (3,) point is N = 1).
+            check: convert and check ``X_world`` (default). ``check=False`` is the fast path for points checked
+                once already (a scene's points on every drag): the caller promises a float64 (N, 3) array of
+                finite values within ``MAX_MAGNITUDE``; nothing is converted or checked, and anything else gives an
+                undefined result (wrong values or a numpy error, never a ``GeometryError``).
         """
-        return self._project(as_points(X_world, "X_world", 3))
+        return self._project(as_points(X_world, "X_world", 3) if check else X_world)
 
     def _project(self, X: np.ndarray) -> PinholeProjection:
         """:meth:`project` of checked (N, 3) float64 points (internal: no conversion, no check)."""
         M = self.K_Rt
         c = M @ self.pose.t
+        size = (self.intrinsics.width, self.intrinsics.height)
+        if X.flags.f_contiguous and not X.flags.c_contiguous:
+            return self._project_columns(X.T, M, c, size)
         # K R^T (X - t) = K R^T X - K R^T t: one thin product, then per-column work (no (N, 3) temporaries).
         m = X @ M.T
         depth = m[:, 2] - c[2]
@@ -353,14 +419,22 @@ class PinholeCamera:
             np.multiply(m[:, 1] - c[1], inv, out=pixels[:, 1])
         if not in_front.all():
             pixels[~in_front] = np.nan
-        w, h = self.intrinsics.width, self.intrinsics.height
-        u, v = pixels[:, 0], pixels[:, 1]
-        with np.errstate(invalid="ignore"):
-            in_image = u >= 0  # NaN compares False: points behind are never in the image
-            in_image &= u <= w
-            in_image &= v >= 0
-            in_image &= v <= h
-        return PinholeProjection(pixels, depth, in_front, in_image)
+        return PinholeProjection(pixels, depth, in_front, size)
+
+    @staticmethod
+    def _project_columns(XT: np.ndarray, M: np.ndarray, c: np.ndarray, size: tuple[int, int]) -> PinholeProjection:
+        """:meth:`_project` of points given as the rows of a (3, N) array (EGT's columns, transposed): the same
+        arithmetic on contiguous coordinate rows (a product of the transposed view would be several times slower);
+        the pixels are the rows (N, 2) of a (2, N) array."""
+        m = M @ XT
+        m -= c[:, None]  # (m - c): the same values as the row path's differences
+        depth = m[2]
+        in_front = depth > 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pixels_T = m[:2] * (1.0 / depth)
+        if not in_front.all():
+            pixels_T[:, ~in_front] = np.nan
+        return PinholeProjection(pixels_T.T, depth, in_front, size)
 
     def back_project(self, pixels: npt.ArrayLike) -> np.ndarray:
         r"""Unit world directions (N, 3) of the rays through ``pixels`` (N, 2): :math:`d \propto R K^{-1} m`."""
@@ -380,8 +454,16 @@ class PinholeCamera:
         d_cam = d_cam * (depth / d_cam[:, 2:3])
         return self.pose.to_world(d_cam)
 
-    def image_to_world(self, pixels: npt.ArrayLike, depth: float = 1.0) -> np.ndarray:
-        """World points (N, 3) of ``pixels`` (N, 2) on the plane ``z_c = depth`` (for drawing the image in 3D)."""
-        m = as_points(pixels, "pixels", 2)
+    def image_to_world(self, pixels: npt.ArrayLike, depth: float = 1.0, *, check: bool = True) -> np.ndarray:
+        """World points (N, 3) of ``pixels`` (N, 2) on the plane ``z_c = depth`` (for drawing the image in 3D).
+
+        ``check=False`` (the viewer, on every drag, with the derived pixels): the caller promises a float64 (N, 2)
+        array of finite pixels and a positive finite ``depth``; nothing is checked, anything else gives an
+        undefined result.
+        """
+        if check:
+            m, depth = as_points(pixels, "pixels", 2), as_positive(depth, "depth")
+        else:
+            m = pixels
         d_cam = np.column_stack([m, np.ones(len(m))]) @ self.K_inv.T
-        return self.pose.to_world(d_cam * as_positive(depth, "depth"))
+        return (d_cam * depth) @ self.pose.R.T + self.pose.t

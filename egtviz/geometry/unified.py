@@ -74,6 +74,7 @@ from .camera_model import (
     check_sample_count,
     finite_nonzero_rows,
     parameters_from_specs,
+    unchecked_normals,
 )
 from .homogeneous import normalize_homogeneous
 from .poses import Pose
@@ -166,15 +167,22 @@ class UnifiedCamera:
         r""":math:`K` for :math:`\xi = 0` (the model is then a pin-hole camera), else None."""
         return self.K if self.xi == 0.0 else None
 
-    def light_paths(self, X_world: npt.ArrayLike, radius: float = 0.5) -> np.ndarray:
+    def light_paths(self, X_world: npt.ArrayLike, radius: float = 0.5, *, check: bool = True) -> np.ndarray:
         """(N, 3, 3) polylines point -> its point on the sphere of ``radius`` -> the projection centre; NaN rows for
-        points without an image."""
-        X = as_points(X_world, "X_world", 3)
+        points without an image.
+
+        ``check=False``: as for :meth:`project`, and ``radius`` a positive float (not checked).
+        """
+        if check:
+            X, radius = as_points(X_world, "X_world", 3), as_positive(radius, "radius")
+        else:
+            X = X_world
+        v = X - self.pose.t
         out = np.empty((len(X), 3, 3))
         out[:, 0] = X
-        out[:, 1] = self.sphere_points(X, radius)
-        out[:, 2] = self.projection_centre(radius)
-        out[~self._project_local(self.pose.to_local(X)).visible] = np.nan
+        out[:, 1] = self._sphere_points(v, radius)
+        out[:, 2] = self._projection_centre(radius)
+        out[~self._project_local(v @ self.pose.R).visible] = np.nan
         return out
 
     @cached_property
@@ -196,7 +204,9 @@ class UnifiedCamera:
 
     def projection_centre(self, radius: float = 1.0) -> np.ndarray:
         r"""(3,) world position of the projection centre :math:`(0, 0, -\xi)` for a sphere of ``radius``."""
-        radius = as_positive(radius, "radius")
+        return self._projection_centre(as_positive(radius, "radius"))
+
+    def _projection_centre(self, radius: float) -> np.ndarray:
         return self.pose.t - (radius * self.xi) * self.pose.R[:, 2]
 
     def sphere_points(self, X_world: npt.ArrayLike, radius: float = 1.0) -> np.ndarray:
@@ -205,7 +215,10 @@ class UnifiedCamera:
         A point at the centre has no ray: NaN row.
         """
         radius = as_positive(radius, "radius")
-        v = as_points(X_world, "X_world", 3) - self.pose.t
+        return self._sphere_points(as_points(X_world, "X_world", 3) - self.pose.t, radius)
+
+    def _sphere_points(self, v: np.ndarray, radius: float) -> np.ndarray:
+        """:meth:`sphere_points` of the offsets ``v = X - t`` (N, 3), unchecked."""
         norm = np.linalg.norm(v, axis=1, keepdims=True)
         with np.errstate(divide="ignore", invalid="ignore"):
             s = np.where(norm > 0, v / norm, np.nan)
@@ -226,17 +239,23 @@ class UnifiedCamera:
         return self.pose.t + radius * (np.cos(theta)[:, None] * u[0] + np.sin(theta)[:, None] * v[0])
 
     # ------------------------------------------------------------------ projection
-    def project(self, X_world: npt.ArrayLike) -> CameraProjection:
+    def project(self, X_world: npt.ArrayLike, *, check: bool = True) -> CameraProjection:
         r"""Project world points (N, 3) through the sphere.
 
         .. math:: s = \frac{R^T (X - t)}{|R^T (X - t)|}, \qquad m \sim K (s_x, s_y, s_z + \xi).
+
+        Args:
+            X_world: (N, 3) world points.
+            check: convert and check ``X_world`` (default). ``check=False``: the caller promises a float64 (N, 3)
+                array of finite values within ``MAX_MAGNITUDE``; nothing is converted or checked, and anything else
+                gives an undefined result (never a ``GeometryError``).
 
         Returns:
             A :class:`~egtviz.geometry.camera_model.CameraProjection`: NaN pixels and ``visible`` False where
             :math:`s_z + \xi \le 0` (for :math:`\xi = 0`, behind the camera) or at the centre itself.
         """
-        d = self.pose.to_local(as_points(X_world, "X_world", 3))
-        return self._project_local(d)
+        X = as_points(X_world, "X_world", 3) if check else X_world
+        return self._project_local((X - self.pose.t) @ self.pose.R)
 
     def _project_local(self, d: np.ndarray) -> CameraProjection:
         norm = np.linalg.norm(d, axis=1)
@@ -271,38 +290,48 @@ class UnifiedCamera:
         s /= np.linalg.norm(s, axis=1, keepdims=True)
         return s @ self.pose.R.T
 
-    def baseline_images(self, direction_world: npt.ArrayLike) -> DirectionImages:
+    def baseline_images(self, direction_world: npt.ArrayLike, *, check: bool = True) -> DirectionImages:
         r"""The images :math:`K (s_x, s_y, s_z + \xi)` of :math:`s = \pm R^T d / |d|`, visible where
         :math:`s_z + \xi > 0` (the image of a ray not seen is the other intersection of its line with the
-        sphere's image, still on every conic of a plane containing the line)."""
-        d = self.pose.R.T @ as_direction(direction_world)
+        sphere's image, still on every conic of a plane containing the line).
+
+        ``check=False``: the caller promises a float64 (3,) finite, non-zero ``direction_world`` (not checked).
+        """
+        d = self.pose.R.T @ (as_direction(direction_world) if check else direction_world)
         s = np.stack([d, -d]) / np.linalg.norm(d)
         q = s.copy()
         q[:, 2] += self.xi
         return DirectionImages(normalize_homogeneous(q @ self.K.T), q[:, 2] > 0)
 
     # ------------------------------------------------------------------ planes through the centre
-    def plane_image_conics(self, normals_world: npt.ArrayLike) -> np.ndarray:
+    def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         r"""Image conics (N, 3, 3) :math:`C = K^{-T} \Omega K^{-1}` of planes through the centre (world normals
         (N, 3)), symmetric with unit Frobenius norm (sign arbitrary); NaN rows for zero or NaN normals.
 
         ``C`` is the image of the whole great circle; where :math:`\xi > 0` and the circle dips below
         :math:`s_z = -\xi`, part of it (a branch to infinity) belongs to rays that are not seen.
-        """
-        return great_circle_conics(as_normals(normals_world) @ self.pose.R, self.xi, self._K_inv)
 
-    def plane_image_lines(self, normals_world: npt.ArrayLike) -> np.ndarray | None:
+        ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN.
+        """
+        n = as_normals(normals_world) if check else unchecked_normals(normals_world)
+        return great_circle_conics(n @ self.pose.R, self.xi, self._K_inv)
+
+    def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:
         r"""For :math:`\xi = 0` (a pin-hole) the image lines :math:`l = K^{-T} R^T n` (N, 3), NaN rows for zero or NaN
-        normals; otherwise None."""
+        normals; otherwise None.
+
+        ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN.
+        """
         if self.xi != 0.0:
             return None
-        n = as_normals(normals_world)
+        n = as_normals(normals_world) if check else unchecked_normals(normals_world)
         lines = np.full((len(n), 3), np.nan)
         good = finite_nonzero_rows(n)
         lines[good] = (n[good] @ self.pose.R) @ self._K_inv
         return lines
 
-    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96) -> list[list[np.ndarray]]:
+    def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96, *,
+                         check: bool = True) -> list[list[np.ndarray]]:
         r"""Per world normal, the drawn arc of its plane's image: the part of the great circle inside the cap
         :math:`s_z \ge c_\rho` of the drawn disc (module docstring).
 
@@ -312,12 +341,18 @@ class UnifiedCamera:
         the rim; a circle wholly inside the cap is one closed polyline of ``n_samples + 1`` points. Every
         sample has :math:`s_z + \xi \ge c_\rho + \xi > 0`: no invisible ray and no branch to infinity.
 
+        ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN and a whole
+        number ``n_samples`` in ``3..MAX_SAMPLES``; nothing is checked.
+
         Returns:
             For each normal a list with one (k, 2) polyline, or an empty list (zero or NaN normal, or the
             circle misses the cap).
         """
-        n_samples = check_sample_count(n_samples, "n_samples", 3)
-        n = as_normals(normals_world)
+        if check:
+            n_samples = check_sample_count(n_samples, "n_samples", 3)
+            n = as_normals(normals_world)
+        else:
+            n = unchecked_normals(normals_world)
         out: list[list[np.ndarray]] = [[] for _ in range(len(n))]
         good = finite_nonzero_rows(n)
         if len(good) == 0:

@@ -14,10 +14,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
 from ..geometry import GeometryError, Pose
+from ..geometry._shared import matrix_rank3
 from ..geometry.camera_model import (
     CAMERA_MODELS,
     CameraModel,
@@ -27,7 +29,7 @@ from ..geometry.epipolar import essential_from_poses, fundamental_from_essential
 from ..geometry.epipolar_curves import EpipolarCurves, epipolar_curves
 from ..geometry.homogeneous import clip_lines_to_rect
 from .scene import Scene
-from .specs import SceneError
+from ._values import SceneError
 
 COINCIDENT_MESSAGE = "no epipolar geometry: the centres coincide"
 #: Samples on each epipolar curve (polylines): fewer per curve when there are many, so that a panel holds about
@@ -150,16 +152,28 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
+class _CameraBlock(NamedTuple):
+    cam: CameraModel
+    pose: tuple[np.ndarray, np.ndarray]
+    ray: np.ndarray
+    plane: ImagePlane
+    overflow: str | None
+    """Why the camera cannot be drawn (its pixels or rays overflow), or None."""
+
+
 @lru_cache(maxsize=64)
-def _camera_block(spec, points: tuple) -> dict:
+def _camera_block(spec, points: tuple, check: bool) -> _CameraBlock:
     """Everything about one camera that depends only on its spec and the points (cached: a drag changes one
-    camera, so the others' projections, light paths and image content are reused). Arrays are read-only."""
+    camera, so the others' projections, light paths and image content are reused). Arrays are read-only.
+
+    The points were checked when the scene took them (``Scene.points_array``): the core is called with
+    ``check=False`` unless ``check`` asks for its checked calls (the reference the tests compare with)."""
     X = points.array  # type: ignore[attr-defined]
     cam = spec.camera()
     pose = cam.pose
-    proj = cam.project(X)
+    proj = cam.project(X, check=check)
     visible = proj.visible
-    rim, horizon = _rim_and_horizon(spec.model_kind, tuple(spec.model_values().items()))
+    rim, horizon = _rim_and_horizon(spec.model_kind, spec.model_key)
     plane = ImagePlane(
         camera=spec.name,
         width=cam.width,
@@ -172,12 +186,13 @@ def _camera_block(spec, points: tuple) -> dict:
         rim=rim,
         horizon=horizon,
     )
-    return {
-        "cam": cam,
-        "pose": (_frozen(np.array(pose.quat_wxyz)), _frozen(pose.t.copy())),
-        "ray": _frozen(cam.light_paths(X)),
-        "plane": plane,
-    }
+    ray = _frozen(cam.light_paths(X, check=check))
+    overflow = None
+    if np.isinf(plane.points).any():
+        overflow = f"cannot be drawn: camera {spec.name!r}: image coordinates overflow"
+    elif np.isinf(ray).any():
+        overflow = f"cannot be drawn: camera {spec.name!r}: rays overflow"
+    return _CameraBlock(cam, (_frozen(np.array(pose.quat_wxyz)), pose.t), ray, plane, overflow)
 
 
 @lru_cache(maxsize=64)
@@ -193,31 +208,37 @@ def _rim_and_horizon(kind: str, values: tuple[tuple[str, float], ...]) -> tuple[
     return (None if rim is None else _frozen(rim)), horizon
 
 
-def compute_derived(scene: Scene) -> Derived:
+def compute_derived(scene: Scene, *, check: bool = False) -> Derived:
     """Project, and compute the epipolar entities of the drawn pair, for every camera of ``scene``.
+
+    The scene was checked when it was made (its points, its specs, so its cameras), so the core is called on
+    its fast path (``check=False``, ``docs/conventions.md``). ``check=True`` calls the core's checked functions
+    instead: the same results (the tests compare the two), slower.
 
     Raises:
         SceneError: the scene cannot be drawn (the core refused it, or a drawn value is infinite). A scene
             whose ``compute_derived`` succeeds is one the viewer can draw.
     """
     try:
-        derived = _compute_derived(scene)
+        derived = _compute_derived(scene, check=True) if check else _compute_derived(scene)
     except (GeometryError, ArithmeticError, ValueError) as exc:
         raise SceneError(f"cannot be drawn: {exc}") from exc
-    for name, plane in derived.image_planes.items():
-        if np.isinf(plane.points).any() or (plane.lines is not None and np.isinf(plane.lines).any()):
+    for name in derived.pair.names or ():
+        lines = derived.image_planes[name].lines
+        if lines is not None and np.isinf(lines).any():
             raise SceneError(f"cannot be drawn: camera {name!r}: image coordinates overflow")
-    for name, ray in derived.rays.items():
-        if np.isinf(ray).any():
-            raise SceneError(f"cannot be drawn: camera {name!r}: rays overflow")
     return derived
 
 
-def _compute_derived(scene: Scene) -> Derived:
+def _compute_derived(scene: Scene, check: bool = False) -> Derived:
     X = scene.points_array()
-    blocks = {spec.name: _camera_block(spec, scene.points) for spec in scene.cameras}
-    cams = {name: b["cam"] for name, b in blocks.items()}
-    planes: dict[str, ImagePlane] = {name: b["plane"] for name, b in blocks.items()}
+    points = scene.points
+    blocks = {spec.name: _camera_block(spec, points, check) for spec in scene.cameras}
+    for b in blocks.values():
+        if b.overflow is not None:
+            raise SceneError(b.overflow)
+    cams = {name: b.cam for name, b in blocks.items()}
+    planes: dict[str, ImagePlane] = {name: b.plane for name, b in blocks.items()}
 
     pair_names = scene.drawn_pair
     readout = PairReadout(pair_names)
@@ -228,7 +249,7 @@ def _compute_derived(scene: Scene) -> Derived:
         lo, hi = CONIC_SAMPLES
         n_samples = min(max(CONIC_VERTEX_BUDGET // max(len(X), 1), lo), hi)
         try:
-            curves = epipolar_curves(c1, c2, X, n_samples=n_samples, conics=False, arcs=False)
+            curves = epipolar_curves(c1, c2, X, n_samples=n_samples, conics=False, arcs=False, check=check)
         except GeometryError:  # DegenerateConfigurationError: the centres coincide
             for n in pair_names:
                 planes[n] = replace(planes[n], message=COINCIDENT_MESSAGE, in_pair=True)
@@ -239,8 +260,9 @@ def _compute_derived(scene: Scene) -> Derived:
             segments = _clipped_lines([(side, planes[name]) for name, _, _, side in sides])
             for (name, idx, cam, side), seg in zip(sides, segments, strict=True):
                 planes[name] = replace(planes[name], in_pair=True,
-                                       **_pair_content(cam, side, seg, curves.normals, n_samples, idx, planes[name]))
-            readout = _readout(pair_names, c1, c2, curves.first, curves.second)
+                                       **_pair_content(cam, side, seg, curves.normals, n_samples, idx, planes[name],
+                                                       check))
+            readout = _readout(pair_names, c1, c2, curves.first, curves.second, check)
             sel = scene.selected_point
             if sel is not None and not math.isnan(curves.normals[sel, 0]):  # a normal is all NaN or all finite
                 tri = np.array([c1.centre, c2.centre, X[sel]])
@@ -251,8 +273,8 @@ def _compute_derived(scene: Scene) -> Derived:
     return Derived(
         image_planes=planes,
         pair=readout,
-        poses={name: b["pose"] for name, b in blocks.items()},
-        rays={name: b["ray"] for name, b in blocks.items()},
+        poses={name: b.pose for name, b in blocks.items()},
+        rays={name: b.ray for name, b in blocks.items()},
         cameras=cams,
         epipolar_plane=epi_plane,
         selected_normal=selected_normal,
@@ -270,17 +292,18 @@ def _clipped_lines(sides: list[tuple[EpipolarCurves, ImagePlane]]) -> list[np.nd
     for k in drawn:
         groups.setdefault((sides[k][1].width, sides[k][1].height), []).append(k)
     for (w, h), members in groups.items():
-        lines = np.concatenate([sides[k][0].lines for k in members])
+        lines = np.concatenate([sides[k][0].lines for k in members]) if len(members) > 1 else sides[members[0]][0].lines
         # The core computed these lines from validated cameras: its unchecked path, which also gives NaN rows for
         # a point with no line (NaN or zero), as for a line that misses the image.
         seg = clip_lines_to_rect(lines, w, h, check=False)[0]
-        for k, part in zip(members, np.split(seg, len(members)), strict=True):
-            out[k] = _frozen(part)
+        n = len(seg) // len(members)
+        for j, k in enumerate(members):
+            out[k] = _frozen(seg[j * n:(j + 1) * n])
     return out
 
 
 def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | None, normals: np.ndarray,
-                  n_samples: int, idx: str, plane: ImagePlane) -> dict:
+                  n_samples: int, idx: str, plane: ImagePlane, check: bool) -> dict:
     """Epipoles and epipolar curves of one camera of the drawn pair, as its panel draws them.
 
     A model with one image of the baseline (a pin-hole: both directions image to one point, where every epipolar
@@ -298,21 +321,23 @@ def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | 
     )
     if lines is not None:
         return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(np.array(curves.lines, float))}
-    arcs = cam.plane_image_arcs(normals, n_samples)
+    arcs = cam.plane_image_arcs(normals, n_samples, check=check)
     # tuple() of a tuple is that tuple: the models' tuples are kept, any other sequence becomes one.
     return {"epipoles": epipoles, "conics": tuple(map(tuple, arcs))}
 
 
 def _readout(names: tuple[str, str], c1: CameraModel, c2: CameraModel, first: EpipolarCurves,
-             second: EpipolarCurves) -> PairReadout:
+             second: EpipolarCurves, check: bool) -> PairReadout:
     r"""E between the rays of any pair, :math:`d_2^T E d_1 = 0`; F between pixels when both cameras image
     linearly, :math:`F = K_2^{-T} E K_1^{-1}`; the epipoles towards the other centre."""
-    E = essential_from_poses(c1.pose, c2.pose)
+    E = essential_from_poses(c1.pose, c2.pose, check=check)
     K1, K2 = c1.projective_calibration, c2.projective_calibration
     F = rank = None
     if K1 is not None and K2 is not None:
-        F = fundamental_from_essential(E, K1, K2)
-        rank = int(np.linalg.matrix_rank(F, tol=1e-9 * np.linalg.norm(F)))
+        F = fundamental_from_essential(E, K1, K2, check=check)
+        tol = 1e-9 * np.linalg.norm(F)
+        # The SVD's rank, decided from F's invariants when they are conclusive (every drag of a pin-hole pair).
+        rank = int(np.linalg.matrix_rank(F, tol=tol)) if check else matrix_rank3(F, tol)
     return PairReadout(names, F, E, rank, first.epipoles[0], second.epipoles[0])
 
 

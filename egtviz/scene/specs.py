@@ -231,14 +231,22 @@ class _CameraSpecBase:
 
     @cached_property
     def _camera(self) -> CameraModel:
-        return _model_at_origin(self.model_kind, tuple(self.model_values().items())).moved(self.pose)
+        return _model_at_origin(self.model_kind, self.model_key).moved(self.pose)
+
+    @property
+    def model_key(self) -> tuple[tuple[str, float], ...]:
+        """``tuple(model_values().items())``, remembered when the spec was checked: what the camera depends on
+        besides the pose (a key for caches of pose-free content, such as the drawn region)."""
+        return self.__dict__["_model_key"]
 
     def _check_model(self) -> None:
         """Build the model once at the origin: a value the model refuses is a SceneError naming this camera."""
+        key = tuple(self.model_values().items())
         try:
-            _model_at_origin(self.model_kind, tuple(self.model_values().items()))
+            _model_at_origin(self.model_kind, key)
         except GeometryError as exc:
             raise SceneError(f"camera {self.name!r}: {exc}") from exc
+        object.__setattr__(self, "_model_key", key)
 
     def with_pose(self, position: Any = None, ypr_deg: Any = None) -> Any:
         """This spec at another place (a drag): ``dataclasses.replace`` with the new position and angles."""

@@ -53,7 +53,7 @@ class PinholeDrawing(CameraDrawing):
         if self._pts_src is not plane.points:  # an unchanged camera brings the same array
             ok = np.flatnonzero(plane.visible)
             if len(ok):
-                P = camera.image_to_world(plane.points[ok], IMAGE_PLANE_DEPTH)
+                P = camera.image_to_world(plane.points[ok], IMAGE_PLANE_DEPTH, check=False)  # derived pixels
                 assign_array(self.img_pts, "points", P.astype(np.float32))
                 assign_array(self.img_pts, "colors", np.ascontiguousarray(colours(n)[ok]))
             assign(self.img_pts, "visible", len(ok) > 0)
@@ -68,7 +68,8 @@ class PinholeDrawing(CameraDrawing):
                 hit = rows[np.isfinite(L[rows]).all(axis=(1, 2))]
                 lines3 = np.full((len(L), 2, 3), np.nan)
                 if len(hit):
-                    lines3[hit] = camera.image_to_world(L[hit].reshape(-1, 2), IMAGE_PLANE_DEPTH).reshape(-1, 2, 3)
+                    lines3[hit] = camera.image_to_world(L[hit].reshape(-1, 2), IMAGE_PLANE_DEPTH,
+                                                        check=False).reshape(-1, 2, 3)
                 seg, point = segments(lines3, ctx.line_rows)
                 if len(seg):
                     assign_array(self.img_lines, "points", seg)
