@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import gc
 import re
+import threading
 import time
 
 import pytest
@@ -48,12 +49,12 @@ def notes(clients, monkeypatch):
 
 
 def test_the_budget_refuses_what_does_not_fit_and_frees_on_release():
-    budget = ServoBudget(frames=100)
+    budget = ServoBudget(frames=100, queue_seconds=0.0)
     a, b, c = object.__new__(type("A", (), {})), object.__new__(type("B", (), {})), object.__new__(type("C", (), {}))
     budget.reserve(a, 60)
     budget.reserve(b, 40)
-    with pytest.raises(ServoBusy, match=r"busy with 2 other servo runs \(100 of its 100 frames\); this run needs "
-                                        r"up to 1\. Try again in a moment"):
+    with pytest.raises(ServoBusy, match=r"^The server is busy with 2 other servo runs \(100 of its 100 frames\); "
+                                        r"this run needs up to 1\. Try again in a moment, or with fewer max steps\.$"):
         budget.reserve(c, 1)
     assert budget.held(c) == 0 and budget.held() == 100  # a refusal changes nothing
     budget.reserve(a, 30)  # a's next run replaces its last one
@@ -72,11 +73,46 @@ def test_the_budget_refuses_what_does_not_fit_and_frees_on_release():
 
 
 def test_the_server_budget_is_the_named_limit():
-    assert SERVER_BUDGET.frames == SERVO_SERVER_FRAMES == 2 * SERVO_DEMO_STEPS.high
+    assert SERVER_BUDGET.frames == SERVO_SERVER_FRAMES == 2 * (SERVO_DEMO_STEPS.high + 1)  # two runs at the bound
+
+
+def test_a_run_that_does_not_fit_waits_for_frames_and_is_told_why():
+    budget = ServoBudget(frames=100, queue_seconds=30.0)
+    a, b = object.__new__(type("A", (), {})), object.__new__(type("B", (), {}))
+    budget.reserve(a, 100)
+    told: list[str] = []
+    got = threading.Event()
+
+    def wait_for_frames():
+        budget.reserve(b, 60, waiting=told.append)
+        got.set()
+
+    thread = threading.Thread(target=wait_for_frames)
+    thread.start()
+    time.sleep(0.3)
+    assert not got.is_set() and told == ["The server is busy with 1 other servo run (100 of its 100 frames); this "
+                                         "run needs up to 60; it waits up to 30 s for them."]
+    budget.shrink(a, 40)  # a's run converged early: the waiting run fits
+    assert got.wait(5.0) and budget.held(b) == 60
+    thread.join()
+    closed = threading.Event()
+    errors = []
+
+    def cancelled_wait():
+        try:
+            budget.reserve(object.__new__(type("C", (), {})), 60, cancelled=closed.is_set)
+        except ServoBusy as exc:
+            errors.append(str(exc))
+
+    thread = threading.Thread(target=cancelled_wait)
+    thread.start()
+    closed.set()  # its tab closed
+    thread.join(5.0)
+    assert not thread.is_alive() and "busy with 2 other servo runs" in errors[0]
 
 
 def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another_closes(clients, notes):
-    budget = ServoBudget(frames=2 * (STEPS + 1))
+    budget = ServoBudget(frames=2 * (STEPS + 1), queue_seconds=0.0)
     demos = []
     try:
         for client in clients[:2]:
@@ -85,7 +121,8 @@ def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another
             assert demo.wait(60) and demo.result is not None and demo.result.n_samples == STEPS + 1
         third = make_servo_demo(clients[2], "pinhole", steps=STEPS, autoplay=False, budget=budget)
         demos.append(third)
-        assert not third.running and third.result is None  # refused: nothing simulated
+        assert third.wait(30) and not third.running and third.result is None  # refused: nothing simulated
+        assert not third.btn_run.disabled
         assert notes[2] == [("Server busy", notes[2][0][1])]
         assert re.search(r"busy with 2 other servo runs .*Try again in a moment", notes[2][0][1])
         assert "busy with 2 other servo runs" in third.status.content
@@ -148,3 +185,25 @@ def test_the_lessons_measured_runs_are_cached_within_the_frame_budget(monkeypatc
     assert again.time.tolist() == first.time.tolist()  # simulated again, the same run
     servo_runs.simulate(runs[2])
     assert simulated == [0, 1, 2, 0]  # the newest are kept
+
+
+def test_a_queued_run_says_so_and_runs_when_another_tab_closes(clients, notes):
+    budget = ServoBudget(frames=2 * (STEPS + 1) - 1, queue_seconds=30.0)
+    first = make_servo_demo(clients[0], "pinhole", steps=STEPS, autoplay=False, budget=budget)
+    second = None
+    try:
+        assert first.wait(60) and first.result is not None
+        second = make_servo_demo(clients[1], "pinhole", steps=STEPS, autoplay=False, budget=budget)
+        deadline = time.time() + 10
+        while "Queued" not in second.status.content and time.time() < deadline:
+            time.sleep(0.02)
+        assert "Queued: The server is busy with 1 other servo run" in second.status.content
+        assert second.running and second.result is None
+        first.close()
+        assert second.wait(60) and second.result is not None and second.result.n_samples == STEPS + 1
+        assert notes[1] == []  # queued, not refused
+    finally:
+        first.close()
+        if second is not None:
+            second.close()
+    assert budget.held() == 0

@@ -457,17 +457,11 @@ class ServoPlayer(ABC):
         with self.lock:
             if self._closed.is_set() or self.running:
                 return False
-            kw = self.params()
-            try:
-                self.budget.reserve(self, int(kw["steps"]) + 1)
-            except ServoBusy as exc:
-                self.status.content = self._status_html("warn", str(exc))
-                notify_busy(self.client, exc)
-                return False
             self.pause()
             self.running = True
             self._sim_gen += 1
             gen = self._sim_gen
+            kw = self.params()
             self.btn_run.disabled = True
             self.progress.value = 0.0
             self.progress.visible = True
@@ -580,6 +574,14 @@ class ServoPlayer(ABC):
         result = frames = None
         error = ""
         try:
+            self.budget.reserve(self, kw["steps"] + 1, cancelled=stale,
+                                waiting=lambda why: self._say(gen, "warn", f"Queued: {why}"))
+        except ServoBusy as exc:
+            self._say(gen, "warn", str(exc), running=False)
+            notify_busy(self.client, exc)
+            return
+        self._say(gen, "running", "Simulating ...")
+        try:
             result = self._simulate_run(kw, progress)
             frames = self._derive_frames(result, stale)
         except (ValueError, TypeError) as exc:
@@ -618,6 +620,17 @@ class ServoPlayer(ABC):
                 self.status.content = self._status_html("error", f"lesson check failed: {exc}")
         if self.autoplay:
             self.play()
+
+    def _say(self, gen: int, level: str, text: str, *, running: bool = True) -> None:
+        """Show ``text`` in the status line while run ``gen`` is the tab's; ``running=False`` ends the run."""
+        with self.lock:
+            if self._closed.is_set() or gen != self._sim_gen:
+                return
+            self.status.content = self._status_html(level, text)
+            if not running:
+                self.running = False
+                self.btn_run.disabled = False
+                self.progress.visible = False
 
     def _install_result(self) -> None:
         r = self.result
