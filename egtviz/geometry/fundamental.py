@@ -82,8 +82,12 @@ def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.nd
     (H&Z Algorithm 11.1, step (i)); their scales are ``T[0, 0]``.
     """
     n = u1.shape[0]
-    Un, T = hartley_normalization(np.concatenate((u1, u2)).reshape(2, n, 2), ("U1", "U2"), check=False)
-    return design_matrix(Un[0], Un[1]), T[0], T[1]
+    # Homogeneous normalised points of both images, (2, 3, N); the design matrix is their Kronecker
+    # product, column by column, in one broadcast product.
+    H = np.empty((2, 3, n))
+    T = hartley_normalization((u1, u2), ("U1", "U2"), check=False, out=H[:, :2])[1]
+    H[:, 2] = 1.0
+    return (H[1][:, None, :] * H[0][None, :, :]).reshape(9, n), T[0], T[1]
 
 
 def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
@@ -114,6 +118,28 @@ def canonical_fundamental(F: np.ndarray) -> np.ndarray:
     G = F / max(F.ravel().tolist(), key=abs)
     g = G.ravel()
     return G / math.sqrt(g.dot(g))
+
+
+def _denormalize_canonical(Fn: np.ndarray, T1: np.ndarray, T2: np.ndarray) -> np.ndarray:
+    r""":func:`canonical_fundamental` of :math:`F = T_2^T \hat F T_1` (H&Z Algorithm 11.1, step (iii)).
+
+    For the similarities :math:`T = [s, 0, p;\ 0, s, q;\ 0, 0, 1]` of Hartley's normalisation the
+    product is written out on Python floats: numpy's per-call cost dominates on nine numbers.
+    """
+    s1, _, p1 = T1[0].tolist()
+    q1 = float(T1[1, 2])
+    s2, _, p2 = T2[0].tolist()
+    q2 = float(T2[1, 2])
+    rows = []
+    for r0, r1, r2 in Fn.tolist():  # F_hat T1, row by row
+        rows.append((s1 * r0, s1 * r1, p1 * r0 + q1 * r1 + r2))
+    (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = rows
+    f = [s2 * a0, s2 * a1, s2 * a2, s2 * b0, s2 * b1, s2 * b2,
+         p2 * a0 + q2 * b0 + c0, p2 * a1 + q2 * b1 + c1, p2 * a2 + q2 * b2 + c2]  # T2^T (F_hat T1)
+    top = max(f, key=abs)
+    g = [v / top for v in f]
+    norm = math.sqrt(sum(v * v for v in g))
+    return np.array([v / norm for v in g]).reshape(3, 3)
 
 
 def _det3(M: np.ndarray) -> np.ndarray:
@@ -279,7 +305,7 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
     u1, u2 = point_pairs(U1, U2, 8)
     At, T1, T2 = normalized_design(u1, u2)
     Fn = nearest_rank2(null_vector(At).reshape(3, 3), check=False)
-    return canonical_fundamental(T2.T @ Fn @ T1)
+    return _denormalize_canonical(Fn, T1, T2)
 
 
 def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]:

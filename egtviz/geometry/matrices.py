@@ -86,7 +86,11 @@ def unstack_columns(v: npt.ArrayLike, columns: int) -> np.ndarray:
 
 
 def hartley_normalization(
-    U: npt.ArrayLike, name: str | Sequence[str] = "U", *, check: bool = True
+    U: npt.ArrayLike | Sequence[np.ndarray],
+    name: str | Sequence[str] = "U",
+    *,
+    check: bool = True,
+    out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Hartley's isotropic normalisation of pixels (H&Z 2nd ed., section 4.4.4 and Algorithm 11.1).
 
@@ -98,53 +102,70 @@ def hartley_normalization(
     root-mean-square distance). ``docs/conventions.md`` states the choice.
 
     Args:
-        U: (N, 2) pixels, or a stack (K, N, 2) of K images, each normalised on its own (the two images
-            of an estimator: one pass over both).
-        name: the argument's name in error messages; for a stack, one name per image.
-        check: validate ``U``; ``False`` for a float64 array the caller has checked.
+        U: (N, 2) pixels; or K images normalised each on its own in one pass (the two images of an
+            estimator), as a (K, N, 2) stack or a sequence of K (N, 2) arrays.
+        name: the argument's name in error messages; for K images, one name per image.
+        check: validate ``U``; ``False`` for float64 arrays the caller has checked.
+        out: optional (K, 2, N) array (a view may be strided) that receives the normalised points,
+            coordinate-major; the estimators build their design matrix on it.
 
     Returns:
-        ``(Un, T)``: (N, 2) normalised pixels and the (3, 3) similarity ``T``; for a stack, (K, N, 2)
-        and (K, 3, 3).
+        ``(Un, T)``: (N, 2) normalised pixels and the (3, 3) similarity ``T``; for K images, (K, N, 2)
+        and (K, 3, 3). ``Un`` is a transposed view of the coordinate-major result.
 
     Raises:
         DegenerateConfigurationError: all points coincide (to 1e-9 of their distance from the origin).
         GeometryError: a bad ``U``, or points spread over less than 1e-100 (rescale the coordinates).
     """
-    names = [name] if isinstance(name, str) else list(name)
-    if check:
-        if isinstance(name, str):
-            U = as_points(U, name, 2)
-        else:
-            U = as_array(U, ", ".join(names))
-            if U.ndim != 3 or U.shape[0] != len(names) or U.shape[2] != 2:
-                raise GeometryError(f"{', '.join(names)}: expected shape ({len(names)}, N, 2), got {U.shape}")
-    u = U if U.ndim == 3 else U[None]
-    k, n = u.shape[0], u.shape[1]
+    single = isinstance(name, str)
+    names = [name] if single else list(name)
+    images = _images(U, names, single, check)
+    k, n = len(images), images[0].shape[0]
     # Coordinate-major (K, 2, N): every reduction runs over contiguous memory, several times faster than
-    # over the columns of (N, 2); the (N, 2) result is a transposed view of it. The scalars are handled
-    # as Python floats: numpy's per-call cost dominates on these few numbers.
-    d = np.empty((k, 2, n))
-    d[...] = u.transpose(0, 2, 1)
-    c = np.add.reduce(d, axis=2)
+    # over the columns of (N, 2). The scalars are handled as Python floats: numpy's per-call cost
+    # dominates on these few numbers.
+    d = np.empty((k, 2, n)) if out is None else out
+    for i in range(k):
+        d[i] = images[i].T
+    c = np.add.reduce(d, axis=2, keepdims=True)
     c /= n
-    d -= c[:, :, None]
+    d -= c
     sq = d * d
     mean = np.add.reduce(np.sqrt(sq[:, 0] + sq[:, 1]), axis=1).tolist()
-    centre = c.tolist()
+    centre = c.reshape(k, 2).tolist()
     scales = []
     for i in range(k):
         m = mean[i] / n
         _check_spread(m, centre[i], names[i])
         scales.append(math.sqrt(2.0) / m)
-    d *= np.array(scales)[:, None, None] if k > 1 else scales[0]
+    for i in range(k):
+        d[i] *= scales[i]
     flat = []
     for si, (cx, cy) in zip(scales, centre):
         flat += [si, 0.0, -si * cx, 0.0, si, -si * cy, 0.0, 0.0, 1.0]
     T = np.array(flat).reshape(k, 3, 3)
-    if U.ndim == 3:
-        return d.transpose(0, 2, 1), T
-    return d[0].T, T[0]
+    if single:
+        return d[0].T, T[0]
+    return d.transpose(0, 2, 1), T
+
+
+def _images(U: object, names: list[str], single: bool, check: bool) -> list[np.ndarray]:
+    """The images of :func:`hartley_normalization` as a list of (N, 2) arrays, validated if ``check``."""
+    if single:
+        return [as_points(U, names[0], 2) if check else U]
+    images = list(U) if isinstance(U, (list, tuple)) or not check else None
+    if images is None:
+        stack = as_array(U, ", ".join(names))
+        if stack.ndim != 3 or stack.shape[2] != 2:
+            raise GeometryError(f"{', '.join(names)}: expected shape ({len(names)}, N, 2), got {stack.shape}")
+        images = list(stack)
+    if len(images) != len(names):
+        raise GeometryError(f"{', '.join(names)}: expected {len(names)} images, got {len(images)}")
+    if check:
+        images = [as_points(a, nm, 2) for a, nm in zip(images, names)]
+        if len({a.shape[0] for a in images}) != 1:
+            raise GeometryError(f"{', '.join(names)}: expected the same number of points in every image")
+    return images
 
 
 def _check_spread(mean: float, centroid: list[float], name: str) -> None:
