@@ -337,7 +337,7 @@ def unchecked_normals(normals_world: np.ndarray) -> np.ndarray:
     its largest absolute entry (the same arithmetic), zero and NaN rows NaN. The ``check=False`` path of the
     models' plane images."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return normals_world / np.abs(normals_world).max(axis=1, keepdims=True)
+        return normals_world / np.maximum.reduce(np.abs(normals_world), axis=1, keepdims=True)
 
 
 

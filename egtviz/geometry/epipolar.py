@@ -176,7 +176,7 @@ def fundamental_from_essential(E: npt.ArrayLike, K1: npt.ArrayLike, K2: npt.Arra
     E = as_up_to_scale(E, "E", (3, 3)) if check else E / np.abs(E).max()
     F = inverse_calibration(K2, "K2").T @ E @ inverse_calibration(K1, "K1")
     F = F / np.abs(F).max()  # K^-1 may be small (1e-3 per entry): keep the norm's squares in range
-    n = np.linalg.norm(F)
+    n = _frobenius(F)  # np.linalg.norm(F)'s arithmetic
     if not n > 0:
         raise GeometryError("E: expected a nonzero matrix")
     return F / n

@@ -83,7 +83,11 @@ def _normalized_lines(lines: np.ndarray) -> np.ndarray:
     n = np.hypot(lines[:, 0], lines[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         out = lines / n[:, None]
-    out[n <= AT_INFINITY_TOL * np.linalg.norm(lines, axis=1)] = np.nan
+    # |l| as np.linalg.norm(lines, axis=1) computes it (the squares summed in order), without its wrapper.
+    norm = lines[:, 0] * lines[:, 0]
+    norm += lines[:, 1] * lines[:, 1]
+    norm += lines[:, 2] * lines[:, 2]
+    out[n <= AT_INFINITY_TOL * np.sqrt(norm)] = np.nan
     return out
 
 
@@ -118,7 +122,7 @@ def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float, *,
         # normalised (a row that is not finite or is zero becomes NaN on the way).
         lines = np.asarray(lines)
         with np.errstate(divide="ignore", invalid="ignore"):
-            L = _normalized_lines(lines / np.abs(lines).max(axis=1, initial=0.0)[:, None])
+            L = _normalized_lines(lines / np.maximum.reduce(np.abs(lines), axis=1, initial=0.0)[:, None])
         return _clip_lines(np.ascontiguousarray(L.T), float(width), float(height))
     L = normalize_lines(lines)
     return _clip_lines(np.ascontiguousarray(L.T), as_positive(width, "width"), as_positive(height, "height"))

@@ -12,7 +12,7 @@ light paths, the drawn region, and the epipolar curves of the drawn pair by one 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -152,6 +152,16 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
+_PLANE_FIELDS = tuple(f.name for f in fields(ImagePlane))
+
+
+def _replaced(plane: ImagePlane, **changes) -> ImagePlane:
+    """``dataclasses.replace(plane, **changes)`` without its per-call introspection (twice per drag)."""
+    values = {name: getattr(plane, name) for name in _PLANE_FIELDS}
+    values.update(changes)
+    return ImagePlane(**values)
+
+
 class _CameraBlock(NamedTuple):
     cam: CameraModel
     pose: tuple[np.ndarray, np.ndarray]
@@ -259,7 +269,7 @@ def _compute_derived(scene: Scene, check: bool = False) -> Derived:
             sides = ((n1, "1", c1, curves.first), (n2, "2", c2, curves.second))
             segments = _clipped_lines([(side, planes[name]) for name, _, _, side in sides])
             for (name, idx, cam, side), seg in zip(sides, segments, strict=True):
-                planes[name] = replace(planes[name], in_pair=True,
+                planes[name] = _replaced(planes[name], in_pair=True,
                                        **_pair_content(cam, side, seg, curves.normals, n_samples, idx, planes[name],
                                                        check))
             readout = _readout(pair_names, c1, c2, curves.first, curves.second, check)
@@ -320,7 +330,8 @@ def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | 
         if seen or single
     )
     if lines is not None:
-        return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(np.array(curves.lines, float))}
+        # The core's fresh array of this update (the clipped segments were made from a copy): frozen, not copied.
+        return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(curves.lines)}
     arcs = cam.plane_image_arcs(normals, n_samples, check=check)
     # tuple() of a tuple is that tuple: the models' tuples are kept, any other sequence becomes one.
     return {"epipoles": epipoles, "conics": tuple(map(tuple, arcs))}
