@@ -61,7 +61,7 @@ def test_one_render_of_the_start_page_is_one_indexed_query(tmp_path, traced):
 def test_typing_a_name_renders_the_page_once_the_typing_stops(tmp_path, traced):
     store = ProgressStore(tmp_path / "progress.sqlite3")
     start, selects = traced
-    with course(store, field_delay=0.15) as (app, open_tab):
+    with course(store, field_delay=0.5) as (app, open_tab):
         open_tab()
         page = start_page(app)
         start()
