@@ -127,7 +127,7 @@ class _Scorer:
 
     def cost(self, d: np.ndarray) -> np.ndarray:
         if self.mode != "lmeds":
-            return np.minimum(d, self.th2).sum(axis=-1)
+            return np.add.reduce(np.minimum(d, self.th2), axis=-1)  # ndarray.sum's own wrapper costs more
         # The order statistic h = floor(n / 2) + 4 of n residuals (Rousseeuw and Leroy's
         # floor(n / 2) + floor((p + 1) / 2), p = 7 parameters), 0-based below: the 7 sample points fit
         # exactly, so a plain median would fall among them for n < 14 and read a zero scale; d_(h) is
