@@ -207,6 +207,26 @@ def test_figure_switches_and_show_leave_the_tabs_on_the_current_figure(monkeypat
     assert all(tab[-1].title == "Figure 2" and tab[-1].points == ((1.0, 2.0, 3.0),) for tab in server.shown)
 
 
+def test_in_a_notebook_the_inline_page_opens_on_the_figure_and_cells_end_with_a_flush(monkeypatch):
+    monkeypatch.setenv("EGTVIZ_FIGURE", "on")
+    monkeypatch.setattr(ef, "FigureServer", _CountingServer)
+    monkeypatch.setattr(ef, "in_jupyter", lambda: True)
+    cell_end = []
+    monkeypatch.setattr(ef, "on_cell_end", cell_end.append)
+    inline = []
+    monkeypatch.setattr(ef, "show_inline",
+                        lambda url: inline.append((url, [tab[-1] for tab in _CountingServer.made[0].shown])))
+    _CountingServer.made.clear()
+    f_scenepnt(np.array([[0.0, 0.0, 1.0]]).T)
+    (server,) = _CountingServer.made
+    first = ef.current_figure().scene()
+    f_scenepnt(np.array([[1.0, 0.0, 1.0]]).T)
+    assert inline == [("http://127.0.0.1:1", [first] * 3)]  # once, when every tab already shows the figure
+    (flush_at_cell_end,) = cell_end
+    flush_at_cell_end(None)  # IPython's post_run_cell passes the cell's result
+    assert all(tab[-1] == ef.current_figure().scene() for tab in server.shown)
+
+
 def test_the_publisher_pushes_the_latest_state_and_flush_waits_for_it():
     shown: list[int] = []
     gate = threading.Event()
