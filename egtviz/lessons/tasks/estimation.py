@@ -1,0 +1,219 @@
+"""Tasks about estimating from noisy pixels: the estimation lab's fits (:class:`SampsonBelowTask`,
+:class:`InliersRecallTask`) and triangulation under pixel noise (:class:`TriangulationErrorTask`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ...geometry import PinholeCamera
+from ...geometry.triangulation import triangulate_linear, triangulate_optimal
+from ...scene import Scene
+from ...scene.lab import METHODS
+from ...scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT
+from .. import fields
+from ..errors import EntryError
+from .base import Param, Task, TaskContext, TaskResult
+from .common import (
+    DEPTH_ERROR,
+    FRACTION,
+    POINT_INDEX,
+    SAMPSON_PX2,
+    pair_gone,
+    point_gone,
+    point_in,
+    point_label,
+    projective_pair,
+)
+
+__all__ = ["InliersRecallTask", "SampsonBelowTask", "TriangulationErrorTask", "triangulation_rms"]
+
+_TRIANGULATION_DRAWS = 200
+_LAB_KEYS = ("min_noise_px", "min_outlier_percent")
+
+
+def _lab_minimums(table: dict) -> dict[str, float]:
+    """The lab settings the learner must keep at least (``min_noise_px``, ``min_outlier_percent``; 0 if absent)."""
+    return dict(
+        min_noise_px=fields.number(table, "min_noise_px", LAB_NOISE_PX, required=False, default=0.0),
+        min_outlier_percent=fields.number(table, "min_outlier_percent", LAB_OUTLIER_PERCENT, required=False,
+                                          default=0.0),
+    )
+
+
+def _method(table: dict, robust: bool) -> str:
+    method = fields.text(table, "method")
+    allowed = [m for m in METHODS if not robust or m in ("ransac", "lmeds", "mestimator")]
+    if method not in allowed:
+        raise EntryError("method", f"expected one of {', '.join(allowed)}, got {fields.short(method)}")
+    return method
+
+
+def _lab_scene(scene: Scene) -> None:
+    pair = scene.drawn_pair
+    if not projective_pair(scene, pair):
+        raise EntryError(None, f"the estimation lab needs a drawn pair of pin-hole cameras, got {pair}")
+
+
+def _lab_constraints(ctx: TaskContext, min_noise: float, min_outliers: float) -> TaskResult | None:
+    if ctx.lab.noise_px < min_noise:
+        return TaskResult(False, f"Keep the noise at {min_noise:g} px or more (it is {ctx.lab.noise_px:g} px).")
+    if ctx.lab.outlier_percent < min_outliers:
+        return TaskResult(
+            False, f"Keep the outliers at {min_outliers:g} % or more (they are {ctx.lab.outlier_percent:g} %)."
+        )
+    return None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SampsonBelowTask(Task):
+    """The lab's ``method`` has a mean Sampson error below ``below_px2`` (``against`` the true or the measured
+    pixels of the true inliers), with the lab's noise and outliers at least the given minimum."""
+
+    method: str
+    below_px2: float
+    against: str = "true"
+    min_noise_px: float = 0.0
+    min_outlier_percent: float = 0.0
+
+    kind: ClassVar[str] = "sampson_below"
+    table_keys: ClassVar[tuple[str, ...]] = ("method", "below_px2", "against", *_LAB_KEYS)
+
+    @classmethod
+    def from_table(cls, table: dict, common: dict[str, Any]) -> SampsonBelowTask:
+        minimums = _lab_minimums(table)
+        against = fields.text(table, "against", required=False, default="true")
+        if against not in ("true", "measured"):
+            raise EntryError("against", f"expected 'true' or 'measured', got {fields.short(against)}")
+        return cls(**common, **minimums, method=_method(table, robust=False), against=against,
+                   below_px2=fields.number(table, "below_px2", SAMPSON_PX2))
+
+    def params(self) -> dict[str, Param]:
+        return {"below_px2": self.below_px2}
+
+    def validate(self, scene: Scene) -> None:
+        _lab_scene(scene)
+
+    def missing(self, scene: Scene) -> str | None:
+        return pair_gone(scene, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
+        if refused is not None:
+            return refused
+        fit = ctx.lab_result().fit(self.method)
+        if fit.F is None:
+            return TaskResult(False, f"{fit.title} failed: {fit.message}")
+        err = fit.sampson_true if self.against == "true" else fit.sampson_noisy
+        msg = f"{fit.title}'s mean Sampson error is {err:.3g} px^2"
+        if err < params["below_px2"]:
+            return TaskResult(True, f"Done: {msg}.")
+        return TaskResult(False, f"Not yet: {msg}; it must be below {params['below_px2']:g} px^2.")
+
+
+@dataclass(frozen=True, kw_only=True)
+class InliersRecallTask(Task):
+    """The lab's robust ``method`` marks at least ``at_least`` of the true inliers as inliers."""
+
+    method: str
+    at_least: float
+    min_noise_px: float = 0.0
+    min_outlier_percent: float = 0.0
+
+    kind: ClassVar[str] = "inliers_recall"
+    table_keys: ClassVar[tuple[str, ...]] = ("method", "at_least", *_LAB_KEYS)
+
+    @classmethod
+    def from_table(cls, table: dict, common: dict[str, Any]) -> InliersRecallTask:
+        minimums = _lab_minimums(table)
+        return cls(**common, **minimums, method=_method(table, robust=True),
+                   at_least=fields.number(table, "at_least", FRACTION))
+
+    def params(self) -> dict[str, Param]:
+        return {"at_least": self.at_least, "at_least_percent": 100.0 * self.at_least}
+
+    def validate(self, scene: Scene) -> None:
+        _lab_scene(scene)
+
+    def missing(self, scene: Scene) -> str | None:
+        return pair_gone(scene, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
+        if refused is not None:
+            return refused
+        fit = ctx.lab_result().fit(self.method)
+        if fit.F is None:
+            return TaskResult(False, f"{fit.title} failed: {fit.message}")
+        msg = f"{fit.title} marks {100 * fit.inlier_recall:.0f} % of the true inliers as inliers"
+        if fit.inlier_recall >= params["at_least"]:
+            return TaskResult(True, f"Done: {msg}.")
+        return TaskResult(False, f"Not yet: {msg}; at least {100 * params['at_least']:g} % needed.")
+
+
+@dataclass(frozen=True, kw_only=True)
+class TriangulationErrorTask(Task):
+    r"""Triangulating point ``point`` from its two images, each pixel perturbed by Gaussian noise of
+    ``noise_px``, gives an RMS position error of at most ``at_most`` metres (200 fixed draws):
+
+    .. math:: \varepsilon = \sqrt{\tfrac{1}{K} \textstyle\sum_k \|\hat X_k - X\|^2} .
+    """
+
+    point: int
+    noise_px: float
+    at_most: float
+    method: str = "linear"
+
+    kind: ClassVar[str] = "triangulation_error"
+    table_keys: ClassVar[tuple[str, ...]] = ("point", "noise_px", "at_most", "method")
+
+    @classmethod
+    def from_table(cls, table: dict, common: dict[str, Any]) -> TriangulationErrorTask:
+        method = fields.text(table, "method", required=False, default="linear")
+        if method not in ("linear", "optimal"):
+            raise EntryError("method", f"expected 'linear' or 'optimal', got {fields.short(method)}")
+        return cls(**common, point=fields.whole(table, "point", POINT_INDEX),
+                   noise_px=fields.number(table, "noise_px", LAB_NOISE_PX),
+                   at_most=fields.number(table, "at_most", DEPTH_ERROR), method=method)
+
+    def params(self) -> dict[str, Param]:
+        return {"point": float(point_label(self.point)), "noise_px": self.noise_px, "at_most": self.at_most}
+
+    def validate(self, scene: Scene) -> None:
+        point_in(scene, self.point)
+        pair = scene.drawn_pair
+        if not projective_pair(scene, pair):
+            raise EntryError(None, f"triangulation needs a drawn pair of pin-hole cameras, got {pair}")
+
+    def missing(self, scene: Scene) -> str | None:
+        return point_gone(scene, self.point) or pair_gone(scene, pinhole=True)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        err = triangulation_rms(ctx.scene, self.point, params["noise_px"], self.method)
+        if not math.isfinite(err):
+            return TaskResult(False, f"Point {point_label(self.point)} is not seen by both cameras.")
+        msg = f"the RMS triangulation error of point {point_label(self.point)} is {err:.3g} m"
+        if err <= params["at_most"]:
+            return TaskResult(True, f"Done: {msg}.")
+        return TaskResult(False, f"Not yet: {msg}; at most {params['at_most']:g} m allowed.")
+
+
+def triangulation_rms(scene: Scene, point: int, noise_px: float, method: str = "linear", seed: int = 0) -> float:
+    """RMS error (metres) of triangulating ``point`` of the drawn pin-hole pair under pixel noise (NaN if unseen)."""
+    n1, n2 = scene.drawn_pair  # type: ignore[misc]
+    c1, c2 = scene.camera(n1).camera(), scene.camera(n2).camera()
+    if not (isinstance(c1, PinholeCamera) and isinstance(c2, PinholeCamera)):
+        return math.nan
+    X = scene.points_array()[point]
+    p1, p2 = c1.project(X), c2.project(X)
+    if not (p1.in_front[0] and p2.in_front[0]):
+        return math.nan
+    rng = np.random.default_rng(seed)
+    u1 = p1.pixels[0] + rng.normal(0.0, noise_px, (_TRIANGULATION_DRAWS, 2))
+    u2 = p2.pixels[0] + rng.normal(0.0, noise_px, (_TRIANGULATION_DRAWS, 2))
+    solve = triangulate_optimal if method == "optimal" else triangulate_linear
+    Xh = solve(c1.P, c2.P, u1, u2)
+    return float(np.sqrt(np.mean(np.sum((Xh - X) ** 2, axis=1))))

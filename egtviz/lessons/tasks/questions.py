@@ -1,0 +1,87 @@
+"""Tasks answered by typing: a number (:class:`NumberTask`) or one of a few options (:class:`ChoiceTask`).
+
+A typed number is read strictly (:func:`egtviz.lessons.answers.read_number`) and compared by
+:func:`compare_number`, which the servo tasks use too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from .. import fields
+from ..answers import AnswerError, read_number
+from ..errors import EntryError
+from .base import Task, TaskContext, TaskResult
+from .common import ANSWER, TOLERANCE, fmt
+
+__all__ = ["ChoiceTask", "NumberTask", "compare_number"]
+
+_MAX_OPTIONS = 12
+
+
+def compare_number(typed: str | None, answer: float, tolerance: float, unit: str) -> TaskResult:
+    """The typed number (:func:`~egtviz.lessons.answers.read_number`: one number, then optionally ``unit``)
+    against ``answer`` within ``tolerance``."""
+    try:
+        x = read_number(typed, unit)
+    except AnswerError as exc:
+        return TaskResult(False, str(exc))
+    shown = f" {unit}" if unit else ""
+    if abs(x - answer) <= tolerance:
+        return TaskResult(True, f"Right: {fmt(x)}{shown}.")
+    return TaskResult(False, f"{fmt(x)}{shown} is too {'high' if x > answer else 'low'}.")
+
+
+@dataclass(frozen=True, kw_only=True)
+class NumberTask(Task):
+    """A numeric answer within ``tolerance`` of ``answer``: one number, optionally followed by ``unit``."""
+
+    answer: float
+    tolerance: float = 0.0
+    unit: str = ""
+
+    kind: ClassVar[str] = "number"
+    table_keys: ClassVar[tuple[str, ...]] = ("answer", "tolerance", "unit")
+    question: ClassVar[bool] = True
+
+    @classmethod
+    def from_table(cls, table: dict, common: dict[str, Any]) -> NumberTask:
+        return cls(**common, answer=fields.number(table, "answer", ANSWER),
+                   tolerance=fields.number(table, "tolerance", TOLERANCE, required=False, default=0.0),
+                   unit=fields.text(table, "unit", required=False))
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        return compare_number(ctx.answer, self.answer, self.tolerance, self.unit)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChoiceTask(Task):
+    """One of ``options``; the learner types the option or its number (1, 2, ...)."""
+
+    options: tuple[str, ...]
+    answer: str
+
+    kind: ClassVar[str] = "choice"
+    table_keys: ClassVar[tuple[str, ...]] = ("options", "answer")
+    question: ClassVar[bool] = True
+
+    @classmethod
+    def from_table(cls, table: dict, common: dict[str, Any]) -> ChoiceTask:
+        options = fields.name_list(table, "options", limit=_MAX_OPTIONS)
+        if len(options) < 2 or len(set(options)) != len(options):
+            raise EntryError("options", "expected at least two different options")
+        answer = fields.text(table, "answer")
+        if answer not in options:
+            raise EntryError("answer", f"expected one of the options, got {fields.short(answer)}")
+        return cls(**common, options=options, answer=answer)
+
+    def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
+        given = (ctx.answer or "").strip()
+        if given.isdigit() and 1 <= int(given) <= len(self.options):
+            given = self.options[int(given) - 1]
+        if given not in self.options:
+            return TaskResult(False, "Pick one of the options.")
+        if given == self.answer:
+            return TaskResult(True, f"Right: {given}.")
+        return TaskResult(False, f"Not {given!r}.")
