@@ -252,7 +252,10 @@ def test_essential_from_rays_exact(seed: int, n: int) -> None:
     assert f_distance(E, E_true) < 1e-8
     u1 = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
     u2 = d2 / np.linalg.norm(d2, axis=1, keepdims=True)
-    assert np.abs(np.einsum("ni,ij,nj->n", u2, E, u1)).max() < 1e-10
+    # Exact to rounding: the linear solution's error grows with the design matrix's condition number
+    # (near 1e4 for a few unlucky 8-ray sets, e.g. seed 2000, where the residual reaches 3e-10).
+    sv = np.linalg.svd(np.einsum("ni,nj->nij", u2, u1).reshape(n, 9), compute_uv=False)
+    assert np.abs(np.einsum("ni,ij,nj->n", u2, E, u1)).max() < 1e-12 * sv[0] / sv[7]
 
 
 @settings(max_examples=15, deadline=None)

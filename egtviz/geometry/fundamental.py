@@ -81,13 +81,8 @@ def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.nd
     ``T1``, ``T2`` are the similarities of :func:`~egtviz.geometry.matrices.hartley_normalization`
     (H&Z Algorithm 11.1, step (i)); their scales are ``T[0, 0]``.
     """
-    n = u1.shape[0]
-    # Homogeneous normalised points of both images, (2, 3, N); the design matrix is their Kronecker
-    # product, column by column, in one broadcast product.
-    H = np.empty((2, 3, n))
-    T = hartley_normalization((u1, u2), ("U1", "U2"), check=False, out=H[:, :2])[1]
-    H[:, 2] = 1.0
-    return (H[1][:, None, :] * H[0][None, :, :]).reshape(9, n), T[0], T[1]
+    Un, T = hartley_normalization((u1, u2), ("U1", "U2"), check=False)
+    return design_matrix(Un[0], Un[1]), T[0], T[1]
 
 
 def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
