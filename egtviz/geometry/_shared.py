@@ -55,7 +55,22 @@ def inverse_calibration(K: npt.ArrayLike, name: str = "K") -> np.ndarray:
     """
     if not (isinstance(K, np.ndarray) and K.dtype == np.float64 and K.shape == (3, 3)):
         K = as_calibration(K, name)
+    elif not K.flags.writeable and K.base is None:
+        # A camera's own read-only K that owns its data (the same array on every drag): found by identity, no bytes
+        # to hash. The entry holds K itself, so its id is not reused while the entry lives.
+        hit = _BY_IDENTITY.get(id(K))
+        if hit is not None and hit[0] is K and hit[2] == name:
+            return hit[1]
+        inv = _inverse_of(np.ascontiguousarray(K).tobytes(), name)
+        if len(_BY_IDENTITY) >= 64:
+            _BY_IDENTITY.clear()
+        _BY_IDENTITY[id(K)] = (K, inv, name)
+        return inv
     return _inverse_of(np.ascontiguousarray(K).tobytes(), name)
+
+
+_BY_IDENTITY: dict[int, tuple[np.ndarray, np.ndarray, str]] = {}
+"""Read-only calibration matrices seen last, by ``id``: ``(K, K^-1, name)``."""
 
 
 @lru_cache(maxsize=64)

@@ -132,13 +132,19 @@ class Intrinsics:
             raise GeometryError("K: expected positive focal lengths K[0,0], K[1,1]")
         return cls(f, (K[0, 0] / f, K[1, 1] / f), (K[0, 2], K[1, 2]), K[0, 1], width, height, check=check)
 
-    @property
+    @cached_property
     def K(self) -> np.ndarray:
-        """The 3x3 calibration matrix."""
+        """The 3x3 calibration matrix (read-only: built once, shared by the cameras with these intrinsics; copy it
+        to change it)."""
         ku, kv = self.pixels_per_metre
         u0, v0 = self.principal_point
         f = self.focal_length
-        return np.array([[ku * f, self.skew, u0], [0.0, kv * f, v0], [0.0, 0.0, 1.0]])
+        return _read_only(np.array([[ku * f, self.skew, u0], [0.0, kv * f, v0], [0.0, 0.0, 1.0]]))
+
+    @cached_property
+    def K_inv(self) -> np.ndarray:
+        """:math:`K^{-1}` (read-only; the same array as ``inverse_calibration(K)``)."""
+        return inverse_calibration(self.K, "K")
 
     @property
     def focal_pixels(self) -> tuple[float, float]:
@@ -341,10 +347,11 @@ class PinholeCamera:
 
     # Read-only matrices of this (immutable) camera, built once: the epipolar geometry of a pair
     # uses them on every drag of the other camera.
-    @cached_property
+    @property
     def K_inv(self) -> np.ndarray:
-        """:math:`K^{-1}` (read-only; the same array as ``inverse_calibration(K)``)."""
-        return inverse_calibration(self.K, "K")
+        """:math:`K^{-1}` (read-only; the same array as ``inverse_calibration(K)``, shared by the cameras with these
+        intrinsics)."""
+        return self.intrinsics.K_inv
 
     @cached_property
     def K_Rt(self) -> np.ndarray:
