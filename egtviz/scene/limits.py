@@ -204,10 +204,11 @@ for playback, per tab, in the one process every tab shares (about 17 kB a frame 
 bi-conics: 170 MB at this bound)."""
 SERVO_SERVER_FRAMES = 2 * (int(SERVO_DEMO_STEPS.high) + 1)
 """Frames of servo runs all tabs of one server keep together for playback: two runs at :data:`SERVO_DEMO_STEPS`'
-bound (10,001 frames each, about 220 MB for the panoramic demo), or dozens of the demos' default runs, which converge
-in a few hundred steps. A run reserves ``steps + 1`` frames when it starts and keeps the frames it has once drawn; a
-run that does not fit waits for up to half a minute, then is refused in its tab with a notification naming how many
-other runs hold the budget (``egtviz.viewer.servo_budget``)."""
+bound (10,001 frames each; two non-converging panoramic runs raised a server's memory by 390 MB, three by 570 MB),
+or dozens of the demos' default runs, which converge in a few hundred steps. A run reserves ``steps + 1`` frames
+when it starts and keeps the frames it has once drawn; a run that does not fit waits for up to half a minute, then
+is refused in its tab with a notification naming how many other runs hold the budget
+(``egtviz.viewer.servo_budget``)."""
 
 # -- lesson files (egtviz.lessons) --------------------------------------------------------------------
 
