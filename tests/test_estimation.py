@@ -464,3 +464,27 @@ def test_hartley_normalization_of_several_images_is_each_image_on_its_own() -> N
         hartley_normalization((np.full((30, 2), np.nan), U2), ("U1", "U2"))
     with pytest.raises(GeometryError, match="U1, U2: expected the same number of points"):
         hartley_normalization((U1, U2[:20]), ("U1", "U2"))
+
+
+def test_the_checked_helpers_of_the_two_view_modules_name_every_bad_argument(two_view) -> None:
+    # The kernels the estimators share (design_matrix, null_vector, ...) take arrays their callers have
+    # validated; the helpers that validate (by default) refuse bad values by name, as every estimator does.
+    from egtviz.geometry.essential import ray_pairs
+    from egtviz.geometry.matrices import nearest_rank2, point_pairs
+
+    try:
+        from tests._hostile import all_bad_values, assert_rejects
+    except ImportError:  # tests/ run as a plain directory
+        from _hostile import all_bad_values, assert_rejects
+
+    rays = np.c_[two_view.U1, np.full(20, 800.0)]
+    cases = [
+        (point_pairs, {"U1": two_view.U1, "U2": two_view.U2}),
+        (hartley_normalization, {"U": two_view.U1}),
+        (nearest_rank2, {"M": two_view.F}),
+        (lambda d1, d2: ray_pairs(d1, d2, 8), {"d1": rays, "d2": rays + 1.0}),
+    ]
+    for func, kwargs in cases:
+        for arg, valid in kwargs.items():
+            for label, bad in all_bad_values(valid):
+                assert_rejects(func, kwargs, arg, bad, label=label)
