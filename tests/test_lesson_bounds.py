@@ -13,11 +13,13 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
 
 import egtviz.lessons.format as lesson_format
 import egtviz.lessons.servo_runs as servo_runs
 from egtviz.lessons import LessonError, parse_lesson
-from egtviz.lessons.bounds import check_lesson_work, check_toml_text
+from egtviz.lessons.bounds import TomlShape, check_lesson_work, check_toml_text, toml_shape
 from egtviz.lessons.cli import check_file
 from egtviz.lessons.locate import toml_locator
 from egtviz.scene import SceneFileError, scene_from_bytes
@@ -220,3 +222,92 @@ def test_brackets_in_a_scene_files_strings_do_not_count(monkeypatch):
     text = json.dumps({"title": "[[[[[[[[[[ \\\" {{{{{{{{{{", "cameras": [{"kind": "pinhole", "name": "c"}],
                        "points": [[0, 5, 0]]})
     assert scene_from_bytes(text.encode(), "ok.json").title == "[[[[[[[[[[ \\\" {{{{{{{{{{"
+
+
+# -- the scan follows TOML --------------------------------------------------------------------------------
+
+_TEXT = list("ab1 []{}#=.,:")
+
+
+def _basic(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+_STRING = st.one_of(
+    st.text(st.sampled_from(_TEXT + ["'", '"', "\\"]), max_size=6).map(_basic),
+    st.text(st.sampled_from(_TEXT + ['"', "\\"]), max_size=6).map(lambda s: f"'{s}'"),
+    st.text(st.sampled_from(_TEXT + ["\n", "'", '"']), max_size=10).map(
+        lambda s: '"""' + s.replace('"', '\\"') + '"""'),
+    st.text(st.sampled_from(_TEXT + ["\n", '"']), max_size=10).map(lambda s: f"'''{s}'''"),
+)
+_SCALAR = st.one_of(
+    st.integers(-10**6, 10**6).map(str), st.floats(allow_nan=False, allow_infinity=False).map(repr),
+    st.sampled_from(["true", "false", "1979-05-27T07:32:00Z", "1979-05-27 07:32:00", "07:32:00", "0x1F", "1_000"]),
+    _STRING,
+)
+
+
+def _key(first: str) -> st.SearchStrategy:
+    """A dotted key whose first part is ``first`` (unique where it is used): (text, parts)."""
+    part = st.one_of(st.from_regex(r"[A-Za-z0-9_-]{1,5}", fullmatch=True),
+                     st.text(st.sampled_from(_TEXT), max_size=5).map(_basic),
+                     st.text(st.sampled_from(_TEXT), max_size=5).map(lambda s: f"'{s}'"))
+    return st.tuples(st.lists(part, max_size=3), st.sampled_from([".", " . "])).map(
+        lambda t: (t[1].join([first, *t[0]]), 1 + len(t[0])))
+
+
+def _arrays(children: st.SearchStrategy) -> st.SearchStrategy:
+    def build(items: list, multiline: bool) -> tuple:
+        sep, end = (",  # a comment [ {\n  ", ",\n]") if multiline else (", ", "]")
+        text = "[" + ("\n  " if multiline else "") + sep.join(i[0] for i in items) + (end if items else "]")
+        return (text, 1 + max((i[1] for i in items), default=0), max((i[2] for i in items), default=0),
+                sum(i[3] for i in items))
+
+    return st.builds(build, st.lists(children, max_size=3), st.booleans())
+
+
+def _tables(children: st.SearchStrategy) -> st.SearchStrategy:
+    def build(pairs: list) -> tuple:
+        text = "{" + ", ".join(f"{k[0]} = {v[0]}" for k, v in pairs) + "}"
+        return (text, 1 + max((v[1] for _, v in pairs), default=0),
+                max([k[1] for k, _ in pairs] + [v[2] for _, v in pairs], default=0),
+                len(pairs) + sum(v[3] for _, v in pairs))
+
+    return st.integers(0, 3).flatmap(
+        lambda n: st.tuples(*[st.tuples(_key(f"i{j}"), children) for j in range(n)]).map(list)).map(build)
+
+
+_VALUE = st.recursive(_SCALAR.map(lambda s: (s, 0, 0, 0)), lambda ch: st.one_of(_arrays(ch), _tables(ch)),
+                      max_leaves=8)
+
+
+@st.composite
+def _documents(draw) -> tuple[str, TomlShape]:
+    lines, keys, parts, nesting = [], 0, 0, 0
+    for i in range(draw(st.integers(1, 6))):
+        kind = draw(st.sampled_from(["key", "key", "table", "array", "comment"]))
+        if kind == "comment":
+            lines.append("# a comment with [brackets] and = signs")
+            continue
+        if kind in ("table", "array"):
+            key, n = draw(_key(f"t{i}"))
+            lines.append(f"[{key}]" if kind == "table" else f"[[{key}]]  # a comment")
+            keys, parts = keys + 1, max(parts, n)
+            continue
+        (key, n), value = draw(_key(f"k{i}")), draw(_VALUE)
+        lines.append(f"{key} = {value[0]}")
+        keys, parts, nesting = keys + 1 + value[3], max(parts, n, value[2]), max(nesting, value[1])
+    return "\n".join(lines) + "\n", TomlShape(keys, parts, nesting, complete=True)
+
+
+@settings(max_examples=200, suppress_health_check=[HealthCheck.filter_too_much, HealthCheck.too_slow])
+@given(_documents())
+def test_the_scan_measures_any_toml_text_exactly_as_it_is_written(document):
+    """Strings, comments, multi-line arrays, inline tables, dotted and quoted keys, dates: whatever TOML the
+    parser accepts, the scan follows to its end (else the bounds would not hold) and counts what was written."""
+    text, shape = document
+    try:
+        tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        assume(False)
+    assert toml_shape(text) == shape

@@ -18,7 +18,9 @@ Each refusal is a :class:`~egtviz.lessons.errors.LessonError` ``file:line: reaso
 
 from __future__ import annotations
 
+import math
 import re
+from dataclasses import dataclass
 
 from ..scene.limits import (
     MAX_CHANGES,
@@ -31,7 +33,7 @@ from ..scene.limits import (
 from .errors import LessonError
 from .locate import Locator
 
-__all__ = ["check_lesson_work", "check_toml_text"]
+__all__ = ["TomlShape", "check_lesson_work", "check_toml_text", "toml_shape"]
 
 # What the scanner skips between tokens: blanks, newlines and comments.
 _GAP = re.compile(r"(?:[ \t\r\n]+|#[^\n]*)*")
@@ -60,12 +62,30 @@ class _Refusal(Exception):
         self.reason = reason
 
 
-class _Scanner:
-    """One pass over a TOML text, counting what :func:`check_toml_text` bounds."""
+@dataclass(frozen=True)
+class TomlShape:
+    """What :func:`check_toml_text` bounds, measured in one TOML text."""
 
-    def __init__(self, text: str) -> None:
+    keys: int
+    """Keys and table headers, inline tables' keys included."""
+    key_parts: int
+    """Parts of the longest dotted key or table header."""
+    nesting: int
+    """Arrays and inline tables nested in the deepest value."""
+    complete: bool
+    """False: the scan stopped at text that is not TOML (what it measured up to there is kept)."""
+
+
+class _Scanner:
+    """One pass over a TOML text, measuring what :func:`check_toml_text` bounds and refusing beyond the limits."""
+
+    def __init__(self, text: str, parts: float = MAX_LESSON_KEY_PARTS, nesting: float = MAX_LESSON_NESTING,
+                 keys: float = MAX_LESSON_KEYS) -> None:
         self.text = text
+        self.limits = (parts, nesting, keys)
         self.keys = 0
+        self.key_parts = 0
+        self.nesting = 0
 
     def refuse(self, pos: int, reason: str) -> _Refusal:
         return _Refusal(self.text.count("\n", 0, pos) + 1, reason)
@@ -90,7 +110,8 @@ class _Scanner:
                     raise _Stop
                 pos = m.end()
             parts += 1
-            if parts > MAX_LESSON_KEY_PARTS:
+            self.key_parts = max(self.key_parts, parts)
+            if parts > self.limits[0]:
                 what = "a table header" if header else "a dotted key"
                 raise self.refuse(start, f"{what} of more than {MAX_LESSON_KEY_PARTS} parts "
                                          f"(a lesson's keys have at most {MAX_LESSON_KEY_PARTS})")
@@ -100,7 +121,7 @@ class _Scanner:
                 continue
             break
         self.keys += 1
-        if self.keys > MAX_LESSON_KEYS:
+        if self.keys > self.limits[2]:
             raise self.refuse(start, f"more than {MAX_LESSON_KEYS} keys and tables in the file")
         if header:
             if not text.startswith("]", pos):
@@ -141,7 +162,8 @@ class _Scanner:
                 want_key = False
             elif c in "[{":
                 stack.append(c)
-                if len(stack) > MAX_LESSON_NESTING:
+                self.nesting = max(self.nesting, len(stack))
+                if len(stack) > self.limits[1]:
                     raise self.refuse(pos, f"arrays and inline tables nested more than {MAX_LESSON_NESTING} "
                                            "levels deep")
                 pos += 1
@@ -179,6 +201,16 @@ def check_toml_text(text: str, source: str) -> None:
         return
     except _Refusal as exc:
         raise LessonError(source, exc.line, exc.reason) from None
+
+
+def toml_shape(text: str) -> TomlShape:
+    """The keys, the longest key and the deepest value of a TOML text (no limit applied)."""
+    scanner = _Scanner(text, math.inf, math.inf, math.inf)
+    try:
+        scanner.run()
+    except _Stop:
+        return TomlShape(scanner.keys, scanner.key_parts, scanner.nesting, complete=False)
+    return TomlShape(scanner.keys, scanner.key_parts, scanner.nesting, complete=True)
 
 
 def _count_points(change: object) -> int:
