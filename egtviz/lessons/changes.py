@@ -13,6 +13,7 @@ The kinds (``do = ...``) and their keys are listed in ``docs/lessons.md``; :func
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -281,30 +282,144 @@ def apply(model: SceneModel, change: Change) -> Record | None:
 
 # -- parsing -------------------------------------------------------------------------------------------
 
-_KEYS = {
-    "show": ("do", "what"),
-    "hide": ("do", "what"),
-    "move": ("do", "camera", "position", "ypr_deg", "point", "to"),
-    "highlight": ("do", "names"),
-    "lock": ("do", "names"),
-    "unlock": ("do", "names"),
-    "select": ("do", "point"),
-    "set_pair": ("do", "cameras"),
-    "set_field": ("do", "camera", "field", "value"),
-    "set_points": ("do", "points"),
-    "random_points": ("do", "n", "seed", "center", "extent"),
-    "set_range": ("do", "camera", "field", "low", "high"),
-    "set_lab": ("do", *(f.name for f in dataclasses.fields(LabSettings))),
-    "set_lens": ("do", *(f.name for f in dataclasses.fields(LensToggles))),
-    "open_demo": ("do", "demo", *RUN_FIELDS["pinhole"]),
-}
-CHANGE_KINDS = tuple(_KEYS)
-"""The values ``do`` accepts."""
-
 _SETTABLE = frozenset(
     {"focal_length", "pixels_per_metre", "principal_point", "skew", "width", "height", "mirror", "a", "b",
      "focal_pixels", "position", "ypr_deg", "xi"}
 )
+
+
+def _show(table: dict, do: str) -> Show:
+    what = fields.text(table, "what")
+    if what not in DISPLAY_OPTIONS:
+        raise EntryError("what", f"expected one of {', '.join(DISPLAY_OPTIONS)}, got {fields.short(what)}")
+    return Show(what, do == "show")
+
+
+def _move(table: dict, do: str) -> MoveCamera | MovePoint:
+    if "point" in table:
+        for key in ("camera", "position", "ypr_deg"):
+            if key in table:
+                raise EntryError(key, "a move names a camera (position, ypr_deg) or a point (to), not both")
+        return MovePoint(fields.whole(table, "point", _POINT_INDEX),
+                         fields.numbers(table, "to", 3, COORDINATE))  # type: ignore[arg-type]
+    if "to" in table:
+        raise EntryError("to", "'to' moves a point: name it with 'point'")
+    camera = fields.text(table, "camera")
+    position = fields.numbers(table, "position", 3, COORDINATE, required=False)
+    ypr = fields.numbers(table, "ypr_deg", 3, ANGLE_DEG, required=False)
+    if position is None and ypr is None:
+        raise EntryError(None, "a camera move needs 'position', 'ypr_deg' or both")
+    return MoveCamera(camera, position, ypr)  # type: ignore[arg-type]
+
+
+def _set_pair(table: dict, do: str) -> SetPair:
+    names = fields.name_list(table, "cameras")
+    if len(names) != 2 or names[0] == names[1]:
+        raise EntryError("cameras", f"expected two different camera names, got {fields.short(list(names))}")
+    return SetPair(names)  # type: ignore[arg-type]
+
+
+def _set_field(table: dict, do: str) -> SetField:
+    camera = fields.text(table, "camera")
+    field = fields.text(table, "field")
+    if field not in _SETTABLE:
+        raise EntryError("field", f"expected one of {', '.join(sorted(_SETTABLE))}, got {fields.short(field)}")
+    if "value" not in table:
+        raise EntryError("value", "missing")
+    value = table["value"]
+    if isinstance(value, list):
+        value = tuple(value)
+    if isinstance(value, dict) or not isinstance(value, (int, float, str, tuple)) or isinstance(value, bool):
+        raise EntryError("value", f"expected a number, a list of numbers or text, got {fields.short(value)}")
+    return SetField(camera, field, value)
+
+
+def _set_points(table: dict, do: str) -> SetPoints:
+    pts = table.get("points")
+    if not isinstance(pts, list) or len(pts) > MAX_POINTS:
+        raise EntryError("points", f"expected a list of at most {MAX_POINTS} [x, y, z], got {fields.short(pts)}")
+    return SetPoints(tuple(fields.numbers({"points": p}, "points", 3, COORDINATE) for p in pts))  # type: ignore[misc]
+
+
+def _random_points(table: dict, do: str) -> RandomPoints:
+    return RandomPoints(
+        fields.whole(table, "n", _COUNT),
+        fields.whole(table, "seed", _SEED, required=False, default=0),
+        fields.numbers(table, "center", 3, COORDINATE, required=False) or (0.0, 0.0, 1.0),  # type: ignore[arg-type]
+        fields.number(table, "extent", _EXTENT, required=False, default=2.0),
+    )
+
+
+def _set_range(table: dict, do: str) -> SetRange:
+    camera = fields.text(table, "camera")
+    field = fields.text(table, "field")
+    if field not in RANGED_FIELDS:
+        raise EntryError("field", f"expected one of {', '.join(RANGED_FIELDS)}, got {fields.short(field)}")
+    limit = RANGED_FIELDS[field]
+    low = fields.number(table, "low", limit)
+    high = fields.number(table, "high", limit)
+    if not low < high:
+        raise EntryError("high", f"expected high > low ({low:g}), got {high:g}")
+    return SetRange(camera, field, low, high)
+
+
+def _set_lab(table: dict, do: str) -> SetLab:
+    values = {k: v for k, v in table.items() if k != "do"}
+    try:
+        LabSettings(**values)
+    except (ValueError, TypeError) as exc:
+        raise EntryError(_named_key(str(exc), values), str(exc)) from None
+    return SetLab(tuple(sorted(values.items())))
+
+
+def _set_lens(table: dict, do: str) -> SetLens:
+    values = {k: v for k, v in table.items() if k != "do"}
+    for k, v in values.items():
+        if type(v) is not bool:
+            raise EntryError(k, f"expected true or false, got {fields.short(v)}")
+    return SetLens(tuple(sorted(values.items())))
+
+
+def _open_demo(table: dict, do: str) -> OpenDemo:
+    demo = fields.text(table, "demo")
+    if demo not in DEMOS:
+        raise EntryError("demo", f"expected one of {', '.join(DEMOS)}, got {fields.short(demo)}")
+    fields.refuse_unknown(table, ("do", "demo", *RUN_FIELDS[demo]), f"an 'open_demo' change of the {demo} demo")
+    return OpenDemo(demo, parse_run_fields(table, demo))
+
+
+def _highlight(table: dict, do: str) -> Highlight:
+    return Highlight(fields.name_list(table, "names"))
+
+
+def _lock(table: dict, do: str) -> Lock:
+    return Lock(fields.name_list(table, "names"), do == "lock")
+
+
+def _select(table: dict, do: str) -> Select:
+    return Select(fields.whole(table, "point", _POINT_INDEX) if "point" in table else None)
+
+
+_KINDS: dict[str, tuple[tuple[str, ...], Callable[[dict, str], Change]]] = {
+    "show": (("do", "what"), _show),
+    "hide": (("do", "what"), _show),
+    "move": (("do", "camera", "position", "ypr_deg", "point", "to"), _move),
+    "highlight": (("do", "names"), _highlight),
+    "lock": (("do", "names"), _lock),
+    "unlock": (("do", "names"), _lock),
+    "select": (("do", "point"), _select),
+    "set_pair": (("do", "cameras"), _set_pair),
+    "set_field": (("do", "camera", "field", "value"), _set_field),
+    "set_points": (("do", "points"), _set_points),
+    "random_points": (("do", "n", "seed", "center", "extent"), _random_points),
+    "set_range": (("do", "camera", "field", "low", "high"), _set_range),
+    "set_lab": (("do", *(f.name for f in dataclasses.fields(LabSettings))), _set_lab),
+    "set_lens": (("do", *(f.name for f in dataclasses.fields(LensToggles))), _set_lens),
+    "open_demo": (("do", "demo", *RUN_FIELDS["pinhole"]), _open_demo),
+}
+"""Every change kind (``do``): the keys its table may have and the function that reads it (given ``do``)."""
+CHANGE_KINDS = tuple(_KINDS)
+"""The values ``do`` accepts."""
 
 
 def parse_change(table: Any) -> Change:
@@ -317,97 +432,11 @@ def parse_change(table: Any) -> Change:
     if not isinstance(table, dict):
         raise EntryError(None, f"expected a table, got {fields.short(table)}")
     do = table.get("do")
-    if type(do) is not str or do not in _KEYS:
+    if type(do) is not str or do not in _KINDS:
         raise EntryError("do", f"expected one of {', '.join(CHANGE_KINDS)}, got {fields.short(do)}")
-    fields.refuse_unknown(table, _KEYS[do], f"a {do!r} change")
-    if do in ("show", "hide"):
-        what = fields.text(table, "what")
-        if what not in DISPLAY_OPTIONS:
-            raise EntryError("what", f"expected one of {', '.join(DISPLAY_OPTIONS)}, got {fields.short(what)}")
-        return Show(what, do == "show")
-    if do == "move":
-        if "point" in table:
-            for key in ("camera", "position", "ypr_deg"):
-                if key in table:
-                    raise EntryError(key, "a move names a camera (position, ypr_deg) or a point (to), not both")
-            return MovePoint(fields.whole(table, "point", _POINT_INDEX),
-                             fields.numbers(table, "to", 3, COORDINATE))  # type: ignore[arg-type]
-        if "to" in table:
-            raise EntryError("to", "'to' moves a point: name it with 'point'")
-        camera = fields.text(table, "camera")
-        position = fields.numbers(table, "position", 3, COORDINATE, required=False)
-        ypr = fields.numbers(table, "ypr_deg", 3, ANGLE_DEG, required=False)
-        if position is None and ypr is None:
-            raise EntryError(None, "a camera move needs 'position', 'ypr_deg' or both")
-        return MoveCamera(camera, position, ypr)  # type: ignore[arg-type]
-    if do == "highlight":
-        return Highlight(fields.name_list(table, "names"))
-    if do in ("lock", "unlock"):
-        return Lock(fields.name_list(table, "names"), do == "lock")
-    if do == "select":
-        return Select(fields.whole(table, "point", _POINT_INDEX) if "point" in table else None)
-    if do == "set_pair":
-        names = fields.name_list(table, "cameras")
-        if len(names) != 2 or names[0] == names[1]:
-            raise EntryError("cameras", f"expected two different camera names, got {fields.short(list(names))}")
-        return SetPair(names)  # type: ignore[arg-type]
-    if do == "set_field":
-        camera = fields.text(table, "camera")
-        field = fields.text(table, "field")
-        if field not in _SETTABLE:
-            raise EntryError("field", f"expected one of {', '.join(sorted(_SETTABLE))}, got {fields.short(field)}")
-        if "value" not in table:
-            raise EntryError("value", "missing")
-        value = table["value"]
-        if isinstance(value, list):
-            value = tuple(value)
-        if isinstance(value, dict) or not isinstance(value, (int, float, str, tuple)) or isinstance(value, bool):
-            raise EntryError("value", f"expected a number, a list of numbers or text, got {fields.short(value)}")
-        return SetField(camera, field, value)
-    if do == "set_points":
-        pts = table.get("points")
-        if not isinstance(pts, list) or len(pts) > MAX_POINTS:
-            raise EntryError("points", f"expected a list of at most {MAX_POINTS} [x, y, z], got {fields.short(pts)}")
-        out = []
-        for p in pts:
-            out.append(fields.numbers({"points": p}, "points", 3, COORDINATE))
-        return SetPoints(tuple(out))  # type: ignore[arg-type]
-    if do == "random_points":
-        return RandomPoints(
-            fields.whole(table, "n", _COUNT),
-            fields.whole(table, "seed", _SEED, required=False, default=0),
-            fields.numbers(table, "center", 3, COORDINATE, required=False) or (0.0, 0.0, 1.0),  # type: ignore[arg-type]
-            fields.number(table, "extent", _EXTENT, required=False, default=2.0),
-        )
-    if do == "set_range":
-        camera = fields.text(table, "camera")
-        field = fields.text(table, "field")
-        if field not in RANGED_FIELDS:
-            raise EntryError("field", f"expected one of {', '.join(RANGED_FIELDS)}, got {fields.short(field)}")
-        limit = RANGED_FIELDS[field]
-        low = fields.number(table, "low", limit)
-        high = fields.number(table, "high", limit)
-        if not low < high:
-            raise EntryError("high", f"expected high > low ({low:g}), got {high:g}")
-        return SetRange(camera, field, low, high)
-    if do == "open_demo":
-        demo = fields.text(table, "demo")
-        if demo not in DEMOS:
-            raise EntryError("demo", f"expected one of {', '.join(DEMOS)}, got {fields.short(demo)}")
-        fields.refuse_unknown(table, ("do", "demo", *RUN_FIELDS[demo]), f"an 'open_demo' change of the {demo} demo")
-        return OpenDemo(demo, parse_run_fields(table, demo))
-    if do == "set_lab":
-        values = {k: v for k, v in table.items() if k != "do"}
-        try:
-            LabSettings(**values)
-        except (ValueError, TypeError) as exc:
-            raise EntryError(_named_key(str(exc), values), str(exc)) from None
-        return SetLab(tuple(sorted(values.items())))
-    values = {k: v for k, v in table.items() if k != "do"}
-    for k, v in values.items():
-        if type(v) is not bool:
-            raise EntryError(k, f"expected true or false, got {fields.short(v)}")
-    return SetLens(tuple(sorted(values.items())))
+    keys, parse = _KINDS[do]
+    fields.refuse_unknown(table, keys, f"a {do!r} change")
+    return parse(table, do)
 
 
 def _named_key(message: str, values: dict) -> str | None:
