@@ -142,6 +142,12 @@ def test_every_unchecked_core_call_is_the_checked_call(seed, which):
         for x, y in zip(arcs_a, arcs_b, strict=True):
             for u, v in zip(x, y, strict=True):
                 _close(u, v, "arc")
+        np.testing.assert_array_equal(cam.pose.to_local(X, check=False), cam.pose.to_local(X))
+        if hasattr(cam, "sphere_points"):  # the unified camera's 3D drawing
+            np.testing.assert_array_equal(cam.sphere_points(X[1], 0.5, check=False), cam.sphere_points(X[1], 0.5))
+            np.testing.assert_array_equal(cam.projection_centre(0.5, check=False), cam.projection_centre(0.5))
+            n = normals[0] / np.linalg.norm(normals[0])
+            np.testing.assert_array_equal(cam.great_circle(n, 48, 0.5, check=False), cam.great_circle(n, 48, 0.5))
         if hasattr(cam, "image_to_world"):
             px = rng.uniform(0, 640, size=(5, 2))
             np.testing.assert_array_equal(cam.image_to_world(px, 0.3, check=False), cam.image_to_world(px, 0.3))

@@ -135,9 +135,12 @@ class Pose:
         r"""The ``R`` that ``f_Rt2H`` would need: :math:`R_x(-\pi/2)^T R`."""
         return EGT_CAMERA_BASE.T @ self.R
 
-    def to_local(self, X_world: npt.ArrayLike) -> np.ndarray:
-        r"""World points (N, 3) into this frame: :math:`X = R^T (X_w - t)`."""
-        X = as_points(X_world, "X_world", 3)
+    def to_local(self, X_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+        r"""World points (N, 3) into this frame: :math:`X = R^T (X_w - t)`.
+
+        ``check=False``: the caller promises a float64 (N, 3) (or (3,)) array of finite values; nothing is checked.
+        """
+        X = as_points(X_world, "X_world", 3) if check else X_world.reshape(-1, 3)
         return (X - self.t) @ self.R
 
     def to_world(self, X_local: npt.ArrayLike) -> np.ndarray:

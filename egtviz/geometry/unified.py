@@ -202,20 +202,25 @@ class UnifiedCamera:
         K_inv.setflags(write=False)
         return K_inv
 
-    def projection_centre(self, radius: float = 1.0) -> np.ndarray:
-        r"""(3,) world position of the projection centre :math:`(0, 0, -\xi)` for a sphere of ``radius``."""
-        return self._projection_centre(as_positive(radius, "radius"))
+    def projection_centre(self, radius: float = 1.0, *, check: bool = True) -> np.ndarray:
+        r"""(3,) world position of the projection centre :math:`(0, 0, -\xi)` for a sphere of ``radius``
+        (``check=False``: the caller promises a positive float ``radius``)."""
+        return self._projection_centre(as_positive(radius, "radius") if check else radius)
 
     def _projection_centre(self, radius: float) -> np.ndarray:
         return self.pose.t - (radius * self.xi) * self.pose.R[:, 2]
 
-    def sphere_points(self, X_world: npt.ArrayLike, radius: float = 1.0) -> np.ndarray:
+    def sphere_points(self, X_world: npt.ArrayLike, radius: float = 1.0, *, check: bool = True) -> np.ndarray:
         """(N, 3) world points where the rays to ``X_world`` (N, 3) cross the sphere of ``radius``.
 
-        A point at the centre has no ray: NaN row.
+        A point at the centre has no ray: NaN row. ``check=False``: the caller promises a float64 (N, 3) (or (3,))
+        finite ``X_world`` and a positive ``radius``; nothing is checked.
         """
-        radius = as_positive(radius, "radius")
-        return self._sphere_points(as_points(X_world, "X_world", 3) - self.pose.t, radius)
+        if check:
+            radius, X = as_positive(radius, "radius"), as_points(X_world, "X_world", 3)
+        else:
+            X = X_world.reshape(-1, 3)
+        return self._sphere_points(X - self.pose.t, radius)
 
     def _sphere_points(self, v: np.ndarray, radius: float) -> np.ndarray:
         """:meth:`sphere_points` of the offsets ``v = X - t`` (N, 3), unchecked."""
@@ -224,12 +229,20 @@ class UnifiedCamera:
             s = np.where(norm > 0, v / norm, np.nan)
         return self.pose.t + radius * s
 
-    def great_circle(self, normal_world: npt.ArrayLike, n: int = 128, radius: float = 1.0) -> np.ndarray:
+    def great_circle(self, normal_world: npt.ArrayLike, n: int = 128, radius: float = 1.0, *,
+                     check: bool = True) -> np.ndarray:
         """Closed world polyline (n + 1, 3) of the sphere's great circle in the plane through the centre with
-        normal ``normal_world`` (3,)."""
-        n = check_sample_count(n, "n", 3)
-        radius = as_positive(radius, "radius")
-        normal = as_vector(normal_world, "normal_world", 3)
+        normal ``normal_world`` (3,).
+
+        ``check=False``: the caller promises a float64 (3,) finite ``normal_world``, a whole number ``n`` in range
+        and a positive ``radius``; nothing is checked (a zero normal still raises).
+        """
+        if check:
+            n = check_sample_count(n, "n", 3)
+            radius = as_positive(radius, "radius")
+            normal = as_vector(normal_world, "normal_world", 3)
+        else:
+            normal = normal_world
         norm = np.linalg.norm(normal)
         if not norm > 0:
             raise GeometryError("normal_world: a zero normal defines no plane")

@@ -44,15 +44,17 @@ class UnifiedDrawing(CameraDrawing):
         return self.sphere
 
     def update(self, camera: Any, plane: Any, ctx: DrawContext) -> None:
-        assign(self.centre, "position", tuple(camera.pose.to_local(camera.projection_centre(SPHERE_RADIUS))[0]))
+        # The camera and its derived arrays were checked when the scene was: the core's unchecked calls (every drag).
+        centre = camera.pose.to_local(camera.projection_centre(SPHERE_RADIUS, check=False), check=False)
+        assign(self.centre, "position", tuple(centre[0]))
         sel, normal = ctx.selected_point, ctx.selected_normal
         show = sel is not None and normal is not None and ctx.in_pair
         if show:
             key = (camera, sel, normal.tobytes(), ctx.points[sel].tobytes())
             if key != self._circle_key:
-                p = camera.sphere_points(ctx.points[sel], SPHERE_RADIUS)[0]
+                p = camera.sphere_points(ctx.points[sel], SPHERE_RADIUS, check=False)[0]
                 assign(self.on_sphere, "position", tuple(p))
-                C = camera.great_circle(normal, CIRCLE_SAMPLES, SPHERE_RADIUS)
+                C = camera.great_circle(normal, CIRCLE_SAMPLES, SPHERE_RADIUS, check=False)
                 assign_array(self.circle, "points", np.stack([C[:-1], C[1:]], axis=1).astype(np.float32))
                 self._circle_key = key
         assign(self.on_sphere, "visible", show)
