@@ -488,3 +488,37 @@ def test_the_checked_helpers_of_the_two_view_modules_name_every_bad_argument(two
         for arg, valid in kwargs.items():
             for label, bad in all_bad_values(valid):
                 assert_rejects(func, kwargs, arg, bad, label=label)
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "match"),
+    [
+        ("U1", np.nan, "U1: contains NaN or inf"),
+        ("U2", -np.inf, "U2: contains NaN or inf"),
+        ("U1", 1e120, "U1: magnitude .* too large"),  # one huge point among small ones: the centroid stays small
+        ("U2", 1e300, "U2: magnitude .* too large"),
+    ],
+)
+def test_the_normalised_8point_checks_float_arrays_on_the_way(two_view, where, value, match) -> None:
+    # Float64 (N, 2) arrays skip the up-front value check; the normalisation must still refuse them by name,
+    # before any degeneracy of the other image is reported.
+    U = {"U1": two_view.U1.copy(), "U2": two_view.U2.copy()}
+    U[where][3, 1] = value
+    with pytest.raises(GeometryError, match=match):
+        fundamental_normalized_8point(U["U1"], U["U2"])
+    other = "U2" if where == "U1" else "U1"
+    U[other] = np.tile([5.0, 7.0], (20, 1))  # coincident points: degenerate, but the bad value comes first
+    with pytest.raises(GeometryError, match=match):
+        fundamental_normalized_8point(U["U1"], U["U2"])
+    opposite = two_view.U1.copy()
+    opposite[2], opposite[5] = [1e300, 0.0], [-1e300, 0.0]  # the sum cancels; the mean distance does not
+    with pytest.raises(GeometryError, match="U1: magnitude .* too large"):
+        fundamental_normalized_8point(opposite, two_view.U2)
+
+
+def test_the_normalised_8point_gives_the_same_f_on_the_fast_and_the_checked_route(two_view) -> None:
+    U1, U2 = two_view.U1, two_view.U2
+    F_fast = fundamental_normalized_8point(U1, U2)  # float64 arrays: the values checked on the way
+    F_checked = fundamental_normalized_8point(U1.tolist(), U2.astype(np.float32).astype(np.float64).tolist())
+    np.testing.assert_array_equal(fundamental_normalized_8point(U1.tolist(), U2.tolist()), F_fast)
+    assert f_distance(F_checked, F_fast) < 1e-6

@@ -75,6 +75,29 @@ def design_matrix(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
     return At
 
 
+def _float_pairs(U1: npt.ArrayLike, U2: npt.ArrayLike, min_count: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`~egtviz.geometry.matrices.point_pairs`, with the value checks left to Hartley's normalisation
+    when both are float64 ``(N, 2)`` arrays of one ``N >= min_count`` already.
+
+    The normalisation checks the values on its centroid and mean distance and raises the same errors
+    (:func:`~egtviz.geometry.matrices.hartley_normalization`): the two reductions over each array that a
+    full check costs are a fifth of the normalised 8-point algorithm's time at N = 1000.
+    """
+    if (
+        type(U1) is np.ndarray
+        and type(U2) is np.ndarray
+        and U1.dtype == np.float64
+        and U2.dtype == np.float64
+        and U1.ndim == 2
+        and U2.ndim == 2
+        and U1.shape[1] == 2
+        and U2.shape[1] == 2
+        and U1.shape[0] == U2.shape[0] >= min_count
+    ):
+        return U1, U2
+    return point_pairs(U1, U2, min_count)
+
+
 def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(At, T1, T2)``: :func:`design_matrix` of the Hartley-normalised points of two checked ``(N, 2)`` arrays.
 
@@ -297,7 +320,7 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
         GeometryError: bad shapes, NaN/inf, ``N < 8`` or mismatched ``N``.
         DegenerateConfigurationError: coincident points or rank-deficient data.
     """
-    u1, u2 = point_pairs(U1, U2, 8)
+    u1, u2 = _float_pairs(U1, U2, 8)
     At, T1, T2 = normalized_design(u1, u2)
     Fn = nearest_rank2(null_vector(At).reshape(3, 3), check=False)
     return _denormalize_canonical(Fn, T1, T2)

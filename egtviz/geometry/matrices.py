@@ -12,7 +12,15 @@ import numpy as np
 import numpy.typing as npt
 from scipy.linalg import lapack as _lapack
 
-from ._validate import DegenerateConfigurationError, GeometryError, as_array, as_count, as_matrix, as_points
+from ._validate import (
+    MAX_MAGNITUDE,
+    DegenerateConfigurationError,
+    GeometryError,
+    as_array,
+    as_count,
+    as_matrix,
+    as_points,
+)
 
 __all__ = [
     "full_angle",
@@ -101,7 +109,11 @@ def hartley_normalization(
         U: (N, 2) pixels; or K images normalised each on its own (the two images of an estimator),
             as a (K, N, 2) stack or a sequence of K (N, 2) arrays.
         name: the argument's name in error messages; for K images, one name per image.
-        check: validate ``U``; ``False`` for float64 arrays the caller has checked.
+        check: validate ``U`` first. ``False`` for float64 (N, 2) arrays whose type and shape the caller
+            has checked: their values are then checked on the way, from the centroid and the mean
+            distance (a NaN or inf makes the centroid non-finite; every coordinate is within
+            :math:`|c| + N \bar d` of the origin), and a bad one raises the same ``GeometryError`` as
+            the full check, before any degeneracy of any image is reported.
 
     Returns:
         ``(Un, T)``: (N, 2) normalised pixels and the (3, 3) similarity ``T``; for K images, (K, N, 2)
@@ -119,14 +131,22 @@ def hartley_normalization(
     # and the scaling are then one numpy call each, on contiguous memory; numpy's per-call cost, not the
     # arithmetic, dominates at the sizes of an estimation.
     Un = np.empty((k, n, 2))
-    flat: list[float] = []
-    for i, image in enumerate(images):
-        z = np.ascontiguousarray(image).view(np.complex128)[:, 0]
-        out = Un[i].view(np.complex128)[:, 0]
-        c = complex(np.add.reduce(z)) / n
+    zs = [np.ascontiguousarray(image).view(np.complex128)[:, 0] for image in images]
+    outs = [Un[i].view(np.complex128)[:, 0] for i in range(k)]
+    centres = [complex(np.add.reduce(z)) / n for z in zs]
+    for image, c, nm in zip(images, centres, names):
+        if not (math.isfinite(c.real) and math.isfinite(c.imag)):
+            as_points(image, nm, 2)  # names the NaN or inf (or the magnitude that overflowed the sum)
+    means = []
+    for image, z, out, c, nm in zip(images, zs, outs, centres, names):
         np.subtract(z, c, out=out)
         mean = float(np.add.reduce(np.abs(out))) / n
-        _check_spread(mean, c, names[i])
+        if not max(abs(c.real), abs(c.imag)) + n * mean <= MAX_MAGNITUDE:
+            as_points(image, nm, 2)  # a coordinate may exceed MAX_MAGNITUDE: the full check decides
+        means.append(mean)
+    flat: list[float] = []
+    for out, c, mean, nm in zip(outs, centres, means, names):
+        _check_spread(mean, c, nm)
         s = math.sqrt(2.0) / mean
         out *= s
         flat += [s, 0.0, -s * c.real, 0.0, s, -s * c.imag, 0.0, 0.0, 1.0]
