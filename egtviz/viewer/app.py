@@ -72,6 +72,7 @@ from .fields import (
     parse_numbers,
 )
 from .figure_export import panel_svg_of
+from .palette import PRESENT_GUI_CSS
 from .panels import (
     CONTROL_PX,
     DEFAULT_WINDOW,
@@ -102,8 +103,6 @@ VIEW_BUTTONS = {
 DOWNLOAD_FORMATS = ("SVG", "PNG")
 #: The width viser's dock gives a new docked column (CSS pixels).
 DOCK_DEFAULT_PX = 300.0
-#: Presentation mode's GUI type: Mantine (viser's GUI toolkit) scales its rem-based sizes by this variable.
-PRESENT_GUI_CSS = "<style>:root:root{--mantine-scale:1.25}</style>"
 #: How much larger the 3D view's labels (point numbers, camera names) are in presentation mode.
 PRESENT_LABEL_SCALE = 1.6
 
@@ -1358,9 +1357,10 @@ class EgtvizApp:
             old.close()
         client.gui.reset()
         client.scene.reset()
+        present = view.present if view is not None else self.present  # the tab's own choice, if it made one
         try:
             demo = make_servo_demo(client, kind, on_back=lambda: self.close_demo(client),
-                                   field_delay=self.field_delay, **options)
+                                   field_delay=self.field_delay, present=present, **options)
         except Exception as exc:  # noqa: BLE001 - back to a working workbench, with the reason
             import traceback
 

@@ -1,4 +1,4 @@
-"""Colours shared by the 3D view and the image-plane panels.
+"""Colours shared by the 3D view and the image-plane panels, and presentation mode's type for every page.
 
 Okabe & Ito's colour-blind-safe palette (without black and yellow, which do not
 read on white): point ``i`` gets ``POINT_COLOURS[i % 6]`` in the 3D scene and in
@@ -33,6 +33,20 @@ EPIPOLE_COLOUR = "#222222"
 BASELINE_COLOUR = "#444444"
 RIM_COLOUR = "#777777"
 CAMERA_COLOURS: tuple[str, ...] = ("#1b1b1b", "#5a3e8c", "#2f6d3a", "#8c4a1e")
+
+#: Smallest text of a page in presentation mode, CSS pixels (what a projector's back row reads; the panels'
+#: :data:`egtviz.viewer.svg.PRESENT` sizes meet it too).
+PRESENT_MIN_TEXT_PX = 16.0
+#: Presentation mode's GUI type, for every page (workbench, start page, servo demos): Mantine (viser's GUI toolkit)
+#: scales its rem-based sizes by ``--mantine-scale``; the pages' own smaller notes (an inline ``font-size:0.8em``)
+#: and Mantine's small controls are raised to :data:`PRESENT_MIN_TEXT_PX` (``max``: larger text stays larger).
+PRESENT_GUI_CSS = (
+    "<style>:root:root{--mantine-scale:1.25}"
+    f'small,[style*="font-size:0."],[style*="font-size: 0."]{{font-size:max({PRESENT_MIN_TEXT_PX:g}px,0.85em)!important}}'
+    ".mantine-Button-label,.mantine-SegmentedControl-label,.mantine-InputWrapper-label,.u-legend,.u-title,"
+    f".mantine-InputWrapper-description,.mantine-Tabs-tabLabel{{font-size:max({PRESENT_MIN_TEXT_PX:g}px,1em)!important}}"
+    "</style>"
+)
 
 
 def hex_to_rgb(colour: str) -> tuple[int, int, int]:

@@ -64,6 +64,8 @@ MIN_CANVAS_PX = 360.0
 FLOOR_CANVAS_PX = 160.0
 #: Height taken in each cell of a column by the panel's handle and tab strip (measured in Chromium: 56-68 px).
 CELL_CHROME_PX = 70.0
+#: The same by panel style: presentation mode's larger GUI type makes the tab strip taller (measured: 78 px).
+CELL_CHROME_BY_STYLE = {"normal": CELL_CHROME_PX, "present": 80.0}
 #: Width of the divider between two docked columns, and between a region and the 3D view.
 DIVIDER_PX = 5.0
 #: Status rows under a panel's frame assumed when planning (the SVG's max-height catches a third).
@@ -139,6 +141,8 @@ class PanelGrid:
     column_px: float
     """Width of each column (every column is equally wide)."""
     columns: tuple[tuple[tuple[str, ...], ...], ...]
+    chrome_px: float = CELL_CHROME_PX
+    """Height of each cell's handle and tab strip (:data:`CELL_CHROME_BY_STYLE`)."""
 
     @property
     def right_px(self) -> float:
@@ -170,7 +174,7 @@ class PanelGrid:
         """The tallest an SVG in camera ``name``'s cell can be without making the cell scroll."""
         i, j = self._where(name)
         share = dock_plan(len(self.columns[i]))[1][j]
-        return max(self.window.height * share - CELL_CHROME_PX, 80.0)
+        return max(self.window.height * share - self.chrome_px, 80.0)
 
 
 def dock_plan(rows: int) -> tuple[list[tuple[int, int | None]], list[float]]:
@@ -269,9 +273,10 @@ def plan_grid(cameras: Sequence[tuple[str, float, float]], window: WindowSize, *
         The :class:`PanelGrid` (no columns for no cameras).
     """
     control = CONTROL_PX[style.name] if style.name in CONTROL_PX else CONTROL_PX["normal"]
+    chrome = CELL_CHROME_BY_STYLE.get(style.name, CELL_CHROME_PX)
     names = [c[0] for c in cameras]
     if not names:
-        return PanelGrid(window, control, 0.0, ())
+        return PanelGrid(window, control, 0.0, (), chrome)
     # The tallest image sets the heights: every other panel is then at most as high.
     tallest = max(cameras, key=lambda c: float(c[2]) / float(c[1]))
     image = (float(tallest[1]), float(tallest[2]))
@@ -280,7 +285,7 @@ def plan_grid(cameras: Sequence[tuple[str, float, float]], window: WindowSize, *
 
     def width(n_cells: int, rows: int) -> tuple[float, int]:
         cols = math.ceil(n_cells / rows)
-        avail_h = window.height * min(dock_plan(rows)[1]) - CELL_CHROME_PX
+        avail_h = window.height * min(dock_plan(rows)[1]) - chrome
         hi = max(min(budget / cols - DIVIDER_PX, cap), 60.0)
         return _widest_fitting(image, avail_h, style, hi), cols
 
@@ -295,12 +300,12 @@ def plan_grid(cameras: Sequence[tuple[str, float, float]], window: WindowSize, *
             if not good:
                 # One panel of tabs in a small window: the 3D view shrinks to FLOOR_CANVAS_PX before the panel does.
                 room = window.width - control - FLOOR_CANVAS_PX - 2 * DIVIDER_PX
-                w = max(w, min(MIN_PANEL_PX, room, _widest_fitting(image, window.height - CELL_CHROME_PX, style,
+                w = max(w, min(MIN_PANEL_PX, room, _widest_fitting(image, window.height - chrome, style,
                                                                    MIN_PANEL_PX)))
             break
     cells = _split(names, n_cells)
     columns = tuple(tuple(tuple(cell) for cell in col) for col in _split(cells, cols))
-    return PanelGrid(window, control, float(math.floor(w)), columns)
+    return PanelGrid(window, control, float(math.floor(w)), columns, chrome)
 
 
 def initial_view(plane: Any) -> ViewMode:

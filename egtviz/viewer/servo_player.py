@@ -50,14 +50,20 @@ from .fields import (
     on_event,
     parse_numbers,
 )
-from .palette import hex_to_rgb, point_colour
+from .palette import PRESENT_GUI_CSS, hex_to_rgb, point_colour
+from .panels import CONTROL_PX
 from .servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy, notify_busy
 from .servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
+from .svg import NORMAL, PRESENT
 
 __all__ = ["FIELD_DELAY", "PANEL_WIDTH", "RUN_RULES", "SPEEDS", "ServoPlayer"]
 
 SPEEDS = ("0.25x", "0.5x", "1x", "2x", "4x")
 PANEL_WIDTH = 470
+#: The panel's width in presentation mode (the image panel is drawn in :data:`egtviz.viewer.svg.PRESENT`).
+PRESENT_PANEL_WIDTH = 600
+#: The panel's width less the image's on screen (the panel's padding and scroll bar; measured in Chromium).
+PANEL_INSET_PX = 32
 FPS = 15.0
 #: Most samples per uPlot series sent per frame (the series are thinned, the newest sample kept).
 PLOT_SAMPLES = 300
@@ -132,6 +138,7 @@ class ServoPlayer(ABC):
         show_panel: bool = True,
         field_delay: float = FIELD_DELAY,
         budget: ServoBudget | None = None,
+        present: bool = False,
         **params: Any,
     ) -> None:
         given = {"seed": seed, "noise_px": noise_px, "steps": self.DEFAULT_STEPS if steps is None else steps,
@@ -141,6 +148,9 @@ class ServoPlayer(ABC):
         self._typing = Debouncer(field_delay)
         self.client = client
         self.autoplay = autoplay
+        #: Presentation mode: large type in the GUI and the image panel (``egtviz serve --present``).
+        self.present = bool(present)
+        self.panel_width = PRESENT_PANEL_WIDTH if self.present else PANEL_WIDTH
         self.lock = threading.RLock()
         self._closed = threading.Event()
         self._syncing = False
@@ -275,9 +285,11 @@ class ServoPlayer(ABC):
         gui.configure_theme(dark_mode=False, show_logo=False)
         try:
             gui.main_panel.dock_left()
-            gui.main_panel.set_width(330)
+            gui.main_panel.set_width(CONTROL_PX["present" if self.present else "normal"])
         except Exception:  # noqa: BLE001 - placement is cosmetic
             pass
+        if self.present:
+            gui.add_html(PRESENT_GUI_CSS)
         self.title_md = gui.add_markdown(f"**{self.TITLE}**  \n{self.INTRO}")
         if self._on_back is not None:
             self.btn_back = gui.add_button("Back to the epipolar workbench", icon=viser.Icon.ARROW_LEFT)
@@ -388,7 +400,7 @@ class ServoPlayer(ABC):
                                   (self.FEATURE_ERROR_LABEL, "#CC79A7", "e"))
             self.plot_errors = self._uplot("Errors, % of their start value", self._error_series, dual=False)
         self.panel.dock_right()
-        self.panel.set_width(PANEL_WIDTH)
+        self.panel.set_width(self.panel_width)
 
     def _uplot(self, title: str, series: tuple[tuple[str, str, str], ...], *, dual: bool, t_end: float = 1.0):
         from viser import uplot
@@ -735,7 +747,10 @@ class ServoPlayer(ABC):
 
     def _send_svg(self, img: ServoImage) -> None:
         self.revision += 1
-        self.svg = servo_image_svg(img, revision=self.revision, max_height="calc(100vh - 500px)")
+        # Drawn for the width it is shown at, never shrunk to a height (its text would go under the style's sizes):
+        # in a short window the plots are under it, a scroll away.
+        self.svg = servo_image_svg(img, revision=self.revision, style=PRESENT if self.present else NORMAL,
+                                   panel_px=self.panel_width - PANEL_INSET_PX)
         if self.image_html is not None:
             self.image_html.content = self.svg
 

@@ -19,11 +19,15 @@ import threading
 from html import escape
 from typing import Any
 
+import viser
+
 from ..lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
 from ..lessons.progress import LessonProgress
 from ..scene import SceneModel
 from .fields import Debouncer, FieldError, on_event
 from .lesson_view import LESSON_ORDER, LessonPanel, typed_learner_key
+from .palette import PRESENT_GUI_CSS
+from .start_preview import start_preview_html
 from .progress_notice import progress_notice_html, show_name_in_use
 
 __all__ = ["Course", "LessonStatus", "StartPage", "course_statuses", "lesson_status"]
@@ -31,6 +35,8 @@ __all__ = ["Course", "LessonStatus", "StartPage", "course_statuses", "lesson_sta
 #: The start page's control panel is wider than the workbench's: it is the page.
 START_PAGE_WIDTH_PX = 560
 START_PAGE_MARGIN_PX = 16
+#: In presentation mode the column is this much wider (its type is 1.25 times larger).
+PRESENT_WIDTH_SCALE = 1.25
 
 
 class LessonStatus:
@@ -74,15 +80,20 @@ class StartPage:
         self._lock = threading.RLock()
         self._typing = Debouncer(course.app.field_delay)
         gui = client.gui
+        present = bool(getattr(course.app, "present", False))
+        width = START_PAGE_WIDTH_PX * (PRESENT_WIDTH_SCALE if present else 1.0)
         with client.atomic():
             gui.configure_theme(dark_mode=False, show_logo=False)
             try:
                 # Floating, not docked: the 3D canvas keeps the whole window, and the workbench a lesson opens
                 # plans its panels from the canvas size the tab reports (the window's, before anything docks).
-                gui.main_panel.float(x=START_PAGE_MARGIN_PX, y=START_PAGE_MARGIN_PX, width=START_PAGE_WIDTH_PX,
+                gui.main_panel.float(x=START_PAGE_MARGIN_PX, y=START_PAGE_MARGIN_PX, width=width,
                                      height=self._height())
             except Exception:  # noqa: BLE001 - placement is cosmetic
                 pass
+            if present:
+                gui.add_html(PRESENT_GUI_CSS)
+            self.preview = gui.add_html(self._preview(width, present))
             gui.add_html(
                 '<div style="padding:0 0.6em" data-egtviz="start-page"><h2 style="margin:0.3em 0">'
                 f"Two-view geometry: a course</h2>{len(course.lessons)} lessons, from camera poses to visual "
@@ -93,7 +104,7 @@ class StartPage:
                                      hint="Your progress is kept under this name: type it again in any tab, or "
                                           "after a restart, to resume where you were.")
             self.btn_workbench = gui.add_button(
-                "Open the workbench", color="gray",
+                "Open the workbench", color="teal", icon=viser.Icon.ARROW_RIGHT,
                 hint="Cameras, points and image planes without a lesson; this page is one click away from it.")
             self.buttons: dict[str, Any] = {}
             self.status: dict[str, Any] = {}
@@ -107,15 +118,27 @@ class StartPage:
         self._on(self.btn_workbench.on_click, lambda _: self.course.open_workbench(self.client))
         self._on(self.name.on_update, lambda e: self._name_typed(e.target.value))
 
-    def _height(self) -> float:
-        """The page's height: the window's (as the tab reported its canvas) less the margins."""
+    def _window(self) -> Any:
+        """The tab's window, as it reported its canvas (nothing is docked on the start page)."""
         from .panels import DEFAULT_WINDOW, window_from_canvas
 
         try:
-            window = window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
+            return window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
         except (AssertionError, AttributeError):  # no camera message yet
-            window = DEFAULT_WINDOW
-        return max(window.height - 2 * START_PAGE_MARGIN_PX, 300.0)
+            return DEFAULT_WINDOW
+
+    def _height(self) -> float:
+        """The page's height: the window's less the margins."""
+        return max(self._window().height - 2 * START_PAGE_MARGIN_PX, 300.0)
+
+    def _preview(self, width: float, present: bool) -> str:
+        """The workbench's scene drawn beside the page's column (:mod:`egtviz.viewer.start_preview`)."""
+        try:
+            return start_preview_html(self.course.app.initial_scene, self._window(),
+                                      left_px=START_PAGE_MARGIN_PX + width, margin_px=START_PAGE_MARGIN_PX,
+                                      present=present)
+        except Exception:  # noqa: BLE001 - a preview that cannot be drawn leaves the page as it was
+            return ""
 
     def report(self, exc: BaseException) -> None:
         """Show what went wrong in this tab."""
@@ -165,7 +188,7 @@ class StartPage:
             colour = "#117733" if status == LessonStatus.DONE else "#555"
             mark = "\u2713 " if status == LessonStatus.DONE else ""
             self.status[name].content = (
-                f'<div style="font-size:0.8em;padding:0 0.6em 0.4em" data-lesson="{escape(name)}" '
+                f'<div style="font-size:0.85em;padding:0 0.6em 0.4em" data-lesson="{escape(name)}" '
                 f'data-status="{escape(status)}">{escape(lesson.summary)} '
                 f'<b style="color:{colour}">{mark}{escape(status)}</b></div>'
             )

@@ -261,3 +261,139 @@ def test_high_density_screen_gets_the_layout_of_its_css_size(browser):
     finally:
         page.close()
         server.stop()
+
+
+#: Every text a user can see on the page (not covered, not scrolled away; the browser's own "software WebGL" toast
+#: aside): its size on screen in CSS px (an SVG text's computed size times the SVG's scale) and where it is.
+PAGE_TEXTS_JS = """() => {
+  const out = [];
+  const walker = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT);
+  while (walker.nextNode()) {
+    const node = walker.currentNode, el = node.parentElement;
+    if (!node.textContent.trim() || !el || el.closest('.mantine-Notification-root, style, script')) continue;
+    const range = document.createRange(); range.selectNodeContents(node);
+    const r = range.getBoundingClientRect();
+    if (r.width < 1 || r.height < 1) continue;
+    const x = r.left + r.width / 2, y = r.top + r.height / 2;
+    if (x < 0 || y < 0 || x > innerWidth || y > innerHeight) continue;
+    const hit = document.elementFromPoint(x, y);
+    if (!hit || !(hit === el || el.contains(hit) || hit.contains(el))) continue;
+    let px = parseFloat(getComputedStyle(el).fontSize);
+    const svg = el.closest('svg');
+    if (svg) px *= svg.getScreenCTM().a;
+    out.push({text: node.textContent.trim().slice(0, 40), px, svg: svg ? svg.dataset.egtviz || '' : ''});
+  }
+  return out;
+}"""
+
+#: Each image-plane panel's scroll box: how far its content overflows (0: nothing scrolls).
+PANEL_SCROLL_JS = """() => [...document.querySelectorAll('svg[data-egtviz="image-plane"]')]
+  .filter(s => s.getBoundingClientRect().width > 0)
+  .map(s => { let e = s.parentElement;
+    while (e && !(['auto', 'scroll'].includes(getComputedStyle(e).overflowY))) e = e.parentElement;
+    return {camera: s.dataset.camera, over: e ? e.scrollHeight - e.clientHeight : 0}; })"""
+
+
+def _serve_app(*, present=False, **kw):
+    import viser
+
+    from egtviz.viewer.app import EgtvizApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = EgtvizApp(server, present=present, **kw)
+    return server, app, f"http://127.0.0.1:{server.get_port()}"
+
+
+def _open(browser, url, selector, width, height):
+    page = browser.new_page(viewport={"width": width, "height": height})
+    page.goto(url)
+    page.wait_for_function(f"() => document.querySelector('{selector}') !== null", timeout=90_000)
+    close_notifications(page)
+    return page
+
+
+def _smallest(page, *, settle=1.0):
+    time.sleep(settle)
+    texts = page.evaluate(PAGE_TEXTS_JS)
+    assert len(texts) >= 10
+    return min(texts, key=lambda t: t["px"]), texts
+
+
+@pytest.mark.parametrize(("width", "height"), WINDOWS)
+@pytest.mark.parametrize("present", [False, True])
+def test_start_page_uses_its_width_and_presentation_mode(browser, present, width, height):
+    from egtviz.viewer.palette import PRESENT_MIN_TEXT_PX
+
+    server, app, url = _serve_app(present=present, course=True)
+    page = _open(browser, url, '[data-egtviz="start-preview"] svg[data-egtviz="image-plane"]', width, height)
+    try:
+        small, texts = _smallest(page)
+        floor = PRESENT_MIN_TEXT_PX if present else NORMAL.tick_px
+        assert small["px"] >= floor - 0.3, small
+        assert any(t["svg"] == "image-plane" for t in texts)  # the preview's panels are seen, not covered
+        # The preview fills the right of the window beside the page's column: no blank 60 %.
+        box = page.evaluate("""() => { const p = document.querySelector('[data-egtviz="start-preview"]');
+            const svgs = [...p.querySelectorAll('svg')].map(s => s.getBoundingClientRect().toJSON());
+            const page = document.querySelector('[data-egtviz="start-page"]').getBoundingClientRect().toJSON();
+            return {svgs, page}; }""")
+        assert box["svgs"] and all(s["left"] >= box["page"]["right"] for s in box["svgs"])
+        assert max(s["right"] for s in box["svgs"]) >= 0.9 * width
+        assert sum(s["width"] for s in box["svgs"]) >= 0.4 * width
+        # "Open the workbench" is a coloured button, not a grey (disabled-looking) one.
+        rgb = page.evaluate("""() => { const b = [...document.querySelectorAll('button')]
+            .find(b => b.textContent.includes('Open the workbench'));
+            return getComputedStyle(b).backgroundColor.match(/\\d+/g).slice(0, 3).map(Number); }""")
+        assert max(rgb) - min(rgb) >= 60, rgb
+    finally:
+        page.close()
+        server.stop()
+
+
+@pytest.mark.parametrize(("width", "height"), WINDOWS)
+@pytest.mark.parametrize("present", [False, True])
+def test_servo_demo_image_panel_is_readable(browser, present, width, height):
+    from egtviz.viewer.palette import PRESENT_MIN_TEXT_PX
+
+    server, app, url = _serve_app(present=present, demo="pinhole")
+    page = _open(browser, url, 'svg[data-egtviz="servo-image"]', width, height)
+    try:
+        demo = app.wait_for_demo()[0]
+        assert demo.wait(90)
+        demo.pause()
+        small, texts = _smallest(page)
+        image = [t for t in texts if t["svg"] == "servo-image"]
+        assert image
+        floor = PRESENT_MIN_TEXT_PX if present else NORMAL.tick_px
+        assert min(t["px"] for t in image) >= floor - 0.3, min(image, key=lambda t: t["px"])
+        if present:
+            assert small["px"] >= PRESENT_MIN_TEXT_PX - 0.3, small
+    finally:
+        page.close()
+        server.stop()
+
+
+@pytest.mark.parametrize(("width", "height"), WINDOWS)
+def test_workbench_in_presentation_mode_reads_and_no_panel_scrolls(browser, width, height):
+    from egtviz.viewer.palette import PRESENT_MIN_TEXT_PX
+
+    scene = SCENES["example3"]()
+    server, app, url = _serve(scene, present=True)
+    page = open_viewer(browser, url, width=width, height=height, n_panels=2)
+    try:
+        close_notifications(page)
+        _settled_panels(page, app, 2)
+        time.sleep(1.0)
+        assert all(p["over"] <= 1 for p in page.evaluate(PANEL_SCROLL_JS)), page.evaluate(PANEL_SCROLL_JS)
+        # Every status line is on screen (none hidden under the cell's edge).
+        texts = page.evaluate(PAGE_TEXTS_JS)
+        assert sum("outside the image" in t["text"] for t in texts) == 2
+        readout = page.evaluate("""() => { const r = document.querySelector('[data-egtviz="readout"]');
+            return [...r.querySelectorAll('*')].concat([r]).filter(e => e.childNodes.length && [...e.childNodes]
+              .some(n => n.nodeType === 3 && n.textContent.trim())).map(e => parseFloat(getComputedStyle(e).fontSize)); }""")
+        assert readout and min(readout) >= PRESENT_MIN_TEXT_PX - 0.3, readout
+        if width >= 1900:
+            small = min(texts, key=lambda t: t["px"])
+            assert small["px"] >= PRESENT_MIN_TEXT_PX - 0.3, small
+    finally:
+        page.close()
+        server.stop()
