@@ -217,3 +217,24 @@ def test_a_viewer_drag_update_checks_only_the_dragged_pose(monkeypatch):
         for f in fakes:
             f.close()
         server.stop()
+
+
+def test_an_overflowing_camera_is_refused_once_named(monkeypatch):
+    from egtviz.geometry import pinhole
+    from egtviz.scene import SceneError
+    from egtviz.scene import derived as derived_module
+
+    real = pinhole.PinholeCamera._project
+
+    def overflowing(self, X):
+        proj = real(self, X)
+        proj.pixels[0, 0] = np.inf
+        return proj
+
+    monkeypatch.setattr(pinhole.PinholeCamera, "_project", overflowing)
+    derived_module._camera_block.cache_clear()
+    try:
+        with pytest.raises(SceneError, match=r"^cannot be drawn: camera 'cam1': image coordinates overflow$"):
+            compute_derived(_moved(SCENES["pinhole"], np.random.default_rng(1), 8))
+    finally:
+        derived_module._camera_block.cache_clear()

@@ -168,7 +168,7 @@ class _CameraBlock(NamedTuple):
     ray: np.ndarray
     plane: ImagePlane
     overflow: str | None
-    """Why the camera cannot be drawn (its pixels or rays overflow), or None."""
+    """Why the camera cannot be drawn (its pixels or rays overflow), or None; ``compute_derived`` raises it."""
 
 
 @lru_cache(maxsize=64)
@@ -199,9 +199,9 @@ def _camera_block(spec, points: tuple, check: bool) -> _CameraBlock:
     ray = _frozen(cam.light_paths(X, check=check))
     overflow = None
     if np.isinf(plane.points).any():
-        overflow = f"cannot be drawn: camera {spec.name!r}: image coordinates overflow"
+        overflow = f"camera {spec.name!r}: image coordinates overflow"
     elif np.isinf(ray).any():
-        overflow = f"cannot be drawn: camera {spec.name!r}: rays overflow"
+        overflow = f"camera {spec.name!r}: rays overflow"
     return _CameraBlock(cam, (_frozen(np.array(pose.quat_wxyz)), pose.t), ray, plane, overflow)
 
 
