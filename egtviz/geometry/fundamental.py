@@ -68,8 +68,7 @@ def design_matrix(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
         h1 = At[6:9]
         h1[:2] = x1.T
         h1[2] = 1.0
-        np.multiply(h1, x2[:, 0], out=At[0:3])
-        np.multiply(h1, x2[:, 1], out=At[3:6])
+        np.multiply(x2.T[:, None, :], h1[None, :, :], out=At[0:6].reshape(2, 3, n))  # rows 3a + b, a < 2
         return At
     np.multiply(x2.T[:, None, :], x1.T[None, :, :], out=At.reshape(3, 3, n))
     return At

@@ -131,12 +131,15 @@ def hartley_normalization(
     # and the scaling are then one numpy call each, on contiguous memory; numpy's per-call cost, not the
     # arithmetic, dominates at the sizes of an estimation.
     Un = np.empty((k, n, 2))
-    zs = [np.ascontiguousarray(image).view(np.complex128)[:, 0] for image in images]
-    outs = [Un[i].view(np.complex128)[:, 0] for i in range(k)]
-    centres = [complex(np.add.reduce(z)) / n for z in zs]
-    for image, c, nm in zip(images, centres, names):
+    zs, centres = [], []
+    for image, nm in zip(images, names):
+        z = np.ascontiguousarray(image).view(np.complex128)[:, 0]
+        c = complex(np.add.reduce(z)) / n
         if not (math.isfinite(c.real) and math.isfinite(c.imag)):
             as_points(image, nm, 2)  # names the NaN or inf (or the magnitude that overflowed the sum)
+        zs.append(z)
+        centres.append(c)
+    outs = [Un[i].view(np.complex128)[:, 0] for i in range(k)]
     means = []
     for image, z, out, c, nm in zip(images, zs, outs, centres, names):
         np.subtract(z, c, out=out)
