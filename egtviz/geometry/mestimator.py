@@ -80,7 +80,7 @@ def fundamental_mestimator(
     weights, never zero, are not offered: with a third of gross outliers
     their summed pull breaks the estimate down.)
     When the weights have settled, the weighted Sampson cost is minimised
-    over rank-2 ``F`` by ``scipy.optimize.least_squares`` (the same minimal
+    over rank-2 ``F`` by MINPACK's Levenberg-Marquardt (the same minimal
     parameterisation as :func:`~egtviz.geometry.sampson_refinement.fundamental_sampson`),
     the weights recomputed after each such step.
 

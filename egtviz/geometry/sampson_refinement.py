@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import least_squares
+from scipy.optimize import leastsq
 
 from ._validate import GeometryError, as_up_to_scale
 from .fundamental import canonical_fundamental, normalized_design, null_vector
@@ -151,20 +151,23 @@ def refine_sampson(
             (:func:`~egtviz.geometry.fundamental.normalized_design`).
         s1, s2: the normalisations' scales, so that the residuals are pixel distances.
         weights: optional (N,) non-negative weights of the squared residuals.
-        tol: relative tolerance of ``scipy.optimize.least_squares``.
+        tol: relative tolerance (``ftol`` and ``xtol``) of the Levenberg-Marquardt iteration.
 
     Returns:
-        The refined ``F`` (unit Frobenius norm); ``Fn0`` itself if the minimisation did not lower
-        the cost by a factor 2 or gave a non-finite matrix.
+        The refined ``F`` (unit Frobenius norm); ``Fn0`` itself if the minimisation raised the cost
+        or gave a non-finite matrix.
     """
     prob = _SampsonProblem(Fn0, At, s1, s2, weights)
     r0 = prob.residuals(prob.p0)
     cost0 = float(r0 @ r0)
-    res = least_squares(
-        prob.residuals, prob.p0, jac=prob.jacobian, method="lm", xtol=tol, ftol=tol, gtol=1e-12, max_nfev=50
+    # MINPACK's lmder through scipy.optimize.leastsq: the iteration of least_squares(method="lm") (same
+    # call, same factor and scaling), without its wrappers and its extra Jacobian at the solution.
+    x, _, info, _, _ = leastsq(
+        prob.residuals, prob.p0, Dfun=prob.jacobian, full_output=True, ftol=tol, xtol=tol, gtol=1e-12, maxfev=50
     )
-    F = prob.F(res.x)
-    if not (np.all(np.isfinite(F)) and 2.0 * res.cost <= cost0):
+    F = prob.F(x)
+    fvec = info["fvec"]
+    if not (np.all(np.isfinite(F)) and float(fvec @ fvec) <= cost0):
         return Fn0
     return F / np.linalg.norm(F)
 
@@ -179,7 +182,7 @@ def fundamental_sampson(
     .. math:: \sum_i \frac{(m_{2i}^T F m_{1i})^2}
               {(F m_{1i})_1^2 + (F m_{1i})_2^2 + (F^T m_{2i})_1^2 + (F^T m_{2i})_2^2}
 
-    with ``scipy.optimize.least_squares`` (Levenberg-Marquardt, analytic
+    with MINPACK's Levenberg-Marquardt (``scipy.optimize.leastsq``, analytic
     Jacobian) over a minimal rank-2 parameterisation: in Hartley-normalised
     coordinates :math:`F = U R(\omega_1)\,\mathrm{diag}(1, \sigma, 0)\,R(\omega_2)^T V^T`
     (7 parameters, H&Z section 11.4.2). The result is exactly rank 2 and its
