@@ -157,7 +157,7 @@ class _CountingServer:
     """A figure server with ``tabs`` fake tabs: each push costs ``cost`` seconds per tab and is recorded."""
 
     tabs = 3
-    cost = 0.004
+    cost = 0.03
     made: list[_CountingServer] = []
 
     def __init__(self, port=None) -> None:
@@ -190,7 +190,9 @@ def test_a_burst_of_draw_calls_is_a_few_pushes_per_tab_and_the_tabs_end_with_the
     final = ef.current_figure().scene()
     assert len(final.annotations.frames) == 300
     for tab in server.shown:
-        assert 1 <= len(tab) < 30  # 300 drawings, far fewer pushes
+        # 300 drawings, far fewer pushes: a push (90 ms) and its rest take over a third of a second, the 300 calls
+        # a few seconds even on a loaded machine.
+        assert 1 <= len(tab) <= 60
         assert tab[-1] == final
     assert server.threads == {"egtviz-figure-publisher"}  # never in the script's thread
 
