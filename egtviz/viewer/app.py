@@ -50,6 +50,7 @@ from ..scene import (
     SceneFileError,
     SceneModel,
     SurfaceSpec,
+    compute_derived,
     default_scene,
     limits,
     mesh_names,
@@ -57,6 +58,7 @@ from ..scene import (
     scene_to_bytes,
 )
 from ..scene.derived import shown_value
+from ..scene.extent import scene_extent
 from ..scene.shown_numbers import format_value, format_vector
 from ..scene.specs import OutOfRangeError, model_choices
 from .camera_fields import CameraField, camera_fields
@@ -101,6 +103,8 @@ VIEW_BUTTONS = {
     "panel pan": {"\u2190": "left", "\u2192": "right", "\u2191": "up", "\u2193": "down"},
 }
 DOWNLOAD_FORMATS = ("SVG", "PNG")
+#: Changes after which a tab's 3D view is framed on the scene again (what it holds changed, not just a pose).
+REFRAME_CHANGES = frozenset({"add_camera", "load"})
 #: The width viser's dock gives a new docked column (CSS pixels).
 DOCK_DEFAULT_PX = 300.0
 #: How much larger the 3D view's labels (point numbers, camera names) are in presentation mode.
@@ -745,6 +749,9 @@ class ClientView:
                 return
             # Draw the model's current scene, not the notified one: a late notification never wins.
             self._render(self.model.scene, change)
+            if getattr(change, "kind", None) in REFRAME_CHANGES:
+                with self.client.atomic():
+                    self._frame_camera()  # a new camera or scene: in view, beside the panels it docked
 
     def _render(self, scene: Scene, change: Any, *, force_fields: bool = False) -> None:
         """Draw ``scene`` (the model's current one) with the model's derived quantities, in one atomic update."""
@@ -1086,12 +1093,11 @@ class ClientView:
         grid = self.grid
         if grid is None:
             return
-        scene = self.model.scene
-        pts = [np.asarray(c.position, float) for c in scene.cameras]
-        if scene.points:
-            pts.extend(scene.points_array())
+        # What the scene holds (mirrors and their CCDs too) and its size: the glyphs are drawn at that size.
+        extent = scene_extent(self.model.scene, self.model.derived)
+        self.scene3d.set_glyph(extent.glyph)
         aspect = max(grid.canvas_px, 120.0) / grid.window.height
-        framed = framed_camera(np.array(pts).reshape(-1, 3), aspect)
+        framed = framed_camera(extent.points, aspect, pad=extent.glyph, min_radius=3.0 * extent.glyph)
         cam = self.client.camera
         try:
             cam.up_direction = (0.0, 0.0, 1.0)
@@ -1257,12 +1263,11 @@ class EgtvizApp:
 
         Each tab then frames its own view for its window (:meth:`ClientView._frame_camera`).
         """
-        pts = [np.asarray(c.position, float) for c in scene.cameras]
-        if scene.points:
-            pts.extend(scene.points_array())
+        extent = scene_extent(scene, compute_derived(scene))
         grid = plan_grid([(c.name, float(c.width), float(c.height)) for c in scene.cameras], DEFAULT_WINDOW,
                          style=PRESENT if self.present else NORMAL)
-        framed = framed_camera(np.array(pts).reshape(-1, 3), max(grid.canvas_px, 120.0) / DEFAULT_WINDOW.height)
+        framed = framed_camera(extent.points, max(grid.canvas_px, 120.0) / DEFAULT_WINDOW.height, pad=extent.glyph,
+                               min_radius=3.0 * extent.glyph)
         cam = self.server.initial_camera
         cam.look_at = framed.look_at
         cam.position = framed.position

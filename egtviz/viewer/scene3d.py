@@ -129,6 +129,8 @@ class Scene3D:
         #: Every label's handle and its size at scale 1 (presentation mode multiplies them: :meth:`set_label_scale`).
         self._labels: dict[str, tuple[Any, float]] = {}
         self.label_scale = 1.0
+        #: The length gizmos, axes and point marks are drawn at (metres: the scene's size, :meth:`set_glyph`).
+        self.glyph = 1.0
         self._rays: dict[str, Any] = {}
         self._surf_key: Any = None
         self._points_key: Any = None
@@ -160,7 +162,7 @@ class Scene3D:
         # Shadows add nothing to lines, points and frustums, and cost most of a frame in software WebGL.
         api.configure_default_lights(enabled=True, cast_shadow=False)
         api.add_grid("/egt/grid", width=20.0, height=20.0, plane="xy", cell_size=1.0, section_size=5.0)
-        api.add_frame("/egt/world", axes_length=1.0, axes_radius=0.03, origin_radius=0.06)
+        self._world = api.add_frame("/egt/world", axes_length=1.0, axes_radius=0.03, origin_radius=0.06)
         self._label("/egt/world/x", "x", 0.9, position=(1.15, 0.0, 0.0))
         self._label("/egt/world/y", "y", 0.9, position=(0.0, 1.15, 0.0))
         self._label("/egt/world/z", "z", 0.9, position=(0.0, 0.0, 1.15))
@@ -171,6 +173,32 @@ class Scene3D:
         handle = self.api.add_label(path, text, font_screen_scale=size * self.label_scale, **kwargs)
         self._labels[path] = (handle, size)
         return handle
+
+    def set_glyph(self, glyph: float) -> None:
+        """Draw the gizmos, axes and point marks ``glyph`` metres long (``egtviz.scene.extent``: a table-top scene
+        of 0.4 m mirrors gets small ones, a room of cameras 10 m apart 1 m ones); labels follow their marks."""
+        g = float(glyph)
+        if g == self.glyph or not g > 0:
+            return
+        self.glyph = g
+        for key, value in (("axes_length", g), ("axes_radius", 0.03 * g), ("origin_radius", 0.06 * g)):
+            _put(self._world, key, value)
+        for axis, k in (("x", 0), ("y", 1), ("z", 2)):
+            _put(self._labels[f"/egt/world/{axis}"][0], "position", tuple(1.15 * g * (np.arange(3) == k)))
+        for nodes in self._cams.values():
+            self._size_camera(nodes)
+        _put(self.points, "point_size", 0.12 * g)
+        _put(self.selected, "radius", 0.16 * g)
+        for gizmo in self._point_gizmos.values():
+            _put(gizmo, "scale", 0.35 * g)
+        self._points_key = None  # the next draw moves the point labels to the new offset
+
+    def _size_camera(self, nodes: dict[str, Any]) -> None:
+        g = self.glyph
+        _put(nodes["gizmo"], "scale", g)
+        for key, value in (("axes_length", 0.5 * g), ("axes_radius", 0.015 * g), ("origin_radius", 0.03 * g)):
+            _put(nodes["axes"], key, value)
+        _put(nodes["label"], "position", (0.0, -0.35 * g, 0.0))
 
     def set_label_scale(self, scale: float) -> None:
         """Every label at ``scale`` times its size (presentation mode: larger, to read from the back of a room)."""
@@ -204,6 +232,8 @@ class Scene3D:
         drawing = drawing_class(spec.model_kind)(api, root, k, colour)
         nodes["drawing"] = drawing
         nodes.update(drawing.named_nodes())
+        if self.glyph != 1.0:
+            self._size_camera(nodes)
         self._rays[name] = api.add_line_segments(f"/egt/rays_{k}", _EMPTY_SEG, (0, 0, 0), thickness=0.008,
                                                  visible=False)
         return nodes
@@ -247,6 +277,7 @@ class Scene3D:
                frozenset(k for k in scene.highlighted if k.startswith("point:")))
         if key == self._points_key and (X is prev or (X.shape == prev.shape and X.tobytes() == prev.tobytes())):
             return  # a camera moved: nothing about the points changed
+        relabel = self._points_key is None  # first draw, or the glyph size changed: every label moves
         self._points_key, self._points_prev = key, X
         if n:
             _put_array(self.points, "points", X.astype(np.float32))
@@ -265,8 +296,8 @@ class Scene3D:
         labelled = None if n <= MAX_LABELLED_POINTS else {scene.selected_point} | {
             int(k[6:]) for k in scene.highlighted if k.startswith("point:")}
         for i, h in enumerate(self._point_labels):
-            if i >= len(prev) or not np.array_equal(prev[i], X[i]):
-                _put(h, "position", X[i] + np.array([0.08, 0.0, 0.08]))
+            if relabel or i >= len(prev) or not np.array_equal(prev[i], X[i]):
+                _put(h, "position", X[i] + 0.08 * self.glyph * np.array([1.0, 0.0, 1.0]))
             _put(h, "visible", opts.show_labels and (labelled is None or i in labelled))
         # Gizmos: every point while there are few, else only the selected one.
         sel = scene.selected_point
@@ -278,7 +309,7 @@ class Scene3D:
             g = self._point_gizmos.get(i)
             if g is None:
                 g = self.api.add_transform_controls(
-                    f"/egt/pgizmo_{i}", scale=0.35, line_width=1.5, disable_rotations=True, depth_test=False,
+                    f"/egt/pgizmo_{i}", scale=0.35 * self.glyph, line_width=1.5, disable_rotations=True, depth_test=False,
                     opacity=0.7, position=tuple(X[i]),
                 )
 
