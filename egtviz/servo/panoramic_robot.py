@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 import time as _time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -65,6 +66,13 @@ __all__ = [
     "baseline_direction",
     "control_law",
     "step_state",
+    "PanoramicSettings",
+    "PanoramicScene",
+    "panoramic_errors",
+    "observe_panoramic",
+    "panoramic_recorder",
+    "record_panoramic_state",
+    "record_panoramic_control",
     "simulate_panoramic",
 ]
 
@@ -248,14 +256,27 @@ def control_law(
     freeze_angle: float = 0.02,
     alpha_prev: float | None = None,
 ) -> tuple[np.ndarray, int, dict[str, float]]:
-    r"""One step of the two-phase law from the image rays only.
+    r"""One step of the two-phase law from the image rays only (a pure function of ``d`` and ``d_star``).
 
-    Returns ``(u, phase, info)``: ``u = (v_x, v_y, omega)`` in the robot frame, the
-    (possibly advanced) phase 1 or 2, and the measures ``alpha_hat``,
-    ``biconic_measure`` (:math:`\sigma(0)`) and ``s_angle``. In step 2 the rotation is
-    only corrected while the mean ray angle exceeds ``freeze_angle``: with little
-    parallax every plane through the (short) baseline fits and the orientation is no
-    longer observable from the bi-conics. The measures are
+    With :math:`\hat\alpha = \arg\min_\alpha \sigma(\alpha)` (:func:`estimate_rotation`),
+    :math:`\tilde d^*_i = R_z(\hat\alpha) d^*_i` and the mean ray angle
+    :math:`s_\angle = \frac1N \sum_i \arccos(d_i \cdot \tilde d^*_i)`:
+
+    .. math::
+       \text{step 1: } u = (0, 0, k_\omega \hat\alpha), \qquad
+       \text{step 2: } u = (k_v\, s_\angle\, b_{xy} / \lVert b_{xy} \rVert,\ k_\omega \hat\alpha),
+
+    with :math:`b` the common line of the bi-conic planes (:func:`baseline_direction`); step 2 starts once
+    :math:`|\hat\alpha| <` ``switch_rad``. In step 2 the rotation is only corrected while
+    :math:`s_\angle >` ``freeze_angle``: with little parallax every plane through the (short) baseline fits
+    and the orientation is no longer observable from the bi-conics. There (:math:`\omega = 0`,
+    :math:`\tilde d^* = d^*`) the translation follows the ray-alignment gradient,
+    :math:`(v_x, v_y) = \frac{2 k_v}{N} \sum_i [(I - d_i d_i^T)(d_i - \tilde d^*_i)]_{xy}`.
+
+    Returns:
+        ``(u, phase, info)``: ``u = (v_x, v_y, omega)`` in the robot frame, the (possibly advanced) phase 1
+        or 2, and the measures ``alpha_hat`` (:math:`\hat\alpha`), ``biconic_measure``
+        (:math:`\sigma(0)`) and ``s_angle`` (:math:`s_\angle`).
     """
     alpha = estimate_rotation(d, d_star, near=alpha_prev)
     aligned = d_star @ rotz(alpha).T
@@ -283,7 +304,16 @@ def control_law(
 
 
 def step_state(state: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
-    r"""State update: body velocities ``u = (v_x, v_y, omega)`` held for ``dt``, integrated exactly on SE(2)."""
+    r"""State update: body velocities ``u = (v_x, v_y, omega)`` held for ``dt``, integrated exactly on SE(2).
+
+    .. math::
+       \begin{pmatrix} x' \\ y' \end{pmatrix} = \begin{pmatrix} x \\ y \end{pmatrix}
+       + R(\theta) \begin{pmatrix} a & -b \\ b & a \end{pmatrix}
+       \begin{pmatrix} v_x \\ v_y \end{pmatrix} \Delta t, \qquad \theta' = \theta + \omega \Delta t,
+
+    with :math:`a = \sin(\omega\Delta t) / (\omega\Delta t)`, :math:`b = (1 - \cos(\omega\Delta t)) / (\omega\Delta t)`
+    (their series near :math:`\omega = 0`) and :math:`\theta'` wrapped to :math:`[-\pi, \pi)`.
+    """
     x, y, th = state
     vx, vy, w = u
     wt = w * dt
@@ -297,203 +327,266 @@ def step_state(state: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
     return np.array([x + c * dx_body - s * dy_body, y + s * dx_body + c * dy_body, _wrap(th + wt)])
 
 
-# ---------------------------------------------------------------- simulation
-def simulate_panoramic(
-    *,
-    seed: int = 0,
-    noise_px: float = 0.0,
-    steps: int = 1500,
-    dt: float = 0.05,
-    k_omega: float = 2.0,
-    k_v: float = 3.0,
-    switch_rad: float = 5e-3,
-    freeze_angle: float = 0.02,
-    stop_px: float | None = None,
-    rotation_tol: float | None = None,
-    translation_tol: float | None = None,
-    conic_every: int = 10,
-    points: npt.ArrayLike | None = None,
-    camera: CatadioptricCamera | None = None,
-    target: npt.ArrayLike = (0.0, 0.0, 0.0),
-    start: npt.ArrayLike | None = None,
-    progress: Callable[[int, int], None] | None = None,
-) -> ServoResult:
-    """Simulate the panoramic holonomic-robot servo (module docstring); deterministic for a ``seed``.
-
-    Args:
-        seed: draws the start (:func:`draw_start_state`: heading 30-120 degrees off,
-            1-3 m away) and the image noise.
-        noise_px: standard deviation of the Gaussian pixel noise.
-        steps: maximum number of steps (the run stops once ``s(t) < stop_px`` in step 2).
-        dt: time step, seconds.
-        k_omega: rotation gain (1/s).
-        k_v: translation gain (m/s per radian of mean ray angle).
-        switch_rad: step 1 ends when the estimated orientation offset is below this.
-        freeze_angle: in step 2 the rotation is corrected only while the mean ray angle
-            (radians) exceeds this (see :func:`control_law`).
-        stop_px: early-stop threshold on ``s(t)``; default 5e-4 px without noise, none with noise.
-        rotation_tol: convergence tolerance (rad); default 1e-3, or 1e-2 with noise.
-        translation_tol: convergence tolerance (m); default 1e-3, or 1e-2 with noise.
-        conic_every: store the bi-conics every this many steps (and at the first and last).
-        points: (N, 3) scene points; default :func:`default_scene`.
-        camera: the catadioptric camera model (its pose is ignored); default :func:`default_camera`.
-        target: target state ``(x, y, theta)``.
-        start: start state instead of the drawn one.
-        progress: called as ``progress(step, steps)`` every 50 steps.
-
-    Returns:
-        A :class:`ServoResult` with ``states`` (T, 3), controls ``robot_velocity``
-        (T, 3) = (v_x, v_y, omega), errors and extras ``s_px`` (= s(t)),
-        ``alpha_hat``, ``biconic_measure``, ``phase``, ``biconics`` (S, N, 3, 3)
-        at ``biconic_steps`` (S,). Features leaving the mirror's field of view end
-        the run with ``converged=False`` and a reason.
+# ---------------------------------------------------------------- simulation: settings, scene, image
+@dataclass(frozen=True)
+class PanoramicSettings:
+    """The checked settings of one panoramic run: :func:`simulate_panoramic`'s scalar arguments.
 
     Raises:
-        ValueError: on invalid parameters.
+        ValueError: on an invalid value (negative noise, a gain or time step not positive, ...).
     """
-    if not isinstance(noise_px, (int, float)) or not math.isfinite(noise_px) or noise_px < 0:
-        raise ValueError(f"noise_px: expected a finite number of pixels >= 0, got {noise_px!r}")
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise ValueError(f"steps: expected a positive integer, got {steps!r}")
-    for name, value in (("dt", dt), ("k_omega", k_omega), ("k_v", k_v), ("switch_rad", switch_rad)):
-        if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-            raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
-    if isinstance(conic_every, bool) or not isinstance(conic_every, (int, np.integer)) or conic_every < 1:
-        raise ValueError(f"conic_every: expected a positive integer, got {conic_every!r}")
-    wall0 = _time.perf_counter()
-    rng = np.random.default_rng(seed)
-    cam = camera if camera is not None else default_camera()
-    cam0 = cam.moved(Pose())
-    X = default_scene() if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
+
+    seed: int
+    """Seed of the start-state draw and of the image noise."""
+    noise_px: float
+    """Standard deviation of the Gaussian pixel noise."""
+    steps: int
+    """Maximum number of state updates."""
+    dt: float
+    """Time step, seconds."""
+    k_omega: float
+    """Rotation gain :math:`k_\\omega` (1/s)."""
+    k_v: float
+    """Translation gain :math:`k_v` (m/s per radian of mean ray angle)."""
+    switch_rad: float
+    """Step 1 ends when :math:`|\\hat\\alpha|` is below this."""
+    freeze_angle: float
+    """In step 2 the rotation is corrected only while the mean ray angle (rad) exceeds this."""
+    stop_px: float | None
+    """Early-stop threshold on :math:`s(t)`, or ``None`` for :attr:`stop_threshold_px`'s default."""
+    rotation_tol: float | None
+    """Convergence tolerance (rad), or ``None`` for the default."""
+    translation_tol: float | None
+    """Convergence tolerance (m), or ``None`` for the default."""
+    conic_every: int
+    """Store the bi-conics every this many steps (and at the first and last)."""
+
+    def __post_init__(self) -> None:
+        noise_px, steps = self.noise_px, self.steps
+        if not isinstance(noise_px, (int, float)) or not math.isfinite(noise_px) or noise_px < 0:
+            raise ValueError(f"noise_px: expected a finite number of pixels >= 0, got {noise_px!r}")
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+            raise ValueError(f"steps: expected a positive integer, got {steps!r}")
+        for name in ("dt", "k_omega", "k_v", "switch_rad"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ValueError(f"{name}: expected a positive finite number, got {value!r}")
+        every = self.conic_every
+        if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
+            raise ValueError(f"conic_every: expected a positive integer, got {every!r}")
+
+    @property
+    def noisy(self) -> bool:
+        """Whether the features carry noise."""
+        return self.noise_px > 0
+
+    @property
+    def stop_threshold_px(self) -> float:
+        """``stop_px``; by default 5e-4 px without noise, 0 (no early stop) with noise."""
+        return (0.0 if self.noisy else 5e-4) if self.stop_px is None else float(self.stop_px)
+
+    @property
+    def rotation_tolerance(self) -> float:
+        """``rotation_tol``; by default 1e-3 rad, or 1e-2 with noise."""
+        return (1e-2 if self.noisy else 1e-3) if self.rotation_tol is None else float(self.rotation_tol)
+
+    @property
+    def translation_tolerance(self) -> float:
+        """``translation_tol``; by default 1e-3 m, or 1e-2 with noise."""
+        return (1e-2 if self.noisy else 1e-3) if self.translation_tol is None else float(self.translation_tol)
+
+
+@dataclass(frozen=True)
+class PanoramicScene:
+    """The camera model, the scene and the target of a run, with the desired features measured there (once)."""
+
+    camera: CatadioptricCamera
+    """The controller's camera model, posed at the identity (rays come out in the mirror frame)."""
+    points: np.ndarray
+    """(N, 3) world points."""
+    target: np.ndarray
+    """(3,) target state ``(x, y, theta)``."""
+    desired: np.ndarray
+    """(N, 2) desired feature pixels (with noise) :math:`m^*_i`."""
+    desired_rays: np.ndarray
+    """(N, 3) desired unit rays :math:`d^*_i` (desired mirror frame), back-projected from :attr:`desired`."""
+
+
+def panoramic_errors(state: np.ndarray, target: np.ndarray) -> tuple[float, float]:
+    r"""``(rotation, translation)`` errors of ``state``: :math:`|\theta - \theta^*|` wrapped, the x-y distance."""
+    return abs(_wrap(state[2] - target[2])), float(np.hypot(state[0] - target[0], state[1] - target[1]))
+
+
+def observe_panoramic(
+    state: np.ndarray, scene: PanoramicScene, noise_px: float, rng: np.random.Generator
+) -> tuple[Any, np.ndarray]:
+    r"""The robot at ``state`` sees ``(projection, m)``: the camera's projection and the noisy pixels (N, 2).
+
+    The points in the mirror frame are :math:`R_z(\theta)^T (X - (x, y, h))`; the noise (``noise_px``) is
+    drawn from ``rng`` only when ``noise_px > 0``.
+    """
+    X = scene.points
+    c_th, s_th = math.cos(state[2]), math.sin(state[2])
+    rel = X - np.array([state[0], state[1], CAMERA_HEIGHT])
+    local = np.column_stack([c_th * rel[:, 0] + s_th * rel[:, 1], -s_th * rel[:, 0] + c_th * rel[:, 1], rel[:, 2]])
+    proj = scene.camera.project_directions(local)  # == cam.moved(mirror_pose(state)).project(X)
+    m = proj.pixels + (rng.normal(scale=noise_px, size=(len(X), 2)) if noise_px > 0 else 0.0)
+    return proj, m
+
+
+def _current_rays(scene: PanoramicScene, proj: Any, m: np.ndarray, t: float) -> tuple[np.ndarray | None, str]:
+    """The current unit rays of ``m`` (mirror frame), or ``None`` and why the run must stop at time ``t``."""
+    if not np.all(proj.in_image):
+        i = int(np.flatnonzero(~proj.in_image)[0])
+        return None, f"feature {i} left the mirror's field of view at t = {t:.2f} s"
+    d = scene.camera.back_project(m)
+    if not np.all(np.isfinite(d)):
+        return None, f"a feature does not back-project to a mirror ray at t = {t:.2f} s"
+    return d, ""
+
+
+# ---------------------------------------------------------------- simulation: recording
+def panoramic_recorder(capacity: int, n_features: int) -> Recorder:
+    """NaN-filled buffers for ``capacity`` samples of a run with ``n_features`` features."""
+    scalars = ("rot", "trans", "s_px", "s_ang", "alpha", "measure", "phase")
+    return Recorder(
+        capacity, {"state": (3,), "features": (n_features, 2), "u": (3,), **{name: () for name in scalars}}
+    )
+
+
+def record_panoramic_state(rec: Recorder, k: int, state: np.ndarray, m: np.ndarray, target: np.ndarray) -> None:
+    """Store sample ``k``'s state, features and errors (:func:`panoramic_errors`); the sample now counts."""
+    b = rec.buffers
+    b["state"][k] = state
+    b["features"][k] = m
+    b["rot"][k], b["trans"][k] = panoramic_errors(state, target)
+    rec.count = k + 1
+
+
+def record_panoramic_control(
+    rec: Recorder, k: int, u: np.ndarray, phase: int, info: dict[str, float], m: np.ndarray, desired: np.ndarray
+) -> float:
+    r"""Store sample ``k``'s control and measures; returns the feature distance :math:`s(t)` in pixels.
+
+    :math:`s(t) = \frac1N \sum_i \lVert m_i - m^*_i \rVert`; the measures are :func:`control_law`'s
+    :math:`\hat\alpha`, :math:`\sigma(0)` and :math:`s_\angle`.
+    """
+    b = rec.buffers
+    s_px = float(np.mean(np.linalg.norm(m - desired, axis=1)))
+    b["u"][k] = u
+    b["s_px"][k] = s_px
+    b["s_ang"][k] = info["s_angle"]
+    b["alpha"][k] = info["alpha_hat"]
+    b["measure"][k] = info["biconic_measure"]
+    b["phase"][k] = phase
+    return s_px
+
+
+# ---------------------------------------------------------------- simulation: set-up, loop, result
+class _NotRun(Exception):
+    """The run cannot start, for the reason given."""
+
+
+def _panoramic_scene(
+    cam: CatadioptricCamera, X: np.ndarray, target: np.ndarray, noise_px: float, rng: np.random.Generator
+) -> PanoramicScene:
+    """The scene, with the desired features measured once (with noise) at ``target``.
+
+    Raises:
+        _NotRun: too few features, or one unseen at the target.
+    """
     n_feat = len(X)
-    noisy = noise_px > 0
-    stop_px = (0.0 if noisy else 5e-4) if stop_px is None else float(stop_px)
-    rot_tol = (1e-2 if noisy else 1e-3) if rotation_tol is None else float(rotation_tol)
-    trans_tol = (1e-2 if noisy else 1e-3) if translation_tol is None else float(translation_tol)
-    target = np.asarray(target, dtype=float).reshape(3)
-    state = draw_start_state(rng, target) if start is None else np.asarray(start, dtype=float).reshape(3).copy()
-    params: dict[str, Any] = {
-        "seed": seed,
-        "noise_px": float(noise_px),
-        "dt": float(dt),
-        "max_steps": int(steps),
-        "k_omega": float(k_omega),
-        "k_v": float(k_v),
-        "switch_rad": float(switch_rad),
-        "freeze_angle": float(freeze_angle),
-        "stop_px": stop_px,
-        "rotation_tol": rot_tol,
-        "translation_tol": trans_tol,
-        "K": np.asarray(cam.K).tolist(),
-        "mirror": {"kind": cam.mirror.kind, "a": getattr(cam.mirror, "a", None), "b": getattr(cam.mirror, "b", None)},
-        "camera_height": CAMERA_HEIGHT,
-        "target": target.tolist(),
-    }
-
-    def errors_of(st: np.ndarray) -> tuple[float, float]:
-        return abs(_wrap(st[2] - target[2])), float(np.hypot(st[0] - target[0], st[1] - target[1]))
-
-    def failure(reason: str) -> ServoResult:
-        r0, t0 = errors_of(state)
-        return ServoResult.not_run(
-            "panoramic", reason, rotation_error=r0, translation_error=t0,
-            camera_poses=mirror_pose(state).matrix[None], n_features=n_feat, controls={"robot_velocity": 3},
-            wall_time_s=_time.perf_counter() - wall0, states=state[None].copy(), params=params,
-        )
-
+    cam0 = cam.moved(Pose())
     if n_feat < 4:
-        return failure(f"the bi-conic test needs at least 4 features, got {n_feat}")
+        raise _NotRun(f"the bi-conic test needs at least 4 features, got {n_feat}")
     goal_proj = cam.moved(mirror_pose(target)).project(X)
     if not np.all(goal_proj.in_image):
         i = int(np.flatnonzero(~goal_proj.in_image)[0])
-        return failure(f"feature {i} is outside the mirror's field of view at the target")
-    m_des = goal_proj.pixels + (rng.normal(scale=noise_px, size=(n_feat, 2)) if noisy else 0.0)
+        raise _NotRun(f"feature {i} is outside the mirror's field of view at the target")
+    m_des = goal_proj.pixels + (rng.normal(scale=noise_px, size=(n_feat, 2)) if noise_px > 0 else 0.0)
     d_star = cam0.back_project(m_des)
     if not np.all(np.isfinite(d_star)):
-        return failure("a desired feature does not back-project to a ray of the mirror")
+        raise _NotRun("a desired feature does not back-project to a ray of the mirror")
+    return PanoramicScene(cam0, X, target, m_des, d_star)
 
-    T_cap = steps + 1
-    rec = Recorder(
-        T_cap,
-        {
-            "state": (3,),
-            "features": (n_feat, 2),
-            "u": (3,),
-            "rot": (),
-            "trans": (),
-            "s_px": (),
-            "s_ang": (),
-            "alpha": (),
-            "measure": (),
-            "phase": (),
-        },
-    )
-    b = rec.buffers
+
+def _panoramic_params(s: PanoramicSettings, cam: CatadioptricCamera, target: np.ndarray) -> dict[str, Any]:
+    return {
+        "seed": s.seed, "noise_px": float(s.noise_px), "dt": float(s.dt), "max_steps": int(s.steps),
+        "k_omega": float(s.k_omega), "k_v": float(s.k_v), "switch_rad": float(s.switch_rad),
+        "freeze_angle": float(s.freeze_angle), "stop_px": s.stop_threshold_px, "rotation_tol": s.rotation_tolerance,
+        "translation_tol": s.translation_tolerance, "K": np.asarray(cam.K).tolist(),
+        "mirror": {"kind": cam.mirror.kind, "a": getattr(cam.mirror, "a", None), "b": getattr(cam.mirror, "b", None)},
+        "camera_height": CAMERA_HEIGHT, "target": target.tolist(),
+    }
+
+
+@dataclass(frozen=True)
+class _PanoramicRun:
+    data: dict[str, np.ndarray]
+    steps: int
+    reason: str
+    phase: int
+    conics: list[np.ndarray]
+    conic_steps: list[int]
+
+
+def _panoramic_loop(
+    s: PanoramicSettings, scene: PanoramicScene, state: np.ndarray, rng: np.random.Generator,
+    progress: Callable[[int, int], None] | None,
+) -> _PanoramicRun:
+    """Image, control law, record, state update, until the features are lost, the goal or the last step."""
+    rec = panoramic_recorder(s.steps + 1, len(scene.points))
     conics: list[np.ndarray] = []
     conic_steps: list[int] = []
-    phase = 1
-    alpha_prev: float | None = None
-    reason = ""
-    k = 0
+    phase, alpha_prev, k = 1, None, 0
     while True:
-        c_th, s_th = math.cos(state[2]), math.sin(state[2])
-        rel = X - np.array([state[0], state[1], CAMERA_HEIGHT])
-        local = np.column_stack([c_th * rel[:, 0] + s_th * rel[:, 1], -s_th * rel[:, 0] + c_th * rel[:, 1], rel[:, 2]])
-        proj = cam0.project_directions(local)  # == cam.moved(mirror_pose(state)).project(X)
-        m = proj.pixels + (rng.normal(scale=noise_px, size=(n_feat, 2)) if noisy else 0.0)
-        b["state"][k] = state
-        b["features"][k] = m
-        b["rot"][k], b["trans"][k] = errors_of(state)
-        rec.count = k + 1
-        if not np.all(proj.in_image):
-            i = int(np.flatnonzero(~proj.in_image)[0])
-            reason = f"feature {i} left the mirror's field of view at t = {k * dt:.2f} s"
-            break
-        d = cam0.back_project(m)
-        if not np.all(np.isfinite(d)):
-            reason = f"a feature does not back-project to a mirror ray at t = {k * dt:.2f} s"
+        proj, m = observe_panoramic(state, scene, s.noise_px, rng)
+        record_panoramic_state(rec, k, state, m, scene.target)
+        d, reason = _current_rays(scene, proj, m, k * s.dt)
+        if d is None:
             break
         u, phase, info = control_law(
-            d, d_star, phase=phase, k_omega=k_omega, k_v=k_v, switch_rad=switch_rad, freeze_angle=freeze_angle,
-            alpha_prev=alpha_prev,
+            d, scene.desired_rays, phase=phase, k_omega=s.k_omega, k_v=s.k_v, switch_rad=s.switch_rad,
+            freeze_angle=s.freeze_angle, alpha_prev=alpha_prev,
         )
         # warm start the next search once the turn per step is small (the global grid otherwise)
-        alpha_prev = info["alpha_hat"] if abs(u[2]) * dt < 0.05 else None
-        s_px = float(np.mean(np.linalg.norm(m - m_des, axis=1)))
-        b["u"][k] = u
-        b["s_px"][k] = s_px
-        b["s_ang"][k] = info["s_angle"]
-        b["alpha"][k] = info["alpha_hat"]
-        b["measure"][k] = info["biconic_measure"]
-        b["phase"][k] = phase
-        done = phase == 2 and stop_px > 0 and s_px < stop_px
-        if k % conic_every == 0 or done or k >= steps:
-            conics.append(biconic(cam0, d, d_star))
+        alpha_prev = info["alpha_hat"] if abs(u[2]) * s.dt < 0.05 else None
+        s_px = record_panoramic_control(rec, k, u, phase, info, m, scene.desired)
+        done = phase == 2 and s.stop_threshold_px > 0 and s_px < s.stop_threshold_px
+        if k % s.conic_every == 0 or done or k >= s.steps:
+            conics.append(biconic(scene.camera, d, scene.desired_rays))
             conic_steps.append(k)
-        if done or k >= steps:
+        if done or k >= s.steps:
             break
-        state = step_state(state, u, dt)
+        state = step_state(state, u, s.dt)
         k += 1
         if progress is not None and k % 50 == 0:
-            progress(k, steps)
+            progress(k, s.steps)
     if progress is not None:
-        progress(k, steps)
+        progress(k, s.steps)
+    return _PanoramicRun(rec.trim(), k, reason, phase, conics, conic_steps)
 
-    data = rec.trim()
+
+def _panoramic_result(
+    s: PanoramicSettings, scene: PanoramicScene, run: _PanoramicRun, params: dict[str, Any], wall0: float
+) -> ServoResult:
+    data, k = run.data, run.steps
     rot, trans = data["rot"], data["trans"]
     final_rot, final_trans = float(rot[-1]), float(trans[-1])
+    rot_tol, trans_tol = s.rotation_tolerance, s.translation_tolerance
+    reason = run.reason
     if not reason and (final_rot >= rot_tol or final_trans >= trans_tol):
         reason = (
-            f"not converged after {k} steps (phase {phase}): rotation error {final_rot:.2e} rad "
+            f"not converged after {k} steps (phase {run.phase}): rotation error {final_rot:.2e} rad "
             f"(tol {rot_tol:g}), translation error {final_trans:.2e} m (tol {trans_tol:g})"
         )
-    poses = np.stack([mirror_pose(s).matrix for s in data["state"]])
     return ServoResult(
         demo="panoramic",
-        time=np.arange(rec.count) * dt,
-        camera_poses=poses,
+        time=np.arange(len(rot)) * s.dt,
+        camera_poses=np.stack([mirror_pose(st).matrix for st in data["state"]]),
         features=data["features"],
-        desired_features=m_des,
+        desired_features=scene.desired,
         controls={"robot_velocity": data["u"]},
         errors={
             "task_error_norm": np.hypot(data["alpha"], data["s_ang"]),
@@ -508,7 +601,7 @@ def simulate_panoramic(
         final_rotation_error_rad=final_rot,
         final_translation_error=final_trans,
         steps=k,
-        sim_time_s=k * dt,
+        sim_time_s=k * s.dt,
         wall_time_s=_time.perf_counter() - wall0,
         states=data["state"],
         extras={
@@ -517,10 +610,71 @@ def simulate_panoramic(
             "alpha_hat": data["alpha"],
             "biconic_measure": data["measure"],
             "phase": data["phase"],
-            "biconics": np.stack(conics) if conics else np.zeros((0, n_feat, 3, 3)),
-            "biconic_steps": np.asarray(conic_steps, dtype=int),
-            "scene_points": X,
-            "target_state": target,
+            "biconics": np.stack(run.conics) if run.conics else np.zeros((0, len(scene.points), 3, 3)),
+            "biconic_steps": np.asarray(run.conic_steps, dtype=int),
+            "scene_points": scene.points,
+            "target_state": scene.target,
         },
         params=params,
     )
+
+
+def simulate_panoramic(
+    *, seed: int = 0, noise_px: float = 0.0, steps: int = 1500, dt: float = 0.05, k_omega: float = 2.0,
+    k_v: float = 3.0, switch_rad: float = 5e-3, freeze_angle: float = 0.02, stop_px: float | None = None,
+    rotation_tol: float | None = None, translation_tol: float | None = None, conic_every: int = 10,
+    points: npt.ArrayLike | None = None, camera: CatadioptricCamera | None = None,
+    target: npt.ArrayLike = (0.0, 0.0, 0.0), start: npt.ArrayLike | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> ServoResult:
+    r"""Simulate the panoramic holonomic-robot servo (module docstring); deterministic for a ``seed``.
+
+    Each step: the image (:func:`observe_panoramic`), the control law (:func:`control_law`, from the rays
+    only), the record (:func:`record_panoramic_state`, :func:`record_panoramic_control`) and the state update
+    (:func:`step_state`, exact on SE(2)).
+
+    Args:
+        seed: draws the start (:func:`draw_start_state`: heading 30-120 degrees off, 1-3 m away) and the
+            image noise.
+        noise_px, steps, dt, k_omega, k_v, switch_rad, freeze_angle, conic_every: see
+            :class:`PanoramicSettings`; the run stops once ``s(t) < stop_px`` in step 2.
+        stop_px: early-stop threshold on ``s(t)``; default 5e-4 px without noise, none with noise.
+        rotation_tol: convergence tolerance (rad); default 1e-3, or 1e-2 with noise.
+        translation_tol: convergence tolerance (m); default 1e-3, or 1e-2 with noise.
+        points: (N, 3) scene points; default :func:`default_scene`.
+        camera: the catadioptric camera model (its pose is ignored); default :func:`default_camera`.
+        target: target state ``(x, y, theta)``.
+        start: start state instead of the drawn one.
+        progress: called as ``progress(step, steps)`` every 50 steps.
+
+    Returns:
+        A :class:`ServoResult` with ``states`` (T, 3), controls ``robot_velocity`` (T, 3) = (v_x, v_y, omega),
+        errors and extras ``s_px`` (= s(t)), ``alpha_hat``, ``biconic_measure``, ``phase``, ``biconics``
+        (S, N, 3, 3) at ``biconic_steps`` (S,). Features leaving the mirror's field of view end the run with
+        ``converged=False`` and a reason.
+
+    Raises:
+        ValueError: on invalid parameters.
+    """
+    s = PanoramicSettings(
+        seed=seed, noise_px=noise_px, steps=steps, dt=dt, k_omega=k_omega, k_v=k_v, switch_rad=switch_rad,
+        freeze_angle=freeze_angle, stop_px=stop_px, rotation_tol=rotation_tol, translation_tol=translation_tol,
+        conic_every=conic_every,
+    )
+    wall0 = _time.perf_counter()
+    rng = np.random.default_rng(seed)
+    cam = camera if camera is not None else default_camera()
+    X = default_scene() if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
+    target = np.asarray(target, dtype=float).reshape(3)
+    state = draw_start_state(rng, target) if start is None else np.asarray(start, dtype=float).reshape(3).copy()
+    params = _panoramic_params(s, cam, target)
+    try:
+        scene = _panoramic_scene(cam, X, target, noise_px, rng)
+    except _NotRun as exc:
+        r0, t0 = panoramic_errors(state, target)
+        return ServoResult.not_run(
+            "panoramic", str(exc), rotation_error=r0, translation_error=t0,
+            camera_poses=mirror_pose(state).matrix[None], n_features=len(X), controls={"robot_velocity": 3},
+            wall_time_s=_time.perf_counter() - wall0, states=state[None].copy(), params=params,
+        )
+    return _panoramic_result(s, scene, _panoramic_loop(s, scene, state, rng, progress), params, wall0)

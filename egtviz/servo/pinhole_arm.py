@@ -53,6 +53,7 @@ from __future__ import annotations
 import math
 import time as _time
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
@@ -84,6 +85,16 @@ __all__ = [
     "joint_velocities",
     "step_joints",
     "rotation_angle",
+    "PinholeSettings",
+    "PinholeScene",
+    "PinholeLaw",
+    "PinholeControl",
+    "pinhole_law",
+    "pinhole_control_law",
+    "world_twist",
+    "observe_features",
+    "pinhole_recorder",
+    "record_pinhole_step",
     "simulate_pinhole",
 ]
 
@@ -326,7 +337,10 @@ def joint_velocities(
 
 
 def step_joints(q: np.ndarray, qd: np.ndarray, dt: float, qlim: np.ndarray) -> tuple[np.ndarray, bool]:
-    """State update: ``q + dt qd`` clipped to the joint limits ``qlim`` (2, n); also whether a limit clipped."""
+    r"""State update :math:`q' = \mathrm{clip}(q + \Delta t\,\dot q,\ q_{\min}, q_{\max})`, and whether it clipped.
+
+    ``qlim`` (2, n) holds :math:`q_{\min}` and :math:`q_{\max}`.
+    """
     q_new = q + dt * qd
     clipped = np.clip(q_new, qlim[0], qlim[1])
     return clipped, bool(np.any(clipped != q_new))
@@ -400,60 +414,574 @@ def _draw_start_q(
     return None
 
 
-def simulate_pinhole(
+
+# ---------------------------------------------------------------- simulation: settings, scene, control law
+@dataclass(frozen=True)
+class PinholeSettings:
+    """The checked settings of one pin-hole run: :func:`simulate_pinhole`'s scalar arguments.
+
+    Raises:
+        ValueError: on an invalid value (negative noise, NaN beta, unknown algorithm, ...).
+    """
+
+    seed: int
+    """Seed of the start-pose draw and of the image noise."""
+    beta: float
+    """Weight :math:`\\beta` of the secondary (translation) task; 0 servos the rotation only."""
+    noise_px: float
+    """Standard deviation of the Gaussian image noise, pixels."""
+    f_algorithm: int | None
+    """``None`` for F from the true poses, else a key of :data:`ESTIMATORS`."""
+    steps: int
+    """Maximum number of state updates."""
+    dt: float
+    """Time step, seconds."""
+    gain: float
+    """:math:`\\lambda` of the task function (1/s)."""
+    secondary_gain: float
+    """:math:`\\kappa`, the weight of the translation task relative to the rotation."""
+    damping: float
+    """Maximum damping :math:`\\mu_0` of the damped least squares."""
+    priority: str
+    """``"exact"``: solve :math:`e_1 = 0` for the rotation each step (:math:`R_{cd}` from the true poses or, for
+    an estimated F, from :math:`E = K^T F K` by ``essential.pose_from_essential``'s cheirality test);
+    ``"linearized"``: Rives' first-order step :math:`W^+ e_1`, which can stall in a local minimum of
+    :math:`\\lVert e_1 \\rVert` (about a third of the seeds with ``beta = 0``)."""
+    parallax_min_px: float
+    """With an estimated F, below this median translation parallax (pixels) the essential matrix is dominated
+    by noise and the linearised step is used instead (near the goal, where it has no local minima)."""
+    stop_px: float | None
+    """Early-stop threshold in pixels, or ``None`` for :attr:`stop_threshold_px`'s default."""
+    rotation_tol: float | None
+    """Convergence tolerance on the rotation error (rad), or ``None`` for the default."""
+    translation_tol: float | None
+    """Convergence tolerance on the translation error (m), or ``None`` for the default."""
+
+    def __post_init__(self) -> None:
+        _check_params(self.beta, self.noise_px, self.f_algorithm, self.steps, self.dt)
+        if self.priority not in ("exact", "linearized"):
+            raise ValueError(f"priority: expected 'exact' or 'linearized', got {self.priority!r}")
+        for name in ("gain", "secondary_gain", "damping"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value < 0:
+                raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
+
+    @property
+    def noisy(self) -> bool:
+        """Whether the features carry noise."""
+        return self.noise_px > 0
+
+    @property
+    def stop_threshold_px(self) -> float:
+        """``stop_px``; by default 0.005 px without noise, 0 (no early stop) with noise."""
+        return (0.0 if self.noisy else 0.005) if self.stop_px is None else float(self.stop_px)
+
+    @property
+    def rotation_tolerance(self) -> float:
+        """``rotation_tol``; by default 1e-3 rad, or 1e-2 with noise."""
+        return (1e-2 if self.noisy else 1e-3) if self.rotation_tol is None else float(self.rotation_tol)
+
+    @property
+    def translation_tolerance(self) -> float:
+        """``translation_tol``; by default 1e-3 m, or 1e-2 with noise."""
+        return (1e-2 if self.noisy else 1e-3) if self.translation_tol is None else float(self.translation_tol)
+
+
+@dataclass(frozen=True)
+class PinholeScene:
+    """The camera, the scene and the target of a run, with the desired features measured there (once)."""
+
+    K: np.ndarray
+    """(3, 3) intrinsic matrix."""
+    K_inv: np.ndarray
+    """(3, 3) its inverse."""
+    image_size: tuple[int, int]
+    """``(width, height)`` in pixels."""
+    points: np.ndarray
+    """(N, 3) world points."""
+    target: Pose
+    """The target camera pose."""
+    target_q: np.ndarray
+    """(6,) the arm's joint angles at the target."""
+    desired: np.ndarray
+    """(N, 2) desired feature pixels (with noise) :math:`m^*_i`."""
+    desired_rays: np.ndarray
+    """(N, 3) unit desired rays :math:`q_i = K^{-1} m^*_i / \\lVert K^{-1} m^*_i \\rVert` (target camera frame)."""
+    desired_h: np.ndarray
+    """(N, 3) the desired pixels in homogeneous coordinates :math:`(m^*_i, 1)`."""
+
+
+@dataclass(frozen=True)
+class PinholeLaw:
+    """The controller: the gains of the hybrid task function and how it finds the epipole."""
+
+    beta: float
+    """:math:`\\beta`, the weight of the translation task."""
+    gain: float
+    """:math:`\\lambda` (1/s)."""
+    secondary_gain: float
+    """:math:`\\kappa`."""
+    exact: bool
+    """Solve the priority task exactly (:func:`exact_priority_step`) rather than to first order."""
+    parallax_min: float
+    """With an estimated F, the median parallax angle (rad) below which the exact step is not trusted."""
+    estimator: Callable[[np.ndarray, np.ndarray], Any] | None = None
+    """F from (current, desired) pixels, ``m_desired^T F m_current = 0``; ``None`` for F from the true poses."""
+    pose_from_essential: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+    """The cheirality-tested relative pose from E (needed with an estimator)."""
+
+
+def pinhole_law(settings: PinholeSettings, K: np.ndarray) -> PinholeLaw:
+    """The controller of ``settings`` for a camera ``K`` (imports the F estimator only when one is asked for)."""
+    estimator = pose_from_essential = None
+    if settings.f_algorithm is not None:
+        from egtviz.geometry import essential, fundamental, sampson_refinement
+
+        module = sampson_refinement if settings.f_algorithm == 3 else fundamental
+        estimator = getattr(module, ESTIMATORS[settings.f_algorithm])
+        pose_from_essential = essential.pose_from_essential
+    return PinholeLaw(
+        beta=settings.beta, gain=settings.gain, secondary_gain=settings.secondary_gain,
+        exact=settings.priority == "exact", parallax_min=float(settings.parallax_min_px) / float(K[0, 0]),
+        estimator=estimator, pose_from_essential=pose_from_essential,
+    )
+
+
+@dataclass(frozen=True)
+class PinholeControl:
+    """What the control law computed from one image."""
+
+    twist: np.ndarray
+    """(6,) camera twist :math:`\\tau = (v, \\omega)` in the camera frame."""
+    task: np.ndarray
+    """(N,) the priority task :math:`e_1`."""
+    epipole: np.ndarray | None
+    """(3,) unit epipole direction :math:`\\hat e` in the current camera frame, or ``None`` when unknown."""
+    exact_step: bool
+    """Whether the rotation came from the exact priority step."""
+    estimation_failed: bool = False
+    """Whether F (or its epipole) could not be estimated from this image (the previous epipole was kept)."""
+
+
+def _true_epipole(
+    R: np.ndarray, c: np.ndarray, target: Pose, exact: bool
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    r"""From the true poses: the epipole :math:`R^T (c^* - c)` normalised (``None`` at the target), the exact step."""
+    base = R.T @ (target.t - c)
+    nb = float(np.linalg.norm(base))
+    e_dir = base / nb if nb > 1e-12 else None
+    return e_dir, exact_priority_step(target.R.T @ R) if exact else None
+
+
+def _estimated_epipole(
+    m: np.ndarray, p_rays: np.ndarray, scene: PinholeScene, law: PinholeLaw, e_dir_prev: np.ndarray | None
+) -> tuple[np.ndarray | None, np.ndarray | None, bool]:
+    r"""Epipole, exact step and failure flag from F estimated on the features (``m_desired^T F m = 0``).
+
+    :math:`\hat e \propto K^{-1} e` with :math:`F e = 0`, signed like ``e_dir_prev`` (a null vector's sign is
+    arbitrary) and replaced by it when F fails. The exact step is :math:`\log R_{cd}` from
+    :math:`E = K^T F K`, used only while the median angle between the current rays and the derotated desired
+    rays exceeds ``law.parallax_min``.
+    """
+    K, K_inv, q_rays = scene.K, scene.K_inv, scene.desired_rays
+    R_cd = step = None
+    try:
+        F = np.asarray(law.estimator(m, scene.desired), dtype=float)
+        e_dir = epipole_direction(F, K_inv)
+        if law.exact and e_dir is not None:
+            E = essential_from_fundamental(F, K, K)
+            R_cd, _, _ = law.pose_from_essential(E, p_rays[:, :2] / p_rays[:, 2:3], q_rays[:, :2] / q_rays[:, 2:3])
+    except (ValueError, np.linalg.LinAlgError):
+        e_dir = None
+    failed = e_dir is None
+    if e_dir is None:
+        e_dir = e_dir_prev
+    elif e_dir_prev is not None and e_dir @ e_dir_prev < 0:
+        e_dir = -e_dir  # the sign of a null vector is arbitrary; keep it continuous for the record
+    if R_cd is not None:
+        # translation parallax: angle between the current rays and the derotated desired rays
+        cosang = np.einsum("ij,ij->i", p_rays, q_rays @ R_cd)
+        if np.median(np.arccos(np.clip(cosang, -1.0, 1.0))) > law.parallax_min:
+            step = exact_priority_step(R_cd)
+    return e_dir, step, failed
+
+
+def pinhole_control_law(
+    m: np.ndarray,
+    R: np.ndarray,
+    c: np.ndarray,
+    scene: PinholeScene,
+    law: PinholeLaw,
     *,
-    seed: int = 0,
-    beta: float = 1.0,
-    noise_px: float = 0.0,
-    f_algorithm: int | None = None,
-    steps: int = 1000,
-    dt: float = 0.05,
-    gain: float = 3.0,
-    secondary_gain: float = 0.1,
-    damping: float = 0.05,
-    priority: str = "exact",
-    parallax_min_px: float = 10.0,
-    stop_px: float | None = None,
-    rotation_tol: float | None = None,
-    translation_tol: float | None = None,
-    points: npt.ArrayLike | None = None,
-    intrinsics: Intrinsics | None = None,
-    target_q: npt.ArrayLike | None = None,
-    target_pose: Pose | None = None,
-    start_pose: Pose | None = None,
-    q0: npt.ArrayLike | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    e_dir_prev: np.ndarray | None = None,
+) -> PinholeControl:
+    r"""The hybrid task function's camera twist from the current features ``m`` (N, 2) at the pose ``(R, c)``.
+
+    With :math:`p_i = K^{-1} m_i` and :math:`q_i = K^{-1} m^*_i` normalised and the epipole direction
+    :math:`\hat e` (true poses, or F estimated from ``m`` and :math:`m^*`),
+
+    .. math:: e_{1,i} = p_i \cdot \frac{\hat e \times q_i}{\lVert \hat e \times q_i \rVert}, \qquad
+       g = (R^T (c - c^*), 0), \qquad
+       \tau = -\lambda\,\bigl(W^+ e_1 + \beta\kappa\,(I - W^+ W)\, g\bigr),
+
+    with :math:`W = [0 \mid J_\omega]` (:func:`epipolar_task`, :func:`hybrid_twist`); ``law.exact`` replaces
+    the rotational part of :math:`W^+ e_1` by :math:`\log R_{cd}` (:func:`exact_priority_step`). The camera
+    position enters only the secondary task, as in Rives' simulations. Pure: ``e_dir_prev`` (the previous
+    step's epipole) only signs and stands in for an estimated one.
+    """
+    p_rays = rays_from_pixels(m, scene.K_inv)
+    if law.estimator is None:
+        e_dir, step = _true_epipole(R, c, scene.target, law.exact)
+        failed = False
+    else:
+        e_dir, step, failed = _estimated_epipole(m, p_rays, scene, law, e_dir_prev)
+    e1, J_w = epipolar_task(p_rays, scene.desired_rays, e_dir)
+    g = secondary_gradient(R, c, scene.target.t)
+    twist, _ = hybrid_twist(
+        e1, J_w, g, beta=law.beta, gain=law.gain, secondary_gain=law.secondary_gain, priority_step=step
+    )
+    return PinholeControl(twist, e1, e_dir, step is not None, failed)
+
+
+def world_twist(R: np.ndarray, twist: np.ndarray) -> np.ndarray:
+    r"""A camera-frame twist :math:`(v, \omega)` in the world frame: :math:`\tau_w = (R v, R \omega)`."""
+    return np.concatenate([R @ twist[:3], R @ twist[3:]])
+
+
+def observe_features(
+    T: np.ndarray, scene: PinholeScene, noise_px: float, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""The camera at pose ``T`` (4, 4) sees ``(m, m_true, visible)``: noisy and true pixels (N, 2), and a mask.
+
+    :math:`X_c = R^T (X - c)`, :math:`m = (K X_c)_{1,2} / z_c` plus Gaussian noise of ``noise_px``
+    (drawn from ``rng`` only when ``noise_px > 0``); visible: in front and inside the image.
+    """
+    R, c = T[:3, :3], T[:3, 3]
+    W_img, H_img = scene.image_size
+    Xc = (scene.points - c) @ R
+    z = Xc[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        m_true = (Xc @ scene.K.T)[:, :2] / z[:, None]
+    visible = (z > 0) & (m_true[:, 0] >= 0) & (m_true[:, 0] <= W_img) & (m_true[:, 1] >= 0) & (m_true[:, 1] <= H_img)
+    m = m_true + (rng.normal(scale=noise_px, size=m_true.shape) if noise_px > 0 else 0.0)
+    return m, m_true, visible
+
+
+# ---------------------------------------------------------------- simulation: recording
+def pinhole_recorder(capacity: int, n_features: int) -> Recorder:
+    """NaN-filled buffers for ``capacity`` samples of a run with ``n_features`` features."""
+    n = n_features
+    shapes = {"poses": (4, 4), "q": (6,), "features": (n, 2), "features_true": (n, 2), "twist": (6,), "qd": (6,)}
+    scalars = ("task", "rot", "trans", "feat_err", "manip", "limit", "exact")
+    return Recorder(capacity, {**shapes, "epi_px": (n,), "epipole": (3,), **{name: () for name in scalars}})
+
+
+def record_pinhole_step(
+    rec: Recorder,
+    k: int,
+    T: np.ndarray,
+    q: np.ndarray,
+    m: np.ndarray,
+    m_true: np.ndarray,
+    control: PinholeControl,
+    qd: np.ndarray,
+    manip: float,
+    scene: PinholeScene,
+) -> np.ndarray:
+    r"""Store sample ``k``; returns the feature errors :math:`\lVert m_i - m^*_i \rVert` (N,) in pixels.
+
+    Besides the state, features and controls it stores :math:`\lVert e_1 \rVert`, the rotation error
+    :math:`\angle(R^{*T} R)`, the distance :math:`\lVert c - c^* \rVert`, the mean feature error, the signed
+    distance of each feature to its epipolar line :math:`l_i = e \times m^*_i` (:math:`e = K \hat e`, pixels,
+    NaN without an epipole) and the epipole in pixels (its direction where it is at infinity).
+    """
+    b = rec.buffers
+    R, c = T[:3, :3], T[:3, 3]
+    b["exact"][k] = control.exact_step
+    b["poses"][k] = T
+    b["q"][k] = q
+    b["features"][k] = m
+    b["features_true"][k] = m_true
+    b["twist"][k] = control.twist
+    b["qd"][k] = qd
+    b["task"][k] = float(np.linalg.norm(control.task))
+    b["rot"][k] = rotation_angle(scene.target.R.T @ R)
+    b["trans"][k] = float(np.linalg.norm(c - scene.target.t))
+    feat_err = np.linalg.norm(m - scene.desired, axis=1)
+    b["feat_err"][k] = float(feat_err.mean())
+    if control.epipole is not None:
+        e_px = scene.K @ control.epipole
+        lines = _cross(np.broadcast_to(e_px, scene.desired_h.shape), scene.desired_h)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            b["epi_px"][k] = (lines[:, :2] * m).sum(axis=1) + lines[:, 2]
+            b["epi_px"][k] /= np.hypot(lines[:, 0], lines[:, 1])
+        b["epipole"][k] = e_px / (e_px[2] if abs(e_px[2]) > 1e-12 * np.linalg.norm(e_px) else np.linalg.norm(e_px))
+    b["manip"][k] = manip
+    b["limit"][k] = 0.0
+    rec.count = k + 1
+    return feat_err
+
+
+# ---------------------------------------------------------------- simulation: set-up, loop, result
+class _NotRun(Exception):
+    """The run cannot start: ``reason``, and the start and target poses when known."""
+
+    def __init__(self, reason: str, start: Pose | None = None, target: Pose | None = None) -> None:
+        super().__init__(reason)
+        self.reason, self.start, self.target = reason, start, target
+
+
+def _target_q(target_pose: Pose | None, target_q: npt.ArrayLike | None) -> np.ndarray:
+    if target_pose is None:
+        return TARGET_Q.copy() if target_q is None else np.asarray(target_q, dtype=float).reshape(6)
+    q_goal = _solve_ik(target_pose.matrix, TARGET_Q if target_q is None else np.asarray(target_q, float))
+    if q_goal is None:
+        raise _NotRun("target unreachable: no inverse-kinematics solution within the joint limits")
+    return q_goal
+
+
+def _start_q(
+    rng: np.random.Generator, goal: Pose, q_goal: np.ndarray, X: np.ndarray, intr: Intrinsics,
+    start_pose: Pose | None, q0: npt.ArrayLike | None,
+) -> np.ndarray:
+    """Start joint angles: ``q0``, else by inverse kinematics of ``start_pose``, else drawn (:func:`_draw_start_q`)."""
+    robot, ets = puma()
+    qlim = np.asarray(robot.qlim, dtype=float)
+    if q0 is not None:
+        q = np.asarray(q0, dtype=float).reshape(6)
+        if np.any(q < qlim[0]) or np.any(q > qlim[1]):
+            raise _NotRun("start configuration outside the joint limits")
+    elif start_pose is not None:
+        q = _solve_ik(start_pose.matrix, q_goal)
+        if q is None:
+            reason = "start pose unreachable: no inverse-kinematics solution within the joint limits"
+            raise _NotRun(reason, start_pose, goal)
+    else:
+        q = _draw_start_q(rng, goal, q_goal, X, intr.K, intr.width, intr.height)
+        if q is None:
+            raise _NotRun(f"no reachable start pose found in {START_DRAW_TRIES} draws", None, goal)
+    start = Pose.from_matrix(ets.eval(q))
+    w0 = math.sqrt(max(0.0, float(np.linalg.det(ets.jacob0(q) @ ets.jacob0(q).T))))
+    if w0 < SINGULAR_MANIPULABILITY:
+        raise _NotRun(f"start configuration is singular (manipulability {w0:.2e})", start, goal)
+    return q
+
+
+def _prepare_pinhole(
+    s: PinholeSettings, intr: Intrinsics, rng: np.random.Generator, *, points: npt.ArrayLike | None,
+    target_q: npt.ArrayLike | None, target_pose: Pose | None, start_pose: Pose | None, q0: npt.ArrayLike | None,
+) -> tuple[PinholeScene, np.ndarray]:
+    """The scene (target, desired features measured once with noise) and the start joint angles.
+
+    Raises:
+        _NotRun: the target or start is unreachable or singular, too few features, or a feature unseen at the target.
+    """
+    _, ets = puma()
+    K, (W_img, H_img) = intr.K, (intr.width, intr.height)
+    q_goal = _target_q(target_pose, target_q)
+    goal = Pose.from_matrix(ets.eval(q_goal))
+    X = default_scene(goal) if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
+    if s.f_algorithm is not None and len(X) < 8:
+        raise _NotRun(f"estimated F needs at least 8 features, got {len(X)}")
+    if len(X) < 3:
+        raise _NotRun(f"the epipolar task needs at least 3 features, got {len(X)}")
+    q = _start_q(rng, goal, q_goal, X, intr, start_pose, q0)
+    start = Pose.from_matrix(ets.eval(q))
+    Xg = (X - goal.t) @ goal.R
+    if np.any(Xg[:, 2] <= 0):
+        raise _NotRun("some scene points are behind the camera at the target pose", start, goal)
+    m_goal = (Xg @ K.T)[:, :2] / Xg[:, 2:3]
+    if np.any((m_goal < 0) | (m_goal > [W_img, H_img])):
+        raise _NotRun("some features are outside the image at the target pose", start, goal)
+    m_des = m_goal + (rng.normal(scale=s.noise_px, size=m_goal.shape) if s.noisy else 0.0)
+    K_inv = np.linalg.inv(K)
+    m_des_h = np.column_stack([m_des, np.ones(len(X))])
+    scene = PinholeScene(K, K_inv, (W_img, H_img), X, goal, q_goal, m_des, rays_from_pixels(m_des, K_inv), m_des_h)
+    return scene, q
+
+
+def _pinhole_params(s: PinholeSettings, intr: Intrinsics) -> dict[str, Any]:
+    return {
+        "seed": s.seed, "beta": float(s.beta), "noise_px": float(s.noise_px),
+        "estimator": ESTIMATOR_NAMES[s.f_algorithm], "f_algorithm": s.f_algorithm, "dt": float(s.dt),
+        "max_steps": int(s.steps), "gain": float(s.gain), "secondary_gain": float(s.secondary_gain),
+        "damping": float(s.damping), "priority": s.priority, "parallax_min_px": float(s.parallax_min_px),
+        "stop_px": s.stop_threshold_px, "rotation_tol": s.rotation_tolerance,
+        "translation_tol": s.translation_tolerance, "K": intr.K.tolist(), "image_size": [intr.width, intr.height],
+        "camera_tool": CAMERA_TOOL.tolist(),
+    }
+
+
+def _pinhole_not_run(exc: _NotRun, s: PinholeSettings, params: dict[str, Any], wall0: float) -> ServoResult:
+    pose0, goal = exc.start, exc.target
+    known = pose0 is not None and goal is not None
+    return ServoResult.not_run(
+        "pinhole", exc.reason,
+        rotation_error=rotation_angle(goal.R.T @ pose0.R) if known else float("nan"),
+        translation_error=float(np.linalg.norm(pose0.t - goal.t)) if known else float("nan"),
+        camera_poses=pose0.matrix[None] if pose0 is not None else np.zeros((0, 4, 4)),
+        n_features=0, controls={"camera_twist": 6, "joint_velocities": 6},
+        wall_time_s=_time.perf_counter() - wall0, translation_servoed=s.beta > 0, params=params,
+    )
+
+
+def _stop_reason(
+    s: PinholeSettings, k: int, visible: np.ndarray, manip: float, feat_err: np.ndarray, epi_px: np.ndarray
+) -> tuple[bool, str]:
+    """Whether the run ends at step ``k``, and the reason when it fails there.
+
+    It fails when a feature leaves the image or the arm is singular; it ends when the features are within
+    ``stop_px`` of their goal (desired positions, or epipolar lines when beta = 0) or at the last step.
+    """
+    if not np.all(visible):
+        return True, f"feature {int(np.flatnonzero(~visible)[0])} left the image at t = {k * s.dt:.2f} s"
+    if manip < SINGULAR_MANIPULABILITY:
+        return True, f"the arm reached a singular configuration at t = {k * s.dt:.2f} s (manipulability {manip:.1e})"
+    goal_px = feat_err.max() if s.beta > 0 else float(np.nanmax(np.abs(epi_px)))
+    stop_px = s.stop_threshold_px
+    return (stop_px > 0 and goal_px < stop_px) or k >= s.steps, ""
+
+
+@dataclass(frozen=True)
+class _PinholeRun:
+    data: dict[str, np.ndarray]
+    steps: int
+    reason: str
+    estimation_failures: int
+    limit_hits: int
+
+
+def _pinhole_loop(
+    s: PinholeSettings, scene: PinholeScene, q: np.ndarray, rng: np.random.Generator,
+    progress: Callable[[int, int], None] | None,
+) -> _PinholeRun:
+    """Image, control law, record, state update, until :func:`_stop_reason` ends the run."""
+    robot, ets = puma()
+    qlim = np.asarray(robot.qlim, dtype=float)
+    law = pinhole_law(s, scene.K)
+    rec = pinhole_recorder(s.steps + 1, len(scene.points))
+    k, e_dir, failures, limit_hits = 0, None, 0, 0
+    while True:
+        T = ets.eval(q)
+        m, m_true, visible = observe_features(T, scene, s.noise_px, rng)
+        control = pinhole_control_law(m, T[:3, :3], T[:3, 3], scene, law, e_dir_prev=e_dir)
+        e_dir, failures = control.epipole, failures + control.estimation_failed
+        qd, manip = joint_velocities(ets.jacob0(q), world_twist(T[:3, :3], control.twist), damping=s.damping)
+        feat_err = record_pinhole_step(rec, k, T, q, m, m_true, control, qd, manip, scene)
+        stop, reason = _stop_reason(s, k, visible, manip, feat_err, rec.buffers["epi_px"][k])
+        if stop:
+            break
+        q, hit = step_joints(q, qd, s.dt, qlim)
+        rec.buffers["limit"][k] = float(hit)
+        limit_hits += hit
+        k += 1
+        if progress is not None and k % 50 == 0:
+            progress(k, s.steps)
+    if progress is not None:
+        progress(k, s.steps)
+    return _PinholeRun(rec.trim(), k, reason, failures, limit_hits)
+
+
+def _final_reason(s: PinholeSettings, run: _PinholeRun) -> str:
+    """The run's failure reason ("" when converged): its stop reason, or the final errors against the tolerances."""
+    if run.reason:
+        return run.reason
+    final_rot, final_trans = float(run.data["rot"][-1]), float(run.data["trans"][-1])
+    rot_tol, trans_tol = s.rotation_tolerance, s.translation_tolerance
+    if s.beta == 0:
+        reason = "translation not servoed (beta = 0): only the priority (rotation) task acts"
+        if final_rot >= rot_tol:
+            reason += f"; rotation error {final_rot:.2e} rad is above {rot_tol:g}"
+        return reason
+    if final_rot < rot_tol and final_trans < trans_tol:
+        return ""
+    reason = (
+        f"not converged after {run.steps} steps: rotation error {final_rot:.2e} rad (tol {rot_tol:g}), "
+        f"translation error {final_trans:.2e} m (tol {trans_tol:g})"
+    )
+    if run.limit_hits:
+        reason += f"; joint limits clipped the motion at {run.limit_hits} steps"
+    return reason
+
+
+def _pinhole_result(
+    s: PinholeSettings, scene: PinholeScene, run: _PinholeRun, params: dict[str, Any], wall0: float
+) -> ServoResult:
+    data, k = run.data, run.steps
+    rot, trans = data["rot"], data["trans"]
+    reason = _final_reason(s, run)
+    params["estimation_failures"] = run.estimation_failures
+    params["joint_limit_steps"] = run.limit_hits
+    epi = data["epi_px"]
+    return ServoResult(
+        demo="pinhole",
+        time=np.arange(len(rot)) * s.dt,
+        camera_poses=data["poses"],
+        features=data["features"],
+        desired_features=scene.desired,
+        controls={"camera_twist": data["twist"], "joint_velocities": data["qd"]},
+        errors={
+            "task_error_norm": data["task"],
+            "rotation_error_rad": rot,
+            "translation_error": trans,
+            "feature_error_px": data["feat_err"],
+            "max_epipolar_distance_px": np.nanmax(np.abs(epi), axis=1)
+            if np.any(np.isfinite(epi))
+            else np.full(len(rot), np.nan),
+        },
+        converged=not reason,
+        reason=reason,
+        initial_rotation_error_rad=float(rot[0]),
+        initial_translation_error=float(trans[0]),
+        final_rotation_error_rad=float(rot[-1]),
+        final_translation_error=float(trans[-1]),
+        steps=k,
+        sim_time_s=k * s.dt,
+        wall_time_s=_time.perf_counter() - wall0,
+        translation_servoed=s.beta > 0,
+        joint_angles=data["q"],
+        extras={
+            "features_true": data["features_true"],
+            "epipolar_distances_px": epi,
+            "epipole_px": data["epipole"],
+            "manipulability": data["manip"],
+            "joint_limit_clipped": data["limit"].astype(bool),
+            "exact_priority_step": data["exact"].astype(bool),
+            "scene_points": scene.points,
+            "target_pose": scene.target.matrix,
+            "target_q": scene.target_q,
+        },
+        params=params,
+    )
+
+
+def simulate_pinhole(
+    *, seed: int = 0, beta: float = 1.0, noise_px: float = 0.0, f_algorithm: int | None = None, steps: int = 1000,
+    dt: float = 0.05, gain: float = 3.0, secondary_gain: float = 0.1, damping: float = 0.05, priority: str = "exact",
+    parallax_min_px: float = 10.0, stop_px: float | None = None, rotation_tol: float | None = None,
+    translation_tol: float | None = None, points: npt.ArrayLike | None = None, intrinsics: Intrinsics | None = None,
+    target_q: npt.ArrayLike | None = None, target_pose: Pose | None = None, start_pose: Pose | None = None,
+    q0: npt.ArrayLike | None = None, progress: Callable[[int, int], None] | None = None,
 ) -> ServoResult:
     r"""Simulate the Puma 560 pin-hole servo (module docstring); deterministic for a ``seed``.
 
+    Each step: the image (:func:`observe_features`), the control law (:func:`pinhole_control_law`, the camera
+    twist; :func:`joint_velocities`, the arm's), the record (:func:`record_pinhole_step`) and the state update
+    (:func:`step_joints`, :math:`q \leftarrow \mathrm{clip}(q + \Delta t\,\dot q)`).
+
     Args:
-        seed: draws the start pose (:func:`draw_start_pose`: 20-60 degrees about a
-            random axis, 0.2-0.5 m away) and the image noise.
-        beta: weight of the secondary (translation) task; 0 servos the rotation only.
-        noise_px: standard deviation of the Gaussian image noise, pixels.
-        f_algorithm: ``None`` for F from the true poses, else 1 (linear 8-point),
-            2 (normalised 8-point) or 3 (Sampson) on the noisy features, every step.
-        steps: maximum number of steps; the run stops early once the features are
-            within ``stop_px`` of their goal (desired positions, or epipolar lines when
-            ``beta = 0``).
-        dt: time step, seconds.
-        gain: lambda of the task function (1/s).
-        secondary_gain: kappa, the weight of the translation task relative to the rotation.
-        damping: maximum damping mu_0 of the damped least squares.
-        priority: ``"exact"`` (default) solves the priority task exactly each step: the
-            rotation :math:`R_{cd}` that puts every feature on its epipolar line, from the
-            true poses or, for an estimated F, from :math:`E = K^T F K`
-            (``essential.pose_from_essential``, cheirality test); ``"linearized"`` uses
-            Rives' first-order step :math:`W^+ e_1`, which can stall in a local minimum of
-            :math:`\lVert e_1 \rVert` (about a third of the seeds with ``beta = 0``).
-        parallax_min_px: with an estimated F, below this median translation parallax
-            (pixels) the essential matrix is dominated by noise and the linearised step
-            is used instead (near the goal, where it has no local minima).
-        stop_px: early-stop threshold in pixels; default 0.005 px without noise, no early stop with noise.
-        rotation_tol: convergence tolerance on the final rotation error (rad); default
-            1e-3, or 1e-2 with noise.
-        translation_tol: convergence tolerance on the final translation error (m); default
-            1e-3, or 1e-2 with noise.
+        seed: draws the start pose (:func:`draw_start_pose`: 20-60 degrees about a random axis, 0.2-0.5 m
+            away) and the image noise.
+        beta, noise_px, f_algorithm, steps, dt, gain, secondary_gain, damping: see :class:`PinholeSettings`.
+        priority: ``"exact"`` (default) solves the priority task exactly each step: the rotation
+            :math:`R_{cd}` that puts every feature on its epipolar line, from the true poses or, for an
+            estimated F, from :math:`E = K^T F K` (cheirality test); ``"linearized"`` uses Rives' first-order
+            step :math:`W^+ e_1`, which can stall in a local minimum of :math:`\lVert e_1 \rVert`.
+        parallax_min_px: with an estimated F, below this median translation parallax (pixels) the essential
+            matrix is dominated by noise and the linearised step is used instead.
+        stop_px: early stop once the features are within this many pixels of their goal (desired positions,
+            or epipolar lines when ``beta = 0``); default 0.005 px without noise, no early stop with noise.
+        rotation_tol, translation_tol: convergence tolerances (rad, m); default 1e-3, or 1e-2 with noise.
         points: (N, 3) world points; default :func:`default_scene`.
         intrinsics: the camera; default :func:`default_intrinsics`.
         target_q: target joint angles; default :data:`TARGET_Q`.
@@ -463,297 +991,25 @@ def simulate_pinhole(
         progress: called as ``progress(step, steps)`` every 50 steps (for a progress bar).
 
     Returns:
-        A :class:`ServoResult`; failures (unreachable pose, singular start, features
-        leaving the image, too few features for an estimated F) end the run with
-        ``converged=False`` and a ``reason``.
+        A :class:`ServoResult`; failures (unreachable pose, singular start, features leaving the image, too
+        few features for an estimated F) end the run with ``converged=False`` and a ``reason``.
 
     Raises:
         ValueError: on invalid parameters (negative noise, NaN beta, unknown algorithm, ...).
     """
-    _check_params(beta, noise_px, f_algorithm, steps, dt)
-    if priority not in ("exact", "linearized"):
-        raise ValueError(f"priority: expected 'exact' or 'linearized', got {priority!r}")
-    for name, value in (("gain", gain), ("secondary_gain", secondary_gain), ("damping", damping)):
-        if not math.isfinite(value) or value < 0:
-            raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
+    s = PinholeSettings(
+        seed=seed, beta=beta, noise_px=noise_px, f_algorithm=f_algorithm, steps=steps, dt=dt, gain=gain,
+        secondary_gain=secondary_gain, damping=damping, priority=priority, parallax_min_px=parallax_min_px,
+        stop_px=stop_px, rotation_tol=rotation_tol, translation_tol=translation_tol,
+    )
     wall0 = _time.perf_counter()
     rng = np.random.default_rng(seed)
-    robot, ets = puma()
-    qlim = np.asarray(robot.qlim, dtype=float)
     intr = intrinsics if intrinsics is not None else default_intrinsics()
-    K = intr.K
-    K_inv = np.linalg.inv(K)
-    W_img, H_img = intr.width, intr.height
-    noisy = noise_px > 0
-    stop_px = (0.0 if noisy else 0.005) if stop_px is None else float(stop_px)
-    rot_tol = (1e-2 if noisy else 1e-3) if rotation_tol is None else float(rotation_tol)
-    trans_tol = (1e-2 if noisy else 1e-3) if translation_tol is None else float(translation_tol)
-    params: dict[str, Any] = {
-        "seed": seed,
-        "beta": float(beta),
-        "noise_px": float(noise_px),
-        "estimator": ESTIMATOR_NAMES[f_algorithm],
-        "f_algorithm": f_algorithm,
-        "dt": float(dt),
-        "max_steps": int(steps),
-        "gain": float(gain),
-        "secondary_gain": float(secondary_gain),
-        "damping": float(damping),
-        "priority": priority,
-        "parallax_min_px": float(parallax_min_px),
-        "stop_px": stop_px,
-        "rotation_tol": rot_tol,
-        "translation_tol": trans_tol,
-        "K": K.tolist(),
-        "image_size": [W_img, H_img],
-        "camera_tool": CAMERA_TOOL.tolist(),
-    }
-
-    def failure(reason: str, pose0: Pose | None = None, goal: Pose | None = None) -> ServoResult:
-        known = pose0 is not None and goal is not None
-        return ServoResult.not_run(
-            "pinhole", reason,
-            rotation_error=rotation_angle(goal.R.T @ pose0.R) if known else float("nan"),
-            translation_error=float(np.linalg.norm(pose0.t - goal.t)) if known else float("nan"),
-            camera_poses=pose0.matrix[None] if pose0 is not None else np.zeros((0, 4, 4)),
-            n_features=0, controls={"camera_twist": 6, "joint_velocities": 6},
-            wall_time_s=_time.perf_counter() - wall0, translation_servoed=beta > 0, params=params,
+    params = _pinhole_params(s, intr)
+    try:
+        scene, q = _prepare_pinhole(
+            s, intr, rng, points=points, target_q=target_q, target_pose=target_pose, start_pose=start_pose, q0=q0
         )
-
-    # --- target
-    if target_pose is not None:
-        q_goal = _solve_ik(target_pose.matrix, TARGET_Q if target_q is None else np.asarray(target_q, float))
-        if q_goal is None:
-            return failure("target unreachable: no inverse-kinematics solution within the joint limits")
-    else:
-        q_goal = TARGET_Q.copy() if target_q is None else np.asarray(target_q, dtype=float).reshape(6)
-    goal = Pose.from_matrix(ets.eval(q_goal))
-    X = default_scene(goal) if points is None else np.asarray(points, dtype=float).reshape(-1, 3)
-    n_feat = len(X)
-    if f_algorithm is not None and n_feat < 8:
-        return failure(f"estimated F needs at least 8 features, got {n_feat}")
-    if n_feat < 3:
-        return failure(f"the epipolar task needs at least 3 features, got {n_feat}")
-
-    # --- start
-    if q0 is not None:
-        q = np.asarray(q0, dtype=float).reshape(6)
-        if np.any(q < qlim[0]) or np.any(q > qlim[1]):
-            return failure("start configuration outside the joint limits")
-    else:
-        if start_pose is not None:
-            q = _solve_ik(start_pose.matrix, q_goal)
-            if q is None:
-                return failure(
-                    "start pose unreachable: no inverse-kinematics solution within the joint limits", start_pose, goal
-                )
-        else:
-            q = _draw_start_q(rng, goal, q_goal, X, K, W_img, H_img)
-            if q is None:
-                return failure(f"no reachable start pose found in {START_DRAW_TRIES} draws", None, goal)
-    start = Pose.from_matrix(ets.eval(q))
-    w0 = math.sqrt(max(0.0, float(np.linalg.det(ets.jacob0(q) @ ets.jacob0(q).T))))
-    if w0 < SINGULAR_MANIPULABILITY:
-        return failure(f"start configuration is singular (manipulability {w0:.2e})", start, goal)
-
-    # --- desired features (measured once, with noise)
-    Xg = (X - goal.t) @ goal.R
-    if np.any(Xg[:, 2] <= 0):
-        return failure("some scene points are behind the camera at the target pose", start, goal)
-    m_goal = (Xg @ K.T)[:, :2] / Xg[:, 2:3]
-    if np.any((m_goal < 0) | (m_goal > [W_img, H_img])):
-        return failure("some features are outside the image at the target pose", start, goal)
-    m_des = m_goal + (rng.normal(scale=noise_px, size=m_goal.shape) if noisy else 0.0)
-    q_rays = rays_from_pixels(m_des, K_inv)
-    m_des_h = np.column_stack([m_des, np.ones(n_feat)])
-    c_goal, R_goal = goal.t, goal.R
-
-    estimator = None
-    if f_algorithm is not None:
-        from egtviz.geometry import essential, fundamental, sampson_refinement
-
-        estimator = getattr(sampson_refinement if f_algorithm == 3 else fundamental, ESTIMATORS[f_algorithm])
-        pose_from_essential = essential.pose_from_essential
-    exact = priority == "exact"
-    parallax_min = float(parallax_min_px) / float(K[0, 0])
-
-    T_cap = steps + 1
-    rec = Recorder(
-        T_cap,
-        {
-            "poses": (4, 4),
-            "q": (6,),
-            "features": (n_feat, 2),
-            "features_true": (n_feat, 2),
-            "twist": (6,),
-            "qd": (6,),
-            "task": (),
-            "rot": (),
-            "trans": (),
-            "feat_err": (),
-            "epi_px": (n_feat,),
-            "epipole": (3,),
-            "manip": (),
-            "limit": (),
-            "exact": (),
-        },
-    )
-    b = rec.buffers
-    reason = ""
-    e_dir_prev: np.ndarray | None = None
-    estimation_failures = 0
-    limit_hits = 0
-    k = 0
-    while True:
-        T = ets.eval(q)
-        R, c = T[:3, :3], T[:3, 3]
-        Xc = (X - c) @ R
-        z = Xc[:, 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            m_true = (Xc @ K.T)[:, :2] / z[:, None]
-        visible = (z > 0) & (m_true[:, 0] >= 0) & (m_true[:, 0] <= W_img) & (m_true[:, 1] >= 0) & (m_true[:, 1] <= H_img)
-        m = m_true + (rng.normal(scale=noise_px, size=m_true.shape) if noisy else 0.0)
-        # control law
-        p_rays = rays_from_pixels(m, K_inv)
-        step = None
-        if estimator is None:
-            base = R.T @ (c_goal - c)
-            nb = float(np.linalg.norm(base))
-            e_dir = base / nb if nb > 1e-12 else None
-            if exact:
-                step = exact_priority_step(R_goal.T @ R)
-        else:
-            R_cd = None
-            try:
-                F = np.asarray(estimator(m, m_des), dtype=float)
-                e_dir = epipole_direction(F, K_inv)
-                if exact and e_dir is not None:
-                    E = essential_from_fundamental(F, K, K)
-                    R_cd, _, _ = pose_from_essential(E, p_rays[:, :2] / p_rays[:, 2:3], q_rays[:, :2] / q_rays[:, 2:3])
-            except (ValueError, np.linalg.LinAlgError):
-                e_dir = None
-            if e_dir is None:
-                estimation_failures += 1
-                e_dir = e_dir_prev
-            elif e_dir_prev is not None and e_dir @ e_dir_prev < 0:
-                e_dir = -e_dir  # the sign of a null vector is arbitrary; keep it continuous for the record
-            e_dir_prev = e_dir
-            if R_cd is not None:
-                # translation parallax: angle between the current rays and the derotated desired rays
-                cosang = np.einsum("ij,ij->i", p_rays, q_rays @ R_cd)
-                if np.median(np.arccos(np.clip(cosang, -1.0, 1.0))) > parallax_min:
-                    step = exact_priority_step(R_cd)
-        e1, J_w = epipolar_task(p_rays, q_rays, e_dir)
-        g = secondary_gradient(R, c, c_goal)
-        twist, _ = hybrid_twist(
-            e1, J_w, g, beta=beta, gain=gain, secondary_gain=secondary_gain, priority_step=step
-        )
-        b["exact"][k] = step is not None
-        J = ets.jacob0(q)
-        twist_w = np.concatenate([R @ twist[:3], R @ twist[3:]])
-        qd, manip = joint_velocities(J, twist_w, damping=damping)
-
-        # record
-        b["poses"][k] = T
-        b["q"][k] = q
-        b["features"][k] = m
-        b["features_true"][k] = m_true
-        b["twist"][k] = twist
-        b["qd"][k] = qd
-        b["task"][k] = float(np.linalg.norm(e1))
-        b["rot"][k] = rotation_angle(R_goal.T @ R)
-        b["trans"][k] = float(np.linalg.norm(c - c_goal))
-        feat_err = np.linalg.norm(m - m_des, axis=1)
-        b["feat_err"][k] = float(feat_err.mean())
-        if e_dir is not None:
-            e_px = K @ e_dir
-            lines = _cross(np.broadcast_to(e_px, (n_feat, 3)), m_des_h)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                b["epi_px"][k] = (lines[:, :2] * m).sum(axis=1) + lines[:, 2]
-                b["epi_px"][k] /= np.hypot(lines[:, 0], lines[:, 1])
-            b["epipole"][k] = e_px / (e_px[2] if abs(e_px[2]) > 1e-12 * np.linalg.norm(e_px) else np.linalg.norm(e_px))
-        b["manip"][k] = manip
-        b["limit"][k] = 0.0
-        rec.count = k + 1
-
-        if not np.all(visible):
-            lost = np.flatnonzero(~visible)
-            reason = f"feature {int(lost[0])} left the image at t = {k * dt:.2f} s"
-            break
-        if manip < SINGULAR_MANIPULABILITY:
-            reason = f"the arm reached a singular configuration at t = {k * dt:.2f} s (manipulability {manip:.1e})"
-            break
-        goal_px = feat_err.max() if beta > 0 else float(np.nanmax(np.abs(b["epi_px"][k])))
-        if stop_px > 0 and goal_px < stop_px:
-            break
-        if k >= steps:
-            break
-        # state update
-        q, hit = step_joints(q, qd, dt, qlim)
-        if hit:
-            limit_hits += 1
-            b["limit"][k] = 1.0
-        k += 1
-        if progress is not None and k % 50 == 0:
-            progress(k, steps)
-    if progress is not None:
-        progress(k, steps)
-
-    data = rec.trim()
-    rot, trans = data["rot"], data["trans"]
-    final_rot, final_trans = float(rot[-1]), float(trans[-1])
-    if not reason:
-        if beta == 0:
-            reason = "translation not servoed (beta = 0): only the priority (rotation) task acts"
-            if final_rot >= rot_tol:
-                reason += f"; rotation error {final_rot:.2e} rad is above {rot_tol:g}"
-        elif final_rot >= rot_tol or final_trans >= trans_tol:
-            reason = (
-                f"not converged after {k} steps: rotation error {final_rot:.2e} rad (tol {rot_tol:g}), "
-                f"translation error {final_trans:.2e} m (tol {trans_tol:g})"
-            )
-            if limit_hits:
-                reason += f"; joint limits clipped the motion at {limit_hits} steps"
-    converged = not reason
-    params["estimation_failures"] = estimation_failures
-    params["joint_limit_steps"] = limit_hits
-    return ServoResult(
-        demo="pinhole",
-        time=np.arange(rec.count) * dt,
-        camera_poses=data["poses"],
-        features=data["features"],
-        desired_features=m_des,
-        controls={"camera_twist": data["twist"], "joint_velocities": data["qd"]},
-        errors={
-            "task_error_norm": data["task"],
-            "rotation_error_rad": rot,
-            "translation_error": trans,
-            "feature_error_px": data["feat_err"],
-            "max_epipolar_distance_px": np.nanmax(np.abs(data["epi_px"]), axis=1)
-            if np.any(np.isfinite(data["epi_px"]))
-            else np.full(rec.count, np.nan),
-        },
-        converged=converged,
-        reason=reason,
-        initial_rotation_error_rad=float(rot[0]),
-        initial_translation_error=float(trans[0]),
-        final_rotation_error_rad=final_rot,
-        final_translation_error=final_trans,
-        steps=k,
-        sim_time_s=k * dt,
-        wall_time_s=_time.perf_counter() - wall0,
-        translation_servoed=beta > 0,
-        joint_angles=data["q"],
-        extras={
-            "features_true": data["features_true"],
-            "epipolar_distances_px": data["epi_px"],
-            "epipole_px": data["epipole"],
-            "manipulability": data["manip"],
-            "joint_limit_clipped": data["limit"].astype(bool),
-            "exact_priority_step": data["exact"].astype(bool),
-            "scene_points": X,
-            "target_pose": goal.matrix,
-            "target_q": q_goal,
-        },
-        params=params,
-    )
+    except _NotRun as exc:
+        return _pinhole_not_run(exc, s, params, wall0)
+    return _pinhole_result(s, scene, _pinhole_loop(s, scene, q, rng, progress), params, wall0)
