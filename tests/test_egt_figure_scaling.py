@@ -23,6 +23,7 @@ from egtviz.egt import eye, f_3Dframe, f_epipline, f_epipole, f_panproj, f_persp
 from egtviz.egt_figure import _builder
 from egtviz.egt_figure._publisher import Publisher
 from egtviz.egt_figure._server import FigureServer, on_cell_end
+from egtviz.scene.annotations import Annotations
 from egtviz.scene.limits import MAX_PLOT_ITEMS
 
 K = np.array([[500.0, 0.0, 320.0], [0.0, 500.0, 240.0], [0.0, 0.0, 1.0]])
@@ -114,6 +115,23 @@ def test_scene_points_and_panoramic_points_over_the_limit_are_refused_without_wo
     with pytest.warns(RuntimeWarning, match=r"panoramic_points: not drawn \(point set points: expected 1 to 2000"):
         assert _python_lines(f_panproj, P + np.array([[0.0], [0.0], [5.0]]), np.eye(4), None, 3, 1, 1, "r") < 4000
     assert ef.current_figure().scene().points == ()
+
+
+@pytest.mark.parametrize("kind, data, message", [
+    ("projection_rays", dict(points=np.ones((3, 50_000)), centre=np.zeros(3)), "polylines: expected 0 to 2000"),
+    ("scene_points", dict(points=np.ones((3, 50_000))), "point set points: expected 1 to 2000"),
+    ("numbered_points", dict(points=np.ones((3, 50_000))), "point set points: expected 1 to 2000"),
+    ("line3d", dict(points=np.ones((3, 50_000))), "polyline points: expected 2 to 2000"),
+    ("sphere_model", dict(H=np.eye(4), ell=1.0, m=1.0, points=np.ones((3, 50_000)),
+                          sphere_points=np.ones((3, 50_000))), "point set points: expected 1 to 2000"),
+    ("surface", dict(x=np.ones((300, 300)), y=np.ones((300, 300)), z=np.ones((300, 300))),
+     "meshes: at most 20000 vertices in all, got 90000"),
+])
+def test_every_kind_over_its_limit_is_refused_without_work_per_item(kind, data, message):
+    with pytest.warns(RuntimeWarning, match=rf"{kind}: not drawn \({message}"):
+        assert _python_lines(lambda: ef.draw(kind, **data)) < 1500
+    scene = ef.current_figure().scene()
+    assert scene.points == () and scene.annotations == Annotations(messages=scene.annotations.messages)
 
 
 def _add_points_before(points: list, P: np.ndarray) -> None:

@@ -34,6 +34,7 @@ from ..scene.annotations import (
 from ..scene.examples import TUTORIAL_CCD
 from ..scene.limits import (
     MAX_ANNOTATION_ITEMS,
+    MAX_MESH_VERTICES,
     MAX_PLOT_ITEMS,
     MAX_POINTS,
     MAX_POLYLINE_VERTICES,
@@ -453,6 +454,8 @@ class Figure:
             raise ValueError(
                 f"x, y, z: expected three (n, m) grids with n, m >= 2, got {X.shape}, {Y.shape}, {Z.shape}")
         n, m = X.shape
+        have = sum(len(mesh.vertices) for mesh in self.items["meshes"])
+        _refuse_over(have + n * m, MAX_MESH_VERTICES, "meshes", "at most {limit} vertices in all")
         V = np.stack([X, Y, Z], axis=-1).reshape(-1, 3)
         idx = np.arange(n * m).reshape(n, m)
         a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
@@ -515,11 +518,11 @@ class Figure:
 
     def _draw_numbered_points(self, points: Any, numbers: Any = None, style: Any = None, offset: Any = 0.0) -> None:
         P = _columns(points, 3, "points")
+        keep = np.all(np.isfinite(P), axis=1)
+        _refuse_over(int(keep.sum()), MAX_POLYLINE_VERTICES, "point set points", "expected 1 to {limit} entries")
         nums = list(range(1, len(P) + 1)) if numbers is None else [int(k) for k in np.asarray(numbers).reshape(-1)]
         if len(nums) != len(P):
             raise ValueError(f"numbers: expected one per point ({len(P)}), got {len(nums)}")
-        keep = np.all(np.isfinite(P), axis=1)
-        _refuse_over(int(keep.sum()), MAX_POLYLINE_VERTICES, "point set points", "expected 1 to {limit} entries")
         if keep.any():
             self.items["point_sets"].append(PointSet(
                 points=tuple(map(tuple, P[keep])), colour=parse_style(style, "#d00000").colour, numbered=True,
