@@ -104,3 +104,30 @@ def test_numbers_with_no_free_place_are_counted_in_a_note():
     vb = [float(v) for v in root.get("viewBox").split()]
     assert float(note.get("y")) < vb[1] + vb[3]
     assert float(note.get("y")) > 480
+
+
+def test_servo_feature_numbers_stay_with_their_features():
+    from egtviz.viewer.servo_svg import ServoImage, servo_image_svg
+
+    rng = np.random.default_rng(7)
+    n = 12
+    current = rng.normal([320, 240], 30, (n, 2))  # a crowd, as near the end of a run
+    img = ServoImage(demo="pinhole", width=640, height=480, frame=0, current=current,
+                     desired=current + rng.normal(0, 8, (n, 2)), trails=np.zeros((0, n, 2)))
+    root = ET.fromstring(servo_image_svg(img, fixed_size=True))
+    els = list(root.iter())
+    leaders = {el.get("data-index"): el for el in els if el.get("data-kind") == "label-leader"}
+    discs = {el.get("data-index"): el for el in els if el.get("data-kind") == "point"}
+    texts = [el for el in els if el.tag.endswith("text") and el.get("data-box") and el.text and el.text.isdigit()]
+    assert len(texts) == n
+    r = float(next(iter(discs.values())).get("r"))
+    reach = r + 0.3 * NORMAL.label_px * r / NORMAL.mark_px
+    for t in texts:
+        i = str(int(t.text) - 1)
+        x, y = float(discs[i].get("cx")), float(discs[i].get("cy"))
+        box = tuple(float(v) for v in t.get("data-box").split())
+        if i in leaders:
+            assert (float(leaders[i].get("x2")), float(leaders[i].get("y2"))) == pytest.approx((x, y), abs=0.01)
+        else:
+            assert _box_distance(box, x, y) <= NUMBER_NEAR * reach + 1e-6
+    assert leaders  # the crowd needs some

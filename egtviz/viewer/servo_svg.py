@@ -14,7 +14,9 @@ sizes in CSS pixels of a :class:`~egtviz.viewer.svg.PanelStyle` at the panel's
 width, tick steps from the view, the caption, the message and the legend in
 rows under the frame (never over the image), and the feature numbers and
 epipole labels placed clear of each other's marks
-(:func:`~egtviz.viewer.panel_view.place_labels`; each carries ``data-box``).
+(:func:`~egtviz.viewer.panel_view.place_labels`; each carries ``data-box``); a number
+farther from its feature than the panels allow (:func:`~egtviz.viewer.svg.number_fates`), or
+nearer another, or on a mark, is joined to it by a ``label-leader`` line (``data-index``).
 The GUI calls ``servo_image_svg(img, style=PRESENT, panel_px=...)`` in
 presentation mode.
 """
@@ -39,6 +41,7 @@ from .svg import (
     _points_attr,
     _svg_open,
     _text_px,
+    number_fates,
     panel_layout,
 )
 
@@ -223,12 +226,22 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
     boxes = (place_labels(anchors, radii, sizes, obstacles, (0.0, 0.0, w, h), gap=0.3 * size)
              if anchors else np.zeros((0, 4)))
     halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}" paint-order="stroke"'
-    for i, box in zip(cur, boxes[len(eps):]):
+    # As in the panels, a number is next to its feature or joined to it by a leader line; one that found no free
+    # place is drawn too, with its line (a dozen features: the frame has no row to count hidden ones in).
+    keep, far = number_fates(boxes, len(eps), np.asarray(anchors, float).reshape(-1, 2),
+                             np.asarray(radii, float) + 0.3 * size, np.asarray(obstacles, float).reshape(-1, 4),
+                             C[cur].reshape(-1, 2))
+    for i, box, free, near_miss in zip(cur, boxes[len(eps):], keep, far):
         p = C[i]
-        out.append(f'<circle data-kind="point" data-index="{i}" cx="{_f(p[0])}" cy="{_f(p[1])}" r="{_f(r_pt)}" '
-                   f'fill="{colours[i % nc]}" stroke="#fff" stroke-width="{_f(lw * 0.6)}"/>'
-                   + _label_text(box, size, str(i + 1),
-                                 f' font-size="{_f(size)}" fill="{style.ink}" font-weight="bold"{halo_attr}', p[0]))
+        line = ""
+        if near_miss or not free:
+            lx, ly = min(max(p[0], box[0]), box[2]), min(max(p[1], box[1]), box[3])
+            line = (f'<line data-kind="label-leader" data-index="{i}" x1="{_f(lx)}" y1="{_f(ly)}" x2="{_f(p[0])}" '
+                    f'y2="{_f(p[1])}" stroke="{style.ink}" stroke-width="{_f(lw * 0.6)}"/>')
+        text = _label_text(box, size, str(i + 1),
+                           f' font-size="{_f(size)}" fill="{style.ink}" font-weight="bold"{halo_attr}', p[0])
+        out.append(f'{line}<circle data-kind="point" data-index="{i}" cx="{_f(p[0])}" cy="{_f(p[1])}" '
+                   f'r="{_f(r_pt)}" fill="{colours[i % nc]}" stroke="#fff" stroke-width="{_f(lw * 0.6)}"/>' + text)
     for (lab, e), box in zip(eps, boxes[: len(eps)]):
         out.append(f'<g data-kind="epipole" data-label="{escape(lab)}">'
                    f'<path d="M{_f(e[0] - a_ep)} {_f(e[1] - a_ep)}L{_f(e[0] + a_ep)} {_f(e[1] + a_ep)}'

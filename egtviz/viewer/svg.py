@@ -69,7 +69,8 @@ from ..scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
 from .panel_view import ViewBox, image_view, place_labels, tick_values
 
-__all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "empty_svg", "image_plane_svg", "panel_layout"]
+__all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "empty_svg", "image_plane_svg", "number_fates",
+           "panel_layout"]
 
 #: Above this many points in an image only the selected and highlighted points are numbered (more are unreadable).
 MAX_NUMBERED_POINTS = 40
@@ -477,7 +478,7 @@ def _label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> 
             f'data-box="{_f(x0)} {_f(y0)} {_f(x1)} {_f(y1)}"{attrs}>{text}</text>')
 
 
-def _number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
+def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
                   obstacles: np.ndarray, shown: np.ndarray) -> tuple[list[bool], list[bool]]:
     """Which placed point numbers are drawn, and which of those need a leader line to their point.
 
@@ -581,7 +582,7 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
     gap = 0.3 * size
     boxes = place_labels(anchors, radii, sizes, O, bounds, gap=gap) if anchors else np.zeros((0, 4))
     ep_boxes = tuple(tuple(b) for b in boxes[: len(epipoles)])
-    keep, far = _number_fates(boxes, len(epipoles), np.asarray(anchors, float).reshape(-1, 2),
+    keep, far = number_fates(boxes, len(epipoles), np.asarray(anchors, float).reshape(-1, 2),
                               np.asarray(radii, float) + gap, O, shown)
     label_of = {i: b for i, b, ok in zip(numbered, boxes[len(epipoles):], keep) if ok}
     leader_of = {i: b for i, b, ok, f in zip(numbered, boxes[len(epipoles):], keep, far) if ok and f}
