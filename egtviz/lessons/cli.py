@@ -103,15 +103,19 @@ def check_file(path: str) -> str | None:
     """None if ``path`` is a valid lesson (``.toml``, any case) or scene file (anything else), else
     ``file:line: reason``.
 
+    A lesson is also proven against wrong answers: each task's counter-examples, applied from the step's
+    start, must fail (:func:`~egtviz.lessons.proof.prove_counter_examples`).
+
     Scene files go through the scene layer's own reader (``scene_from_bytes``, as ``load_scene_file``); the line
     of a refused entry is found in the JSON text (:func:`~egtviz.lessons.locate.json_locator`).
     """
     shown = printable(path)
     if path.lower().endswith(".toml"):
         from .format import load_lesson
+        from .proof import prove_counter_examples
 
         try:
-            load_lesson(path)
+            prove_counter_examples(load_lesson(path))
         except LessonError as exc:
             return str(exc)
         return None

@@ -48,11 +48,30 @@ from .tasks import (
     parse_task,
 )
 
-__all__ = ["Lesson", "Step", "load_lesson", "parse_lesson"]
+__all__ = ["MAX_COUNTER_EXAMPLES", "CounterExample", "Lesson", "Step", "load_lesson", "parse_lesson"]
 
 _TOP = ("title", "summary", "prerequisites", "scene", "steps")
 _STEP = ("title", "text", "changes", "tasks")
 _LESSON_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,79}")
+_COUNTER = ("why", "changes", "answer")
+MAX_COUNTER_EXAMPLES = 5
+"""Counter-examples of one task."""
+
+
+@dataclass(frozen=True)
+class CounterExample:
+    """A wrong answer a careless learner would give, which its task must refuse (``[[steps.tasks.counter_examples]]``).
+
+    ``egtviz check`` applies ``changes`` from the step's start (a scene task) or types ``answer`` (a question)
+    and refuses the lesson if the task passes (:mod:`egtviz.lessons.proof`).
+    """
+
+    why: str
+    """The mistake, in a few words (e.g. "the loose threshold")."""
+    changes: tuple[Change, ...] = ()
+    answer: str | None = None
+    line: int = 1
+    """The line of the counter-example's table in the lesson file."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +85,15 @@ class Step:
     """The text as shown: Markdown with the formulas rendered to MathML (:func:`render_markdown`)."""
     changes: tuple[Change, ...] = ()
     tasks: tuple[Task, ...] = ()
+    counter_examples: tuple[tuple[CounterExample, ...], ...] = ()
+    """Per task (in the order of :attr:`tasks`), the wrong answers ``egtviz check`` proves it refuses."""
+
+    def counter_examples_of(self, task_id: str) -> tuple[CounterExample, ...]:
+        """The counter-examples of the task ``task_id`` (none if it has none)."""
+        for task, examples in zip(self.tasks, self.counter_examples, strict=False):
+            if task.id == task_id:
+                return examples
+        return ()
 
 
 @dataclass(frozen=True)
@@ -236,8 +264,8 @@ class _Reader:
         except MarkupError as exc:
             raise LessonError(self.source, self.text_line(at, text, exc.offset), f"steps[{i}].text: {exc}") from None
         changes = self.changes(at, data.get("changes", []), model)
-        tasks = self.tasks(at, data.get("tasks", []), model)
-        return Step(title, text, html, changes, tasks)
+        tasks, counter = self.tasks(at, data.get("tasks", []), model)
+        return Step(title, text, html, changes, tasks, counter)
 
     def text_line(self, at: tuple, text: str, offset: int) -> int:
         """The line of character ``offset`` of a step's ``text``: counted from its key in a multi-line string."""
@@ -285,13 +313,20 @@ class _Reader:
                                    f"steps in all, more than the {MAX_LESSON_SERVO_STEPS:,} simulated when a lesson "
                                    "is loaded (fewer steps, or fewer different runs)")
 
-    def tasks(self, at: tuple, value: object, model: SceneModel) -> tuple[Task, ...]:
+    def tasks(self, at: tuple, value: object,
+              model: SceneModel) -> tuple[tuple[Task, ...], tuple[tuple[CounterExample, ...], ...]]:
         if not isinstance(value, list) or len(value) > MAX_TASKS:
             raise self.error(at + ("tasks",), f"tasks: expected at most {MAX_TASKS} [[steps.tasks]] tables")
         out: list[Task] = []
+        counter: list[tuple[CounterExample, ...]] = []
         for j, table in enumerate(value):
             here = at + ("tasks", j)
             what = f"steps[{at[1]}].tasks[{j}]"
+            if isinstance(table, dict) and "counter_examples" in table:
+                table = {k: v for k, v in table.items() if k != "counter_examples"}
+                counter.append(self.counter_examples(here, what, value[j]["counter_examples"]))
+            else:
+                counter.append(())
             try:
                 task = parse_task(table, default_id=f"task{j + 1}")
                 if any(t.id == task.id for t in out):
@@ -310,7 +345,47 @@ class _Reader:
             trial = SceneModel(model.scene)
             for change in task.solution:
                 self.apply(trial, change, here + ("solution",), f"{what}.solution", {})
+            if task.question and any(c.answer is None for c in counter[-1]):
+                raise self.error(here + ("counter_examples",), f"{what}.counter_examples: a question's "
+                                 "counter-example is a wrong answer: expected 'answer'")
+            if not task.question and any(c.answer is not None or not c.changes for c in counter[-1]):
+                raise self.error(here + ("counter_examples",), f"{what}.counter_examples: a scene task's "
+                                 "counter-example is what a learner does: expected 'changes' and no 'answer'")
             out.append(task)
+        return tuple(out), tuple(counter)
+
+    def counter_examples(self, here: tuple, what: str, value: object) -> tuple[CounterExample, ...]:
+        """A task's ``[[steps.tasks.counter_examples]]``: ``why``, and ``changes`` (a list of changes, as in a
+        ``solution``) or ``answer`` (a question's typed answer); applied and checked by ``egtviz check``."""
+        if not isinstance(value, list) or not 1 <= len(value) <= MAX_COUNTER_EXAMPLES:
+            raise self.error(here + ("counter_examples",), f"{what}.counter_examples: expected 1 to "
+                             f"{MAX_COUNTER_EXAMPLES} [[steps.tasks.counter_examples]] tables")
+        out = []
+        for k, table in enumerate(value):
+            at = here + ("counter_examples", k)
+            name = f"{what}.counter_examples[{k}]"
+            if not isinstance(table, dict):
+                raise self.error(at, f"{name}: expected a table, got {fields.short(table)}")
+            try:
+                fields.refuse_unknown(table, _COUNTER, "a counter-example")
+                why = fields.text(table, "why")
+                changes = table.get("changes", [])
+                if not isinstance(changes, list) or len(changes) > MAX_CHANGES:
+                    raise EntryError("changes", f"expected a list of at most {MAX_CHANGES} changes, "
+                                                f"got {fields.short(changes)}")
+                try:
+                    parsed = tuple(parse_change(c) for c in changes)
+                except EntryError as exc:
+                    raise EntryError("changes", f"change: {exc}") from None
+                answer = table.get("answer")
+                if answer is not None and (type(answer) not in (str, int, float)):
+                    raise EntryError("answer", f"expected the typed text or a number, got {fields.short(answer)}")
+                if isinstance(answer, str):
+                    answer = fields.text(table, "answer")
+            except EntryError as exc:
+                raise self.entry(at, exc, name) from None
+            shown = None if answer is None else answer if isinstance(answer, str) else f"{answer:g}"
+            out.append(CounterExample(why, parsed, shown, self.where.line(*at)))
         return tuple(out)
 
 

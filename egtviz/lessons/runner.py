@@ -18,7 +18,8 @@ from .changes import apply as apply_change
 from .format import Lesson, Step
 from .markup import render_markdown
 from .progress import ProgressStore, learner_key
-from .tasks import Task, TaskContext, TaskResult, task_seed
+from .locks import lock_breach
+from .tasks import RESET_ADVICE, Task, TaskContext, TaskResult, task_seed
 
 __all__ = ["Attempt", "LessonRun", "ResolvedTask", "UNDO_NOTE"]
 
@@ -99,6 +100,8 @@ class LessonRun:
             for change in self.lesson.steps[index].changes:
                 self.apply(change)
         self.step_index = index
+        self.step_start = self.model.scene
+        """The scene as the step started (its locks are verified by every scene task's check)."""
         if self.progress is not None:
             self.progress.set_step(self.learner, self.lesson.name, index)
 
@@ -158,7 +161,9 @@ class LessonRun:
         else:
             raise KeyError(f"task: no task {task_id!r} in step {self.step_index}")
         ctx = TaskContext(self.model.scene, self.model.derived, answer, self.lab, self.lens, self.demo)
-        result = resolved.task.check(ctx, resolved.params)
+        breach = None if resolved.task.question else lock_breach(self.step_start, self.model.scene)
+        result = (TaskResult(False, f"{breach}: {RESET_ADVICE}") if breach is not None
+                  else resolved.task.check(ctx, resolved.params))
         if self.progress is not None:
             self.progress.record_attempt(self.learner, self.lesson.name, self.step_index, task_id, result.passed)
         hint = render_markdown(resolved.task.hint) if resolved.task.hint and not result.passed else None

@@ -65,6 +65,14 @@ class LensToggles:
         """At least one mistake is on."""
         return any(getattr(self, f.name) for f in fields(self))
 
+    def switched(self, other: LensToggles) -> LensToggles:
+        """The toggles that differ between ``self`` and ``other`` (on where one has the mistake and the other not).
+
+        A lens that hides its settings shows ``start.switched(now)``: what the learner switched since the step
+        set its hidden mistake, not which mistakes are on; and ``start.switched(shown)`` is the lens in effect.
+        """
+        return LensToggles(**{f.name: getattr(self, f.name) != getattr(other, f.name) for f in fields(self)})
+
 
 @dataclass(frozen=True, eq=False)
 class LensView:

@@ -13,6 +13,11 @@ A working lens gives residuals near zero; a broken one does not.
 
 The toggles belong to the lesson (:attr:`egtviz.lessons.LessonRun.lens`): a click applies a ``set_lens``
 change through the run, so the lesson's checks see what the panels show.
+
+A step that asks which mistake is on (a ``choice`` task while its lens has a mistake on: a diagnosis) hides
+the lens's settings (:func:`hidden_lens`): the panels show the mistake's effect, and each box shows whether the
+learner switched that step of the computation since the step began, not whether the mistake is on
+(:meth:`~egtviz.scene.lens.LensToggles.switched`). Ticking the box of the hidden mistake repairs the lens.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from ..scene.derived import with_pair_lines
 from ..scene.lens import LensToggles, LensView, lens_view
 from .fields import on_event
 
-__all__ = ["LENS_LABELS", "LensPanel", "LessonInstruments", "residual_table_html"]
+__all__ = ["HIDDEN_NOTE", "LENS_LABELS", "LensPanel", "LessonInstruments", "hidden_lens", "residual_table_html"]
 
 #: Each toggle of :class:`~egtviz.scene.lens.LensToggles` as the GUI names it (the mistake it applies).
 LENS_LABELS: dict[str, str] = {
@@ -43,6 +48,9 @@ LENS_LABELS: dict[str, str] = {
 }
 #: Rows of the residual table (the selected point is always listed first).
 MAX_RESIDUAL_ROWS = 12
+#: What the lens says while it hides the step's mistake (:func:`hidden_lens`).
+HIDDEN_NOTE = ("<small><b>A mistake is hidden in this step.</b> A ticked box is a step of the computation you "
+               "switched, not a mistake that is on: find the switch that repairs the geometry.</small>")
 
 
 class LessonInstruments(Protocol):
@@ -52,6 +60,25 @@ class LessonInstruments(Protocol):
     lens: LensToggles
 
     def apply(self, change: Any) -> None: ...
+
+
+def hidden_lens(run: Any) -> LensToggles | None:
+    """The lens the current step set, when the step hides it; None when the lens shows its settings.
+
+    A step hides its lens while it asks which mistake is on: it has a ``choice`` task and its lens (the
+    ``set_lens`` changes of the steps so far, replayed) has a mistake on. A run without a lesson hides nothing.
+    """
+    lesson, index = getattr(run, "lesson", None), getattr(run, "step_index", None)
+    if lesson is None or not isinstance(index, int) or not 0 <= index < len(lesson.steps):
+        return None
+    if not any(t.kind == "choice" for t in lesson.steps[index].tasks):
+        return None
+    lens = LensToggles()
+    for step in lesson.steps[: index + 1]:
+        for change in step.changes:
+            if isinstance(change, SetLens):
+                lens = change.applied_to(lens)
+    return lens if lens.any else None
 
 
 def _num(x: float, digits: int = 3) -> str:
@@ -102,29 +129,41 @@ class LensPanel:
         with self.folder:
             gui.add_markdown("<small>Each toggle applies a mistake people make; the panels draw what the "
                              "mistaken code computes.</small>")
+            self.note = gui.add_markdown("")
             self.toggles: dict[str, Any] = {}
+            shown = self._shown()
             for f in fields(LensToggles):
-                box = gui.add_checkbox(LENS_LABELS[f.name], getattr(run.lens, f.name))
+                box = gui.add_checkbox(LENS_LABELS[f.name], getattr(shown, f.name))
                 on_event(box.on_update, lambda e, k=f.name: self._toggle(k, e.target.value), report)
                 self.toggles[f.name] = box
             self.readout = gui.add_html("")
+        self.note.content = HIDDEN_NOTE if hidden_lens(run) is not None else ""
+
+    def _shown(self) -> LensToggles:
+        """What the boxes show: the run's toggles, or what was switched since the step hid its mistake."""
+        hidden = hidden_lens(self.run)
+        return self.run.lens if hidden is None else hidden.switched(self.run.lens)
 
     def _toggle(self, key: str, value: Any) -> None:
         if self._syncing:
             return
         if not isinstance(value, bool):  # a raw client can send anything
             raise SceneError(f"{LENS_LABELS[key]}: expected true or false, got {str(value)[:40]!r}")
-        if getattr(self.run.lens, key) != value:
-            self.run.apply(SetLens(((key, value),)))
+        hidden = hidden_lens(self.run)
+        wanted = value if hidden is None else getattr(hidden, key) != value
+        if getattr(self.run.lens, key) != wanted:
+            self.run.apply(SetLens(((key, wanted),)))
         self._redraw()
 
     def sync(self) -> None:
-        """Show the run's toggles (after a step changed them)."""
+        """Show the run's toggles (after a step changed them), or what was switched while a step hides its lens."""
         self._syncing = True
         try:
+            shown = self._shown()
+            self.note.content = HIDDEN_NOTE if hidden_lens(self.run) is not None else ""
             for key, box in self.toggles.items():
-                if box.value != getattr(self.run.lens, key):
-                    box.value = getattr(self.run.lens, key)
+                if box.value != getattr(shown, key):
+                    box.value = getattr(shown, key)
         finally:
             self._syncing = False
 

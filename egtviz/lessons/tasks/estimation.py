@@ -29,9 +29,12 @@ from .common import (
     projective_pair,
 )
 
-__all__ = ["InliersRecallTask", "SampsonBelowTask", "TriangulationErrorTask", "triangulation_rms"]
+__all__ = ["DEFAULT_MIN_PRECISION", "InliersRecallTask", "SampsonBelowTask", "TriangulationErrorTask",
+           "default_max_sampson_px2", "triangulation_rms"]
 
 _TRIANGULATION_DRAWS = 200
+DEFAULT_MIN_PRECISION = 0.9
+"""Share of a recall task's marked inliers that must be true inliers, unless its ``min_precision`` says."""
 _LAB_KEYS = ("min_noise_px", "min_outlier_percent")
 
 
@@ -116,21 +119,30 @@ class SampsonBelowTask(Task):
 
 @dataclass(frozen=True, kw_only=True)
 class InliersRecallTask(Task):
-    """The lab's robust ``method`` marks at least ``at_least`` of the true inliers as inliers."""
+    """The lab's robust ``method`` marks at least ``at_least`` of the true inliers as inliers, and its fit is not
+    ruined: at most ``1 - min_precision`` of what it marks are outliers, and the mean Sampson error of its ``F``
+    against the true pixels is at most ``max_sampson_px2`` (default :func:`default_max_sampson_px2` of the
+    lab's noise). A loose threshold keeps every inlier and lets the outliers vote: recall alone would pass it."""
 
     method: str
     at_least: float
     min_noise_px: float = 0.0
     min_outlier_percent: float = 0.0
+    min_precision: float = DEFAULT_MIN_PRECISION
+    max_sampson_px2: float | None = None
+    """None: :func:`default_max_sampson_px2` of the lab's noise at the check."""
 
     kind: ClassVar[str] = "inliers_recall"
-    table_keys: ClassVar[tuple[str, ...]] = ("method", "at_least", *_LAB_KEYS)
+    table_keys: ClassVar[tuple[str, ...]] = ("method", "at_least", "min_precision", "max_sampson_px2", *_LAB_KEYS)
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> InliersRecallTask:
         minimums = _lab_minimums(table)
         return cls(**common, **minimums, method=_method(table, robust=True),
-                   at_least=fields.number(table, "at_least", FRACTION))
+                   at_least=fields.number(table, "at_least", FRACTION),
+                   min_precision=fields.number(table, "min_precision", FRACTION, required=False,
+                                               default=DEFAULT_MIN_PRECISION),
+                   max_sampson_px2=fields.number(table, "max_sampson_px2", SAMPSON_PX2, required=False))
 
     def params(self) -> dict[str, Param]:
         return {"at_least": self.at_least, "at_least_percent": 100.0 * self.at_least}
@@ -145,13 +157,32 @@ class InliersRecallTask(Task):
         refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
         if refused is not None:
             return refused
-        fit = ctx.lab_result().fit(self.method)
+        lab = ctx.lab_result()
+        fit = lab.fit(self.method)
         if fit.F is None:
             return TaskResult(False, f"{fit.title} failed: {fit.message}")
         msg = f"{fit.title} marks {100 * fit.inlier_recall:.0f} % of the true inliers as inliers"
-        if fit.inlier_recall >= params["at_least"]:
-            return TaskResult(True, f"Done: {msg}.")
-        return TaskResult(False, f"Not yet: {msg}; at least {100 * params['at_least']:g} % needed.")
+        if fit.inlier_recall < params["at_least"]:
+            return TaskResult(False, f"Not yet: {msg}; at least {100 * params['at_least']:g} % needed.")
+        marked = int(np.count_nonzero(fit.inliers))
+        wrong = int(np.count_nonzero(fit.inliers & lab.data.outlier))
+        precision = 1.0 - wrong / marked if marked else 0.0
+        if precision < self.min_precision:
+            return TaskResult(False, f"Not yet: {msg}, but {wrong} of the {marked} it marks are outliers "
+                                     f"({100 * (1 - precision):.0f} %; at most {100 * (1 - self.min_precision):g} %): "
+                                     "the threshold lets mismatches vote.")
+        bound = self.max_sampson_px2 if self.max_sampson_px2 is not None else default_max_sampson_px2(ctx.lab.noise_px)
+        if not fit.sampson_true <= bound:
+            return TaskResult(False, f"Not yet: {msg}, but its F is ruined: mean Sampson error {fit.sampson_true:.3g} "
+                                     f"px^2 against the true points (at most {bound:.3g} px^2).")
+        return TaskResult(True, f"Done: {msg}, {100 * precision:.0f} % of its inliers are true ones and its mean "
+                                f"Sampson error is {fit.sampson_true:.3g} px^2.")
+
+
+def default_max_sampson_px2(noise_px: float) -> float:
+    """The worst mean Sampson error (px^2, against the true pixels) a recall task accepts by default: four times
+    the noise variance, and at least 0.1 px^2 (a fit from noisy pixels is never exact)."""
+    return max(4.0 * noise_px**2, 0.1)
 
 
 @dataclass(frozen=True, kw_only=True)
