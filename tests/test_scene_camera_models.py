@@ -15,6 +15,7 @@ from egtviz.geometry import PinholeCamera
 from egtviz.geometry.camera_model import CAMERA_MODELS
 from egtviz.geometry.unified import UnifiedCamera
 from egtviz.scene import (
+    FisheyeSpec,
     OutOfRangeError,
     PanoramicSpec,
     PinholeSpec,
@@ -49,6 +50,7 @@ def every_kind_scene() -> Scene:
             PanoramicSpec("hyp", (4.0, -4.0, 0.5), focal_pixels=300.0),
             PanoramicSpec("par", (-5.0, 3.0, 0.5), mirror="parabolic", a=0.1, focal_pixels=1000.0),
             UnifiedSpec("uni", (6.0, 3.0, 1.5), (-120.0, -5.0, 0.0), xi=0.6),
+            FisheyeSpec("fish", (-6.0, -2.0, 1.5), (70.0, -5.0, 0.0), field_of_view=170.0),
         ),
         points=tuple(map(tuple, X)),
     )
@@ -124,8 +126,9 @@ def test_add_camera_of_every_registered_kind(kind):
     assert type(spec.camera()) is type(CAMERA_MODELS[spec.model_kind].build(spec.pose))
     ip = model.derived.image_planes[name]
     assert ip.visible.sum() > 0  # placed where it sees the points
-    with pytest.raises(SceneError, match=r"kind: expected one of \['hyperbolic', 'parabolic', 'pinhole', 'unified'\]"):
-        model.add_camera("fisheye")
+    with pytest.raises(SceneError, match=r"kind: expected one of \['fisheye', 'hyperbolic', 'parabolic', 'pinhole', "
+                                         r"'unified'\]"):
+        model.add_camera("orthographic")
 
 
 def test_a_unified_camera_survives_the_file_format_and_its_ranges_are_the_models():
@@ -194,9 +197,9 @@ GENERIC_MODULES = [
     "egtviz/viewer/models/unified.py",
     "egtviz/viewer/models/common.py",
 ]
-KIND_NAMES = re.compile(r"""["'](pinhole|panoramic|hyperbolic|parabolic|unified)["']""")
+KIND_NAMES = re.compile(r"""["'](pinhole|panoramic|hyperbolic|parabolic|unified|fisheye)["']""")
 KIND_TEST = re.compile(r"""(?<!dtype)\.(model_)?kind\s*(==|!=|in\b|not in\b)|isinstance\([^)]*(PinholeCamera|CatadioptricCamera|UnifiedCamera|"""
-                       r"""PinholeSpec|PanoramicSpec|UnifiedSpec)""")
+                       r"""PinholeSpec|PanoramicSpec|UnifiedSpec|FisheyeCamera|FisheyeSpec)""")
 
 
 def _code_lines(path: Path) -> list[tuple[int, str]]:
@@ -231,6 +234,6 @@ def test_the_registries_name_each_kind_once_and_agree():
     # The scene file's kinds: only in the spec classes (file format), each spec building registered models.
     from egtviz.scene.specs import CAMERA_KINDS, spec_for_model
 
-    assert set(CAMERA_KINDS) == {"pinhole", "panoramic", "unified"}
+    assert set(CAMERA_KINDS) == {"pinhole", "panoramic", "unified", "fisheye"}
     assert {spec_for_model(k)[0] for k in CAMERA_MODELS} == set(CAMERA_KINDS.values())
     assert PinholeCamera.kind in CAMERA_MODELS and UnifiedCamera.kind in CAMERA_MODELS

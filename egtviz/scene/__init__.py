@@ -21,6 +21,7 @@ from .model import SceneModel as SceneModel
 from .scene import Scene as Scene
 from .scene import SceneFileError as SceneFileError
 from .specs import CameraSpec as CameraSpec
+from .specs import FisheyeSpec as FisheyeSpec
 from .specs import DisplayOptions as DisplayOptions
 from .specs import OutOfRangeError as OutOfRangeError
 from .specs import PanoramicSpec as PanoramicSpec

@@ -54,9 +54,6 @@ def _without_point(marks: frozenset[str], index: int) -> frozenset[str]:
                 m = f"point:{i - 1}"
         out.add(m)
     return frozenset(out)
-_POSE_FIELDS = frozenset({"position", "ypr_deg"})
-_LOCKABLE = frozenset({"camera", "points"})
-"""The change kinds that edit one camera or point in place (a lock may refuse them)."""
 
 
 def _lock_refusal(old: Scene, new: Scene, change: Change) -> str | None:
@@ -72,7 +69,7 @@ def _lock_refusal(old: Scene, new: Scene, change: Change) -> str | None:
         elif name in old.camera_names:
             a = old.camera(name)
             b = new.camera(name) if name in new.camera_names else None
-            if b is not None and b is not a and (a.position != b.position or a.ypr_deg != b.ypr_deg):
+            if b is not None and b is not a and any(getattr(a, f) != getattr(b, f) for f in a.POSE_FIELDS):
                 return f"{name}: the camera is locked in this step; its position and orientation cannot change"
     return None
 
@@ -83,6 +80,9 @@ class Change:
 
     kind: str
     names: tuple[str, ...] = ()
+    in_place: bool = False
+    """The change edits the named cameras or points in place (a field, a gizmo, a raw message): a lock may refuse
+    it. Adding, removing, loading and undoing are not edits in place."""
 
 
 Listener = Callable[[Scene, Change], None]
@@ -139,7 +139,7 @@ class SceneModel:
         with self._lock:
             # Every edit of a camera or a point passes here, whatever sent it (a field, a gizmo, a raw message).
             authority = self._authority is not None and self._authority[0] == threading.get_ident()
-            if change.kind in _LOCKABLE and not authority:
+            if change.in_place and not authority:
                 refusal = _lock_refusal(self._scene, new, change)
                 if refusal is not None:
                     raise SceneError(refusal)
@@ -241,7 +241,7 @@ class SceneModel:
         scene = self._scene
         spec = scene.camera(name)
         try:
-            if fields.keys() <= _POSE_FIELDS:  # a drag
+            if fields.keys() <= spec.POSE_FIELDS:  # a drag
                 new_spec = spec.with_pose(**fields)
             else:
                 new_spec = spec.with_fields(**fields)
@@ -258,12 +258,12 @@ class SceneModel:
         if new_spec.name != name:
             rename = {name: new_spec.name}
             self._replace(
-                Change("camera", (name, new_spec.name)), merge_key, cameras=cameras, pair=pair,
+                Change("camera", (name, new_spec.name), in_place=True), merge_key, cameras=cameras, pair=pair,
                 locked=frozenset(rename.get(m, m) for m in scene.locked),
                 highlighted=frozenset(rename.get(m, m) for m in scene.highlighted),
             )
             return
-        self._replace(Change("camera", (name,)), merge_key, cameras=cameras, pair=pair)
+        self._replace(Change("camera", (name,), in_place=True), merge_key, cameras=cameras, pair=pair)
 
     def set_camera_pose(self, name: str, position: Any, R_world: Any, *, drag_id: object = None) -> None:
         """Place a camera from a world pose (a gizmo drag): the spec keeps its own angle convention.
@@ -337,7 +337,7 @@ class SceneModel:
         if p == points[index]:
             return
         merge = None if drag_id is None else ("point", index, drag_id)
-        self._commit(scene.with_point(index, p), Change("points", (f"point:{index}",)), merge_key=merge)
+        self._commit(scene.with_point(index, p), Change("points", (f"point:{index}",), in_place=True), merge_key=merge)
 
     def set_points(self, points: Any) -> None:
         """Replace all points at once ((N, 3) numbers, N at most ``MAX_POINTS``); point locks and highlights go."""

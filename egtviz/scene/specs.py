@@ -19,6 +19,7 @@ import numpy as np
 from ..geometry import GeometryError, Intrinsics, PinholeCamera, Pose
 from ..geometry.camera_model import CAMERA_MODELS, CameraModel, CameraModelInfo
 from ..geometry.catadioptric import HYPERBOLIC, PARABOLIC
+from ..geometry.fisheye import FisheyeCamera
 from ..geometry.poses import EGT_CAMERA_BASE, rotx, roty, rotz, ypr_from_egt_rotation
 from ..geometry.unified import UnifiedCamera
 from ._values import (
@@ -170,6 +171,9 @@ class _CameraSpecBase:
     name: str
     position: tuple[float, float, float]
     ypr_deg: tuple[float, float, float]
+
+    POSE_FIELDS: ClassVar[frozenset[str]] = frozenset({"position", "ypr_deg"})
+    """The fields that place the camera (what a gizmo moves and a lock holds); every other field is its model's."""
 
     def _check_place(self) -> str:
         name = _check_name(self.name)
@@ -534,10 +538,72 @@ class UnifiedSpec(_CameraSpecBase):
         return _egt_ypr_from_world_rotation(R_world)
 
 
-CameraSpec = PinholeSpec | PanoramicSpec | UnifiedSpec
+@dataclass(frozen=True)
+class FisheyeSpec(_CameraSpecBase):
+    """An equidistant fisheye camera (``r = f theta``), placed like a pin-hole (its frame is a pin-hole's); the
+    ``fisheye`` model."""
+
+    name: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """The lens's centre (the viewpoint) in world coordinates."""
+    ypr_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Yaw, pitch, roll in degrees, as a pin-hole's (all zero: looking along world +y)."""
+    field_of_view: float = 180.0
+    """Degrees: the full angle of the cone of rays that have an image (at most 180)."""
+    focal_pixels: float = 150.0
+    """Pixels per radian of the angle from the axis."""
+    principal_point: tuple[float, float] = (320.0, 240.0)
+    width: int = 640
+    height: int = 480
+
+    kind: ClassVar[str] = "fisheye"
+    """The entry's ``kind`` in a scene file."""
+    NAME_PREFIX: ClassVar[str] = "fish"
+    """A new camera's name: this and a number."""
+    ANGLE_CONVENTION: ClassVar[str] = (
+        "As a pin-hole (EGT's f_Rt2H): yaw, pitch, roll about the camera's own axes (z = optical axis); all zero: "
+        "looking along world +y."
+    )
+    PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
+        "field_of_view": ("field_of_view", None), "focal_pixels": ("focal_pixels", None),
+        "u0": ("principal_point", 0), "v0": ("principal_point", 1), "width": ("width", None), "height": ("height", None),
+    }
+
+    @staticmethod
+    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
+        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
+        return _egt_placement(xy, target_xy, 1.5)
+
+    def __post_init__(self) -> None:
+        name = self._check_place()
+        set_ = object.__setattr__
+        k = self.model_kind
+        for field in ("field_of_view", "focal_pixels"):
+            set_(self, field, _parameter(getattr(self, field), k, field, field, name))
+        set_(self, "principal_point", _parameter_pair(self.principal_point, k, ("u0", "v0"), "principal_point", name))
+        set_(self, "width", int(_parameter(self.width, k, "width", "width", name)))
+        set_(self, "height", int(_parameter(self.height, k, "height", "height", name)))
+        self._check_model()
+
+    @property
+    def model_kind(self) -> str:
+        return FisheyeCamera.kind
+
+    @property
+    def pose(self) -> Pose:
+        """As a pin-hole's: ``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
+        return _egt_pose(self.ypr_deg, self.position)
+
+    @staticmethod
+    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
+        return _egt_ypr_from_world_rotation(R_world)
+
+
+CameraSpec = PinholeSpec | PanoramicSpec | UnifiedSpec | FisheyeSpec
 #: The scene file's camera entries: ``kind`` -> spec class. Every spec builds a registered camera model
 #: (``spec.model_kind``); a ``panoramic`` entry is a hyperbolic or parabolic one as its ``mirror`` says.
-CAMERA_KINDS: dict[str, type] = {cls.kind: cls for cls in (PinholeSpec, PanoramicSpec, UnifiedSpec)}
+CAMERA_KINDS: dict[str, type] = {cls.kind: cls for cls in (PinholeSpec, PanoramicSpec, UnifiedSpec, FisheyeSpec)}
 
 
 def spec_for_model(model_kind: str) -> tuple[type, dict[str, Any]]:
@@ -567,6 +633,7 @@ def model_choices(spec_cls: type) -> dict[str, tuple[str, ...]]:
 _SPEC_FOR_MODEL: dict[str, tuple[type, dict[str, Any]]] = {
     PinholeCamera.kind: (PinholeSpec, {}),
     UnifiedCamera.kind: (UnifiedSpec, {}),
+    FisheyeCamera.kind: (FisheyeSpec, {}),
     **{mirror: (PanoramicSpec, {"mirror": mirror}) for mirror in _MIRROR_KINDS},
 }
 
