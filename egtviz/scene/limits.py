@@ -31,6 +31,9 @@ __all__ = [
     "MAX_JSON_INT_DIGITS",
     "MAX_MESH_FILE_BYTES",
     "MAX_NAME_LENGTH",
+    "MAX_PNG_PIXELS",
+    "MAX_PNG_SVG_BYTES",
+    "MAX_PNG_SVG_ELEMENTS",
     "MAX_POINTS",
     "MAX_SCENE_FILE_BYTES",
     "MAX_SURFACES",
@@ -179,6 +182,21 @@ MESH_OPACITY = Range(0.0, 1.0, "")
 """A mesh's opacity."""
 FRAME_AXIS_LENGTH = Range(1e-6, 1e4, "m")
 """A frame's axis length."""
+
+# -- PNG downloads of a panel (egtviz.viewer.png_worker) --------------------------------------------------
+
+MAX_PNG_SVG_BYTES = 2_000_000
+"""Largest panel SVG rendered to PNG for a tab (2 MB; a panel of 2,000 numbered points with their epipolar lines
+is about 0.8 MB). Above any of the three PNG limits the tab is told which one and why; the SVG download still
+works."""
+MAX_PNG_SVG_ELEMENTS = 10_000
+"""Most SVG elements (tags) of a panel rendered to PNG for a tab (2,000 numbered points with their epipolar lines:
+about 8,000)."""
+MAX_PNG_PIXELS = 2_500_000
+"""Most pixels (width x height) of a PNG rendered for a tab. A panel's PNG is 960 (presentation mode: 1,240) pixels
+wide and about as tall (1.6 million pixels in presentation mode); this leaves room for portrait images and refuses a
+1 x 8192 image's panel, millions of pixels tall. A render's time grows with the elements times the pixels
+(an anti-aliased line costs its bounding box): at these limits it takes seconds, in a worker process."""
 
 # -- the estimation lab (egtviz.scene.lab) ------------------------------------------------------------
 

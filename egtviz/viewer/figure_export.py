@@ -8,8 +8,11 @@ DejaVu Sans fonts that matplotlib ships, so a figure looks the same on every
 machine, fonts installed or not.
 
 How the GUI uses it: ``panel_svg_of(plane, ...)`` for its "download SVG"
-button (the panel it shows, with its view) and ``svg_to_png(svg)`` for
-"download PNG". ``egtviz figure`` calls :func:`add_arguments` and :func:`run`::
+button (the panel it shows, with its view); for "download PNG" it asks
+:func:`png_refusal` whether the figure is small enough and has
+:func:`svg_to_png` run in a worker process (:mod:`egtviz.viewer.png_worker`:
+resvg holds the GIL for the whole render). ``egtviz figure`` calls
+:func:`add_arguments` and :func:`run`, which renders in its own process::
 
     egtviz figure example3 --camera cam1 --out fig.png --present
     egtviz figure --scene my.json --camera left --out fig.svg --no-fit
@@ -18,7 +21,9 @@ button (the panel it shows, with its view) and ``svg_to_png(svg)`` for
 from __future__ import annotations
 
 import argparse
+import math
 import os
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -26,7 +31,8 @@ from typing import Any
 from .panel_view import ViewBox, fit_view
 from .svg import NORMAL, PRESENT, image_plane_svg
 
-__all__ = ["FIGURE_FORMATS", "add_arguments", "panel_svg", "panel_svg_of", "run", "svg_to_png"]
+__all__ = ["FIGURE_FORMATS", "add_arguments", "panel_svg", "panel_svg_of", "png_pixels", "png_refusal", "run",
+           "svg_to_png"]
 
 #: Output formats by file extension.
 FIGURE_FORMATS = (".svg", ".png")
@@ -100,6 +106,59 @@ def svg_to_png(svg: str, *, scale: float = 2.0) -> bytes:
         font_dirs=[_font_dir()], font_family="DejaVu Sans", sans_serif_family="DejaVu Sans",
     )
     return bytes(png)
+
+
+_ROOT_TAG = re.compile(r"<svg\b[^>]*>")
+_START_TAG = re.compile(r"<[A-Za-z]")
+
+
+def _root_length(root_tag: str, name: str) -> float | None:
+    """The root's ``width`` or ``height`` in CSS pixels (a plain number or ``px``); None if absent or unreadable."""
+    m = re.search(rf'\s{name}="([^"]*)"', root_tag)
+    if m is None:
+        return None
+    try:
+        value = float(m.group(1).strip().removesuffix("px"))
+    except ValueError:
+        return None
+    return value if math.isfinite(value) and value > 0 else None
+
+
+def png_pixels(svg: str, *, scale: float = 2.0) -> tuple[int, int] | None:
+    """The ``(width, height)`` in pixels of :func:`svg_to_png`'s PNG of ``svg``; None if the root has no size."""
+    root = _ROOT_TAG.search(svg)
+    if root is None:
+        return None
+    w, h = _root_length(root.group(0), "width"), _root_length(root.group(0), "height")
+    if w is None or h is None:
+        return None
+    return math.ceil(w * scale), math.ceil(h * scale)
+
+
+def png_refusal(svg: str, *, scale: float = 2.0) -> str | None:
+    """Why a tab's PNG of ``svg`` is not made (one sentence for the user), or None if it is within the limits.
+
+    The limits (:mod:`egtviz.scene.limits`) keep one render to seconds and its memory to tens of megabytes:
+    ``MAX_PNG_SVG_BYTES``, ``MAX_PNG_SVG_ELEMENTS`` and ``MAX_PNG_PIXELS`` (output width x height). The check
+    reads the text only (no XML parse): it costs milliseconds for a panel of 2,000 points.
+    """
+    from ..scene import limits
+
+    pixels = png_pixels(svg, scale=scale)
+    if pixels is None:
+        return "the figure has no width and height in pixels, so no PNG is made. Download the SVG instead."
+    if pixels[0] * pixels[1] > limits.MAX_PNG_PIXELS:
+        return (f"the PNG would be {pixels[0]:,} x {pixels[1]:,} pixels, and at most {limits.MAX_PNG_PIXELS:,} "
+                f"pixels are rendered (so that a render takes seconds). Download the SVG instead.")
+    size = len(svg.encode("utf-8"))
+    if size > limits.MAX_PNG_SVG_BYTES:
+        why = (f"the figure is {size / 1e6:.1f} MB of SVG, and a PNG is made from at most "
+               f"{limits.MAX_PNG_SVG_BYTES / 1e6:g} MB")
+    elif (n := len(_START_TAG.findall(svg))) > limits.MAX_PNG_SVG_ELEMENTS:
+        why = f"the figure has {n:,} SVG elements, and a PNG is made from at most {limits.MAX_PNG_SVG_ELEMENTS:,}"
+    else:
+        return None
+    return f"{why} (so that a render takes seconds). Download the SVG instead, or draw fewer points."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
