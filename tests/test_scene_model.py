@@ -161,7 +161,7 @@ def test_save_and_load_round_trip(tmp_path):
     "mutate, match",
     [
         (lambda d: d["cameras"][1].update(focal_length=-1), r"cameras\[1\].*focal_length"),
-        (lambda d: d["cameras"][0].update(kind="fisheye"), r"cameras\[0\]\.kind"),
+        (lambda d: d["cameras"][0].update(kind="orthographic"), r"cameras\[0\]\.kind"),
         (lambda d: d["cameras"][0].update(zoom=2), r"cameras\[0\]\.zoom: unknown field"),
         (lambda d: d["points"].append([1, "x", 2]), r"points\[8\]"),
         (lambda d: d.update(version=99), "version"),

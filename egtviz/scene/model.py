@@ -22,6 +22,7 @@ import numpy as np
 
 from ..geometry import GeometryError, PinholeCamera
 from ..geometry.camera_model import CAMERA_MODELS
+from .constraints import CameraRanges
 from .derived import Derived, compute_derived
 from .limits import COORDINATE, MAX_POINTS, Range
 from .scene import Scene, SceneFileError
@@ -38,6 +39,12 @@ from ._values import as_ranged as _ranged, as_triple as _triple, short_text as _
 from .surfaces import check_surface
 
 UNDO_DEPTH = 100
+def _push_undo(undo: list[Scene], scene: Scene) -> None:
+    """Remember ``scene`` for undo, keeping the last ``UNDO_DEPTH``."""
+    undo.append(scene)
+    del undo[:-UNDO_DEPTH]
+
+
 _POINT_COUNT = Range(0, MAX_POINTS, "", integer=True)
 _EXTENT = Range(0.0, COORDINATE.high, "m")
 
@@ -108,6 +115,7 @@ class SceneModel:
         self._merge_key: object = None
         self._barrier: tuple[Scene, str] | None = None
         self._authority: tuple[int, int] | None = None  # (thread, depth) inside :meth:`lesson_step`
+        self._ranges: CameraRanges | None = None
 
     # -- reading ---------------------------------------------------------------
 
@@ -138,8 +146,7 @@ class SceneModel:
     def _commit(self, new: Scene, change: Change, *, undoable: bool = True, merge_key: object = None) -> None:
         with self._lock:
             # Every edit of a camera or a point passes here, whatever sent it (a field, a gizmo, a raw message).
-            authority = self._authority is not None and self._authority[0] == threading.get_ident()
-            if change.in_place and not authority:
+            if change.in_place and not self._has_authority():
                 refusal = _lock_refusal(self._scene, new, change)
                 if refusal is not None:
                     raise SceneError(refusal)
@@ -150,7 +157,7 @@ class SceneModel:
             derived = compute_derived(new)  # SceneError: not drawable, nothing committed
             # Consecutive changes with the same merge key (one gizmo drag) make one undo step.
             if undoable and (merge_key is None or merge_key != self._merge_key):
-                self._push_undo(self._scene)
+                _push_undo(self._undo, self._scene)
             self._merge_key = merge_key if undoable else None
             self._scene = new
             self._derived = derived
@@ -158,16 +165,23 @@ class SceneModel:
         for listener in listeners:
             listener(new, change)
 
+    def _has_authority(self) -> bool:
+        """The calling thread applies a lesson step (:meth:`lesson_step`): locks and ranges do not hold."""
+        return self._authority is not None and self._authority[0] == threading.get_ident()
+
+    def set_constraints(self, ranges: CameraRanges | None) -> None:
+        """Ranges of camera fields that every later edit in place must respect (None: none), whatever sent it; a
+        lesson step's own changes are not judged (:mod:`egtviz.scene.constraints`)."""
+        if ranges is not None and not isinstance(ranges, CameraRanges):
+            raise SceneError(f"ranges: expected CameraRanges or None, got {_short(ranges)}")
+        self._ranges = ranges
+
     def _replace(self, change: Change, merge_key: object = None, **fields: Any) -> None:
         try:
             new = self._scene.replace(**fields)
         except (GeometryError, TypeError) as exc:
             raise SceneError(str(exc)) from exc
         self._commit(new, change, merge_key=merge_key)
-
-    def _push_undo(self, scene: Scene) -> None:
-        self._undo.append(scene)
-        del self._undo[:-UNDO_DEPTH]
 
     @contextmanager
     def batch(self, kind: str = "batch", *, barrier: str | None = None) -> Iterator[None]:
@@ -198,7 +212,7 @@ class SceneModel:
                     self._scene = start  # type: ignore[assignment]
                     raise
                 self._derived = derived
-                self._push_undo(start)  # type: ignore[arg-type]
+                _push_undo(self._undo, start)  # type: ignore[arg-type]
                 self._merge_key = None
             if barrier is not None:
                 self.set_undo_barrier(barrier)
@@ -245,10 +259,11 @@ class SceneModel:
                 new_spec = spec.with_pose(**fields)
             else:
                 new_spec = spec.with_fields(**fields)
-        except TypeError as exc:
+        except (TypeError, GeometryError) as exc:
             raise SceneError(f"camera {name!r}: {exc}") from exc
-        except GeometryError as exc:
-            raise SceneError(f"camera {name!r}: {exc}") from exc
+        ranges = self._ranges
+        if ranges is not None and not self._has_authority():
+            new_spec = ranges.judge(spec, new_spec, drag=fields.keys() <= spec.POSE_FIELDS)
         if new_spec == spec:
             return
         cameras = tuple(new_spec if c.name == name else c for c in scene.cameras)
@@ -341,12 +356,9 @@ class SceneModel:
 
     def set_points(self, points: Any) -> None:
         """Replace all points at once ((N, 3) numbers, N at most ``MAX_POINTS``); point locks and highlights go."""
-        if not isinstance(points, np.ndarray):
-            if not isinstance(points, (list, tuple)):
-                raise SceneError(f"points: expected (N, 3) numbers, got {_short(points)}")
-            if len(points) > MAX_POINTS:
-                raise SceneError(f"points: at most {MAX_POINTS}, got {len(points)}")
-        elif len(points) > MAX_POINTS:
+        if not isinstance(points, (np.ndarray, list, tuple)):
+            raise SceneError(f"points: expected (N, 3) numbers, got {_short(points)}")
+        if len(points) > MAX_POINTS:
             raise SceneError(f"points: at most {MAX_POINTS}, got {len(points)}")
         scene = self._scene
         self._replace(

@@ -49,6 +49,7 @@ from ..lessons.progress import LearnerNameError, learner_key
 from ..lessons.runner import ResolvedTask
 from ..lessons.tasks import RESET_ADVICE
 from ..scene import SceneError
+from ..scene.constraints import CameraRanges
 from .camera_fields import field_of_spec
 from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
 from .progress_notice import progress_notice_html, show_name_in_use
@@ -205,13 +206,14 @@ def typed_learner_key(name: Any) -> str:
 
 
 def _feedback_markdown(passed: bool, feedback: str, hint: str | None) -> str:
-    """One attempt as shown: the verdict, the check's feedback (plain text), the hint (Markdown) after a failure."""
+    """One attempt as shown: the verdict, the check's feedback (plain text), the hints shown so far (Markdown, each
+    labelled by the runner) after a failure."""
     text = escape(feedback, quote=False).replace("*", "\\*").replace("_", "\\_")
     if passed:
         return f"**\u2713 Passed.** {text}"
     out = f"**\u2717 Not yet.** {text}"
     if hint:
-        out += f"\n\n**Hint:** {hint}"
+        out += f"\n\n{hint}"
     return out
 
 
@@ -286,6 +288,8 @@ class LessonPanel:
         self._on_learner = on_learner
         self._typing = Debouncer(field_delay)
         self.rows: list[TaskRow] = []
+        #: The lesson's summary under the last step's tasks (None on the other steps).
+        self.summary: Any = None
         #: The last attempt per task id in this step (tests read it; the page shows it).
         self.attempts: dict[str, Any] = {}
         self.lab: Any = None
@@ -327,6 +331,9 @@ class LessonPanel:
                 view.panel_filter = self.lens.panel_filter
             view.field_guard = lambda camera, fields: field_range_refusal(self.run, camera, fields)
             view.pose_guard = lambda camera, position, R: pose_within_ranges(self.run, camera, position, R)
+            # The model holds the ranges too, for every route into it (a raw client message, a script).
+            view.model.set_constraints(CameraRanges(lambda: self.run.ranges,
+                                                    lambda camera, fields: field_range_refusal(self.run, camera, fields)))
             self._show_step()
             view.redraw()
         self._on(self.nav.buttons.on_click, lambda e: self._navigate(e.target.value))
@@ -408,6 +415,8 @@ class LessonPanel:
                 row = TaskRow(gui, k, resolved, passed_before=(i, resolved.task.id) in passed)
                 self._on(row.button.on_click, lambda _, r=row: self._check(r))
                 self.rows.append(row)
+            # The lesson's end: what the learner did in it and what comes next, kept current by each check.
+            self.summary = gui.add_markdown(run.summary().markdown()) if run.on_last_step else None
         limits = []
         for c, f in sorted(run.ranges):
             label, rule, _ = _range_terms(run, c, f)
@@ -467,6 +476,8 @@ class LessonPanel:
         attempt = self.run.check(row.task_id, answer)
         self.attempts[row.task_id] = attempt
         row.feedback.content = _feedback_markdown(attempt.result.passed, attempt.result.feedback, attempt.hint)
+        if self.summary is not None:
+            self.summary.content = self.run.summary().markdown()
 
     def row(self, task_id: str) -> TaskRow:
         """The task row of ``task_id`` in the current step."""
