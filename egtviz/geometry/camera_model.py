@@ -12,8 +12,8 @@ sphere models). Everything the rest of egtviz needs from a camera goes through :
   the line towards another camera's centre these are the epipoles;
 - ``plane_image_conics(normals)`` / ``plane_image_lines(normals)``: the exact image of each plane
   :math:`n \cdot (X - c) = 0` through the centre, a symmetric conic :math:`m^T C m = 0` (the double line
-  :math:`l l^T` for the pin-hole) and a line :math:`l \cdot m = 0` (None when the model does not image planes to
-  lines);
+  :math:`l l^T` for the pin-hole; None when the model does not image planes to conics) and a line
+  :math:`l \cdot m = 0` (None when the model does not image planes to lines);
 - ``light_paths(X_world)``: the light's way from each point to the sensor, as world polylines (3D drawing);
 - ``projective_calibration``: :math:`K` when the model images linearly (a pin-hole), else None;
 - ``no_image``: where the points without an image are, in a few words;
@@ -33,7 +33,7 @@ normals finite or all NaN), with the same arithmetic; anything else gives an und
 ranges), one registration line per model. How to add a model: ``docs/camera_models.md``.
 
 The models are :class:`~egtviz.geometry.pinhole.PinholeCamera`, :class:`~egtviz.geometry.catadioptric.CatadioptricCamera`
-(two kinds, ``hyperbolic`` and ``parabolic``, one per mirror shape) and :class:`~egtviz.geometry.unified.UnifiedCamera`.
+(two kinds, ``hyperbolic`` and ``parabolic``, one per mirror shape) and :class:`~egtviz.geometry.unified.UnifiedCamera` and :class:`~egtviz.geometry.fisheye.FisheyeCamera`.
 """
 
 from __future__ import annotations
@@ -229,9 +229,9 @@ class CameraModel(Protocol):
         """Images of the line through the centre along ``direction_world`` (3,)."""
         ...
 
-    def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
+    def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:
         """Exact image conics (N, 3, 3) of planes through the centre, unit Frobenius norm; NaN rows for zero or
-        NaN normals."""
+        NaN normals; None if the model does not image planes to conics (the fisheye: its arcs are sampled)."""
         ...
 
     def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:
