@@ -204,7 +204,8 @@ def fill_to_the_brim(path: Path) -> None:
         for i in range(10_000):
             pages = conn.execute("PRAGMA page_count").fetchone()[0]
             conn.execute("SAVEPOINT fill")
-            conn.execute("INSERT INTO task_state VALUES ('~', 'x', 0, ?, 1, 0, 0.0)", (str(i),))
+            conn.execute("INSERT INTO task_state (learner, lesson, step, task, attempts, passed, updated) "
+                         "VALUES ('~', 'x', 0, ?, 1, 0, 0.0)", (str(i),))
             grew = conn.execute("PRAGMA page_count").fetchone()[0] > pages
             conn.execute("ROLLBACK TO fill" if grew else "RELEASE fill")
             if grew:

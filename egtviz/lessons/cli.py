@@ -48,9 +48,14 @@ def run_lessons(args: argparse.Namespace) -> int:
 
 
 def add_progress_arguments(parser: argparse.ArgumentParser) -> None:
-    """``egtviz progress [--database PATH]``."""
-    parser.description = "Print a table of the learners, the lessons they started, their step and tasks done."
+    """``egtviz progress [--database PATH] [--csv] [--out FILE.csv]``."""
+    parser.description = ("Print a table of the learners, the lessons they started, their step and tasks done; "
+                          "with --csv, one row per learner, lesson, step and task (passed, attempts, hints used, "
+                          "last attempt).")
     parser.add_argument("--database", default=None, help="the progress database (default: in the user's data folder)")
+    parser.add_argument("--csv", action="store_true", help="CSV, one row per task checked, to standard output")
+    parser.add_argument("--out", default=None, metavar="FILE.csv",
+                        help="write the CSV to this file instead (implies --csv; an existing file is replaced)")
 
 
 def run_progress(args: argparse.Namespace) -> int:
@@ -60,12 +65,16 @@ def run_progress(args: argparse.Namespace) -> int:
     path that does not exist has no progress yet; anything that is not a progress database is refused.
     """
     from .progress import ProgressStore, default_database_path
+    from .records import records_csv
 
     path = args.database if args.database is not None else default_database_path()
     store = ProgressStore(path, read_only=True)
     if store.fault is not None:
         print(f"egtviz: progress: {store.fault}", file=sys.stderr)
         return 2
+    out = getattr(args, "out", None)  # a Namespace built by hand may have neither
+    if getattr(args, "csv", False) or out is not None:
+        return _write_csv(records_csv(store.task_records()), out)
     rows = store.summary()
     if not rows:
         print("no progress recorded yet")
@@ -76,6 +85,21 @@ def run_progress(args: argparse.Namespace) -> int:
     widths = [max(len(row[i]) for row in table) for i in range(len(header))]
     for row in table:
         print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
+    return 0
+
+
+def _write_csv(text: str, out: str | None) -> int:
+    """CSV ``text`` to standard output or to ``out`` (written atomically); 2 if ``out`` is refused."""
+    from ..files import write_atomic
+    if out is None:
+        sys.stdout.write(text)
+        return 0
+    try:
+        write_atomic(out, text.encode("utf-8"))
+    except FileSafetyError as exc:
+        print(f"egtviz: progress: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {printable(out)}")
     return 0
 
 

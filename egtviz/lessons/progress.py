@@ -1,8 +1,9 @@
-"""Learners' progress in SQLite: the current step of each lesson, the tasks passed and the attempts.
+"""Learners' progress in SQLite: the current step of each lesson, the tasks passed, the attempts and the hints.
 
 One database file in the user's data folder (:func:`default_database_path`), keyed by the name the learner
 types (:func:`learner_key`), so a reload, a new tab or a restarted server resumes where they were. The
-schema is versioned with ``PRAGMA user_version`` and upgraded by :func:`migrate`. Every call opens its own
+schema is versioned with ``PRAGMA user_version`` and upgraded by :func:`migrate` (version 2 added the hints a
+learner was shown per task; a version-1 file keeps all it held, its tasks at 0 hints). Every call opens its own
 connection (``sqlite3`` connections are not shared between threads) and writes in one transaction, so
 several threads, or several server processes, may use one file.
 
@@ -31,11 +32,11 @@ from typing import TypeVar
 from urllib.parse import quote
 
 __all__ = [
-    "SCHEMA_VERSION", "LearnerNameError", "LessonProgress", "ProgressRow", "ProgressStore", "default_database_path",
-    "learner_key",
+    "SCHEMA_VERSION", "LearnerNameError", "LessonProgress", "ProgressRow", "ProgressStore", "TaskRecord",
+    "default_database_path", "learner_key",
 ]
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 MAX_LEARNER_NAME = 40
 """Characters of a learner's name (after trimming)."""
 _TIMEOUT_S = 10.0
@@ -63,6 +64,7 @@ _MIGRATIONS = {
                updated REAL NOT NULL,
                PRIMARY KEY (learner, lesson, step, task))""",
     ),
+    2: ("ALTER TABLE task_state ADD COLUMN hints INTEGER NOT NULL DEFAULT 0",),
 }
 """Statements that take the schema from version ``n - 1`` to ``n``. The primary keys lead with the learner:
 every per-learner read (the start page's, the runner's) is an index search, not a scan of the table."""
@@ -145,6 +147,23 @@ class ProgressRow:
     """Current step (0-based)."""
     tasks_passed: int
     attempts: int
+
+
+@dataclass(frozen=True)
+class TaskRecord:
+    """What one learner did at one task (a line of ``egtviz progress --csv``)."""
+
+    learner: str
+    lesson: str
+    step: int
+    """The task's step (0-based)."""
+    task: str
+    passed: bool
+    attempts: int
+    hints: int
+    """How many of the task's hints were shown (one more after each failed attempt, up to the task's tiers)."""
+    updated: float
+    """When the last attempt was checked (seconds since the epoch)."""
 
 
 @dataclass(frozen=True)
@@ -297,10 +316,13 @@ class ProgressStore:
             return
         seed = _read_only(self.path)
         if self.read_only:
-            empty = seed.execute("PRAGMA user_version").fetchone()[0] == 0
-            seed.close()
-            if empty:  # an empty file, or an empty SQLite database: a report does not make it one
+            version = seed.execute("PRAGMA user_version").fetchone()[0]
+            if version == 0:  # an empty file, or an empty SQLite database: a report does not make it one
+                seed.close()
                 raise _Unusable(f"{_shown(self.path)} is not a progress database (it holds no progress tables)")
+            if version < SCHEMA_VERSION:  # an older schema is read through a copy upgraded in memory, not in place
+                self._memory = self._upgraded_copy(seed)
+            seed.close()
             return
         try:
             version = seed.execute("PRAGMA user_version").fetchone()[0]
@@ -349,6 +371,14 @@ class ProgressStore:
             yield conn
         finally:
             conn.close()
+
+    @staticmethod
+    def _upgraded_copy(seed: sqlite3.Connection) -> sqlite3.Connection:
+        """What ``seed`` holds, copied into memory and brought to the current schema."""
+        memory = sqlite3.connect(":memory:", check_same_thread=False)
+        seed.backup(memory)
+        migrate(memory)
+        return memory
 
     @staticmethod
     def _empty_memory() -> sqlite3.Connection:
@@ -430,20 +460,29 @@ class ProgressStore:
 
         self._run(work, write=True)
 
-    def record_attempt(self, learner: str, lesson: str, step: int, task: str, passed: bool) -> None:
-        """Count one attempt at a task; once passed, a task stays passed."""
+    def record_attempt(self, learner: str, lesson: str, step: int, task: str, passed: bool, *,
+                       hint_tiers: int = 0) -> int:
+        """Count one attempt at a task; once passed, a task stays passed. A failed attempt shows one more of the
+        task's ``hint_tiers`` hints (none past the last); returns how many of them the learner has now been shown.
+        """
         key = learner_key(learner)
+        tiers = max(int(hint_tiers), 0)
+        more = 0 if passed else 1
 
-        def work(conn: sqlite3.Connection) -> None:
+        def work(conn: sqlite3.Connection) -> int:
             self._learner(conn, key)
             conn.execute(
-                "INSERT INTO task_state (learner, lesson, step, task, attempts, passed, updated) "
-                "VALUES (?, ?, ?, ?, 1, ?, ?) ON CONFLICT (learner, lesson, step, task) DO UPDATE SET "
-                "attempts = attempts + 1, passed = max(passed, excluded.passed), updated = excluded.updated",
-                (key, lesson, int(step), task, int(bool(passed)), time.time()),
+                "INSERT INTO task_state (learner, lesson, step, task, attempts, passed, updated, hints) "
+                "VALUES (?, ?, ?, ?, 1, ?, ?, min(?, ?)) ON CONFLICT (learner, lesson, step, task) DO UPDATE SET "
+                "attempts = attempts + 1, passed = max(passed, excluded.passed), updated = excluded.updated, "
+                "hints = max(hints, min(hints + ?, ?))",
+                (key, lesson, int(step), task, int(bool(passed)), time.time(), more, tiers, more, tiers),
             )
+            row = conn.execute("SELECT hints FROM task_state WHERE learner = ? AND lesson = ? AND step = ? "
+                               "AND task = ?", (key, lesson, int(step), task)).fetchone()
+            return int(row[0])
 
-        self._run(work, write=True)
+        return self._run(work, write=True)
 
     def current_step(self, learner: str, lesson: str) -> int:
         """The step ``learner`` was last at in ``lesson`` (0 if never started)."""
@@ -464,6 +503,28 @@ class ProgressStore:
             "SELECT attempts FROM task_state WHERE learner = ? AND lesson = ? AND step = ? AND task = ?",
             (learner_key(learner), lesson, int(step), task)).fetchone(), write=False)
         return int(row[0]) if row else 0
+
+    def hints_shown(self, learner: str, lesson: str, step: int, task: str) -> int:
+        """How many of that task's hints ``learner`` has been shown (0 if never)."""
+        row = self._run(lambda conn: conn.execute(
+            "SELECT hints FROM task_state WHERE learner = ? AND lesson = ? AND step = ? AND task = ?",
+            (learner_key(learner), lesson, int(step), task)).fetchone(), write=False)
+        return int(row[0]) if row else 0
+
+    def task_records(self, learner: str | None = None, lesson: str | None = None) -> list[TaskRecord]:
+        """Every task a learner checked (``learner``: only theirs; ``lesson``: only that lesson's), sorted by
+        learner, lesson, step and task."""
+        where, args = [], []
+        if learner is not None:
+            where.append("learner = ?")
+            args.append(learner_key(learner))
+        if lesson is not None:
+            where.append("lesson = ?")
+            args.append(lesson)
+        sql = ("SELECT learner, lesson, step, task, passed, attempts, hints, updated FROM task_state"
+               + (" WHERE " + " AND ".join(where) if where else "") + " ORDER BY learner, lesson, step, task")
+        rows = self._run(lambda conn: conn.execute(sql, args).fetchall(), write=False)
+        return [TaskRecord(a, b, int(c), d, bool(e), int(f), int(g), float(h)) for a, b, c, d, e, f, g, h in rows]
 
     def lessons_of(self, learner: str) -> dict[str, LessonProgress]:
         """Every lesson ``learner`` started (moved in it or checked a task), in one indexed query."""

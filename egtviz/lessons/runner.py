@@ -8,12 +8,16 @@ by replaying the lesson's changes from its first step, so a step always starts t
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass
 
 from ..scene import SceneError, SceneModel
 from ..scene.lab import LabSettings
 from ..scene.lens import LensToggles
-from .changes import Change, OpenDemo, SetLab, SetLens, SetRange
+from ..files import FileSafetyError, read_limited
+from ..scene.limits import MAX_LESSON_FILE_BYTES
+from .catalog import lessons_folder
+from .changes import Change, OpenDemo, RandomiseCamera, SetLab, SetLens, SetRange
 from .changes import apply as apply_change
 from .format import Lesson, Step
 from .markup import render_markdown
@@ -21,7 +25,7 @@ from .progress import ProgressStore, learner_key
 from .locks import lock_breach
 from .tasks import RESET_ADVICE, Task, TaskContext, TaskResult, task_seed
 
-__all__ = ["Attempt", "LessonRun", "ResolvedTask", "UNDO_NOTE"]
+__all__ = ["Attempt", "LessonRun", "LessonSummary", "ResolvedTask", "UNDO_NOTE", "next_lesson_title"]
 
 #: What Undo says at the start of a step: a step's own changes (its locks, the values it sets) are the lesson's.
 UNDO_NOTE = ("Undo stops at the start of this step: the step's own changes cannot be undone "
@@ -47,8 +51,29 @@ class Attempt:
     task_id: str
     result: TaskResult
     hint: str | None
-    """The task's hint, rendered like the prompt, after a failed attempt; None after a passed one or when the
-    task has no hint."""
+    """The hints shown so far, rendered like the prompt, each after its label (``**Hint:** *(1 of 3)* ...``),
+    after a failed attempt; None after a passed one or when the task has no hint."""
+    hints_shown: int = 0
+    """How many of the task's hint tiers the learner has been shown (one more per failed attempt)."""
+
+
+@dataclass(frozen=True)
+class LessonSummary:
+    """The end of a lesson: what the learner did in it, and what comes next."""
+
+    tasks: int
+    passed: int
+    attempts: int
+    hints: int
+    next_title: str | None
+    """The next lesson's title (None: this was the last lesson)."""
+
+    def markdown(self) -> str:
+        """The summary as the lesson panel shows it (Markdown; the title's own Markdown is escaped)."""
+        nxt = ("this was the last lesson." if self.next_title is None
+               else f"next lesson: *{_escape_markdown(self.next_title)}*.")
+        return (f"**End of the lesson.** Tasks passed: {self.passed} of {self.tasks}; attempts: {self.attempts}; "
+                f"hints used: {self.hints}; {nxt}")
 
 
 class LessonRun:
@@ -74,6 +99,9 @@ class LessonRun:
         """``(camera, field)``: the range the GUI offers, from the ``set_range`` changes so far."""
         self.demo: OpenDemo | None = None
         """The servo demo and run fields the step offers (the last ``open_demo`` so far); its tasks measure it."""
+        self._own: dict[tuple[int, str], tuple[int, bool, int]] = {}
+        """``(step, task)``: attempts, passed, hints shown, of an anonymous learner (nothing goes to the store)."""
+        self._next_title: tuple[str | None] | None = None
         self.step_index = 0
         start = self.progress.current_step(self.learner, lesson.name) if self.progress else 0
         self.go_to(min(max(start, 0), len(lesson.steps) - 1))
@@ -83,8 +111,12 @@ class LessonRun:
         """The current step."""
         return self.lesson.steps[self.step_index]
 
-    def apply(self, change: Change) -> None:
-        """Apply one change: to the scene, or to the lab, lens and ranges the runner holds."""
+    def apply(self, change: Change, step: int | None = None) -> None:
+        """Apply one change (of step ``step``, default the current one): to the scene, or to the lab, lens and
+        ranges the runner holds. A ``randomise_camera`` draws for this learner, lesson and step."""
+        if isinstance(change, RandomiseCamera):
+            at = self.step_index if step is None else step
+            change = change.seeded(task_seed(self.learner, self.lesson.name, at, f"randomise:{change.camera}"))
         record = apply_change(self.model, change)
         if isinstance(record, SetLab):
             self.lab = record.applied_to(self.lab)
@@ -98,7 +130,7 @@ class LessonRun:
     def _enter(self, index: int) -> None:
         with self.model.lesson_step(UNDO_NOTE):
             for change in self.lesson.steps[index].changes:
-                self.apply(change)
+                self.apply(change, index)
         self.step_index = index
         self.step_start = self.model.scene
         """The scene as the step started (its locks are verified by every scene task's check)."""
@@ -114,7 +146,7 @@ class LessonRun:
             self.model.load_scene(self.lesson.scene)
             for i in range(index):
                 for change in self.lesson.steps[i].changes:
-                    self.apply(change)
+                    self.apply(change, i)
         self._enter(index)
 
     def next(self) -> bool:
@@ -164,7 +196,61 @@ class LessonRun:
         breach = None if resolved.task.question else lock_breach(self.step_start, self.model.scene)
         result = (TaskResult(False, f"{breach}: {RESET_ADVICE}") if breach is not None
                   else resolved.task.check(ctx, resolved.params))
+        tiers = resolved.task.hint
         if self.progress is not None:
-            self.progress.record_attempt(self.learner, self.lesson.name, self.step_index, task_id, result.passed)
-        hint = render_markdown(resolved.task.hint) if resolved.task.hint and not result.passed else None
-        return Attempt(task_id, result, hint)
+            shown = self.progress.record_attempt(self.learner, self.lesson.name, self.step_index, task_id,
+                                                 result.passed, hint_tiers=len(tiers))
+        else:
+            attempts, passed, shown = self._own.get((self.step_index, task_id), (0, False, 0))
+            shown = max(shown, min(shown + (not result.passed), len(tiers)))
+            self._own[(self.step_index, task_id)] = (attempts + 1, passed or result.passed, shown)
+        if result.passed or not shown:
+            return Attempt(task_id, result, None, shown)
+        labels = [f"**Hint:** *({k} of {len(tiers)})* " if len(tiers) > 1 else "**Hint:** "
+                  for k in range(1, shown + 1)]
+        hint = "\n\n".join(label + render_markdown(tier) for label, tier in zip(labels, tiers, strict=False))
+        return Attempt(task_id, result, hint, shown)
+
+    @property
+    def on_last_step(self) -> bool:
+        """Whether the learner is at the lesson's last step (where its summary is shown)."""
+        return self.step_index == len(self.lesson.steps) - 1
+
+    def summary(self) -> LessonSummary:
+        """What this learner did in the lesson: tasks passed (of all), attempts and hints used, the next lesson."""
+        if self.progress is not None:
+            records = {(r.step, r.task): (r.attempts, r.passed, r.hints)
+                       for r in self.progress.task_records(self.learner, self.lesson.name)}
+        else:
+            records = dict(self._own)
+        tasks = {(i, t.id) for i, step in enumerate(self.lesson.steps) for t in step.tasks}
+        mine = [v for k, v in records.items() if k in tasks]
+        if self._next_title is None:
+            self._next_title = (next_lesson_title(self.lesson.name),)
+        return LessonSummary(len(tasks), sum(1 for _, ok, _ in mine if ok), sum(a for a, _, _ in mine),
+                             sum(h for _, _, h in mine), self._next_title[0])
+
+
+def next_lesson_title(name: str) -> str | None:
+    """The title of the shipped lesson after ``name`` (file names sort in course order); None after the last one
+    or for a lesson that is not shipped. Only the next file's ``title`` is read, not the whole lesson."""
+    folder = lessons_folder()
+    names = sorted(f.stem for f in folder.iterdir() if f.suffix.lower() == ".toml" and f.is_file()) \
+        if folder.is_dir() else []
+    if name not in names or names.index(name) + 1 >= len(names):
+        return None
+    try:
+        doc = tomllib.loads(read_limited(folder / f"{names[names.index(name) + 1]}.toml",
+                                         MAX_LESSON_FILE_BYTES).decode("utf-8"))
+    except (FileSafetyError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+    title = doc.get("title")
+    return title if isinstance(title, str) and title.strip() else None
+
+
+def _escape_markdown(text: str) -> str:
+    """Text shown as itself inside Markdown: its HTML and Markdown marks escaped."""
+    out = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    for mark in "\\`*_[]#|$":
+        out = out.replace(mark, "\\" + mark)
+    return out

@@ -106,6 +106,9 @@ class StartPage:
             self.btn_workbench = gui.add_button(
                 "Open the workbench", color="teal", icon=viser.Icon.ARROW_RIGHT,
                 hint="Cameras, points and image planes without a lesson; this page is one click away from it.")
+            self.btn_record = gui.add_button(
+                "Download my record", icon=viser.Icon.DOWNLOAD,
+                hint="A CSV file of your tasks: passed, attempts, hints used, last attempt.")
             self.buttons: dict[str, Any] = {}
             self.status: dict[str, Any] = {}
             with gui.add_folder("Lessons", expand_by_default=True):
@@ -116,6 +119,7 @@ class StartPage:
         for name, button in self.buttons.items():
             self._on(button.on_click, lambda _, n=name: self.course.open_lesson(self.client, n, self.learner))
         self._on(self.btn_workbench.on_click, lambda _: self.course.open_workbench(self.client))
+        self._on(self.btn_record.on_click, lambda _: self.download_record())
         self._on(self.name.on_update, lambda e: self._name_typed(e.target.value))
 
     def _window(self) -> Any:
@@ -178,6 +182,15 @@ class StartPage:
             self.learner = key
             self.course.remember(self.client.client_id, key)
             self._show_status()
+
+    def download_record(self) -> None:
+        """Send this learner's record to the browser as a CSV download (the server writes no file)."""
+        if not self.learner:
+            raise FieldError("download my record: type your name first (your record is kept under it)")
+        from ..lessons.records import records_csv
+
+        text = records_csv(self.course.progress.task_records(self.learner))
+        self.client.send_file_download("egtviz-record.csv", text.encode("utf-8"), save_immediately=True)
 
     def _show_status(self) -> None:
         """Each lesson's summary and how far this learner got in it; whether progress is kept."""

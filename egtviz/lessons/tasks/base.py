@@ -130,7 +130,9 @@ class Task:
 
     id: str
     prompt: str
-    hint: str = ""
+    hint: tuple[str, ...] = ()
+    """The hints in tiers (at most three): the idea, a concrete pointer, the answer; tier k is
+    shown after the k-th failed attempt."""
     solution: tuple[Change, ...] = ()
     """Changes that solve the task from the step's starting scene (for the tests and the docs)."""
 

@@ -19,14 +19,18 @@ from .estimation import InliersRecallTask, SampsonBelowTask, TriangulationErrorT
 from .lens import PointOnLineTask
 from .questions import ChoiceTask, NumberTask
 from .servo import ServoNumberTask
+from .computed import ComputedTask
 
-__all__ = ["TASK_KINDS", "parse_task"]
+__all__ = ["MAX_HINT_TIERS", "TASK_KINDS", "parse_task"]
+
+MAX_HINT_TIERS = 3
+"""Tiers of a task's hint: the idea, a concrete pointer, the answer."""
 
 TASK_KINDS: dict[str, type[Task]] = {
     cls.kind: cls
     for cls in (NumberTask, ChoiceTask, EpipoleNearTask, SameOrientationTask, LinesParallelTask, PointOnLineTask,
                 SampsonBelowTask, InliersRecallTask, PointInImageTask, CameraFieldTask, XiBetweenTask,
-                TriangulationErrorTask, ServoNumberTask)
+                TriangulationErrorTask, ServoNumberTask, ComputedTask)
 }
 """Every task kind by its ``kind`` name (in the order the docs list them, which messages repeat)."""
 
@@ -52,6 +56,26 @@ def _check_prompt(prompt: str, names: set[str]) -> None:
                                        f"{{{name}:.1f}} is allowed")
 
 
+def _hint_tiers(table: dict) -> tuple[str, ...]:
+    """``hint``: one text (one tier) or a list of up to :data:`MAX_HINT_TIERS` texts, the idea first."""
+    value = table.get("hint", "")
+    if isinstance(value, str):
+        tiers = [fields.text(table, "hint", limit=fields.MAX_TEXT, multiline=True)] if value else []
+    elif isinstance(value, list) and 1 <= len(value) <= MAX_HINT_TIERS:
+        tiers = []
+        for k, item in enumerate(value, start=1):
+            try:
+                tiers.append(fields.text({"hint": item}, "hint", limit=fields.MAX_TEXT, multiline=True))
+            except EntryError as exc:
+                raise EntryError("hint", f"tier {k}: {exc.reason}") from None
+            if not item.strip():
+                raise EntryError("hint", f"tier {k}: expected text (it is empty)")
+    else:
+        raise EntryError("hint", f"expected a text or a list of 1 to {MAX_HINT_TIERS} texts (the idea, a "
+                                 f"pointer, the answer), got {fields.short(value)}")
+    return tuple(tiers)
+
+
 def _common_fields(table: dict, default_id: str) -> dict[str, Any]:
     """``id``, ``prompt``, ``hint`` and ``solution``, which every kind has."""
     task_id = fields.text(table, "id", required=False, default=default_id)
@@ -62,7 +86,7 @@ def _common_fields(table: dict, default_id: str) -> dict[str, Any]:
     common: dict[str, Any] = {
         "id": task_id,
         "prompt": fields.text(table, "prompt", limit=fields.MAX_TEXT, multiline=True),
-        "hint": fields.text(table, "hint", required=False, limit=fields.MAX_TEXT, multiline=True),
+        "hint": _hint_tiers(table),
     }
     solution = table.get("solution", [])
     if not isinstance(solution, list):
@@ -90,9 +114,9 @@ def parse_task(table: Any, default_id: str) -> Task:
     fields.refuse_unknown(table, _COMMON + cls.table_keys, f"a {kind!r} task")
     task = cls.from_table(table, _common_fields(table, default_id))
     _check_prompt(task.prompt, set(task.params()))
-    for key in ("prompt", "hint"):
+    for key, text in (("prompt", task.prompt), *(("hint", tier) for tier in task.hint)):
         try:
-            render_markdown(getattr(task, key))
+            render_markdown(text)
         except MarkupError as exc:
             raise EntryError(key, str(exc)) from None
     return task
