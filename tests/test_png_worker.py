@@ -85,6 +85,12 @@ def tiny_svg(label: str, width: int = 10) -> str:
     return f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="10"><desc>{label}</desc></svg>'
 
 
+def heavy_svg() -> str:
+    """4,000 long lines on a 1000 x 400 figure: seconds of rendering at scale 2, inside the limits."""
+    lines = "".join(f'<line x1="0" y1="{k % 400}" x2="1000" y2="{(7 * k) % 400}" stroke="#000"/>' for k in range(4000))
+    return f'<svg xmlns="http://www.w3.org/2000/svg" width="1000" height="400">{lines}</svg>'
+
+
 # -- the queue: latest wins per tab, tabs take turns -------------------------------------------------------
 
 
@@ -169,6 +175,41 @@ def test_a_closed_tab_gets_nothing_and_its_waiting_job_is_dropped():
         renderer.close()
 
 
+def click(group, view, value: str) -> None:
+    """What viser does for a click on a button group: store the value, call the callbacks."""
+    group._impl.value = value
+    for cb in group._impl.update_cb:
+        cb(types.SimpleNamespace(target=group, client=view.client, client_id=None))
+
+
+def test_twenty_png_clicks_in_the_viewer_send_two_files_and_svg_stays_immediate():
+    server, _app, fakes, (view,) = start_headless(default_scene())
+    renderer, workers = held_renderer()
+    try:
+        sent = []
+        view.client.send_file_download = lambda name, data, **kw: sent.append(name)
+        view.png = PngDownloads(view.client, renderer)
+        group = view.panel_buttons["cam1"]["download panel"]
+        click(group, view, "PNG")
+        assert wait_until(lambda: renderer.renders == 1)
+        for _ in range(19):
+            click(group, view, "PNG")
+        click(view.panel_buttons["cam2"]["download panel"], view, "PNG")  # the latest click: cam2's panel
+        click(group, view, "SVG")  # not queued: sent at once
+        assert sent == ["cam1-image-plane.svg"]
+        workers[0].gate.set()
+        assert wait_until(renderer.idle_now, timeout=10)
+        assert renderer.renders == 2
+        assert sent == ["cam1-image-plane.svg", "cam1-image-plane.png", "cam2-image-plane.png"]
+        assert b'data-camera="cam2"' in workers[0].rendered[1].encode()
+    finally:
+        workers[0].gate.set()
+        renderer.close()
+        for f in fakes:
+            f.close()
+        server.stop()
+
+
 # -- the limits ---------------------------------------------------------------------------------------------
 
 
@@ -225,10 +266,7 @@ def test_the_viewer_refuses_the_png_of_a_tall_image_in_that_tab():
         view.client.add_notification = lambda title, body, **kw: notes.append((title, body))
         view.client.send_file_download = lambda name, data, **kw: sent.append(name)
         view.model.update_camera("cam1", width=1, height=8192)
-        group = view.panel_buttons["cam1"]["download panel"]
-        group._impl.value = "PNG"
-        for cb in group._impl.update_cb:  # what viser does for a click: the value, then the callbacks
-            cb(types.SimpleNamespace(target=group, client=view.client, client_id=None))
+        click(view.panel_buttons["cam1"]["download panel"], view, "PNG")
         assert wait_until(lambda: notes)
         title, body = notes[0]
         assert title == "PNG not made: the figure is too large"
@@ -272,11 +310,8 @@ def test_a_render_over_the_timeout_is_stopped():
     try:
         slow.render(tiny_svg("warm"), 1.0)  # started and imported: what follows is the render alone
         slow.timeout = 0.3
-        lines = "".join(f'<line x1="0" y1="{k % 400}" x2="1000" y2="{(7 * k) % 400}" stroke="#000"/>'
-                        for k in range(4000))
-        heavy = f'<svg xmlns="http://www.w3.org/2000/svg" width="1000" height="400">{lines}</svg>'
         with pytest.raises(PngRenderError, match="longer than 0.3 s"):
-            slow.render(heavy, 2.0)
+            slow.render(heavy_svg(), 2.0)
         assert slow.pid is None
         slow.timeout = 60
         assert png_width(slow.render(tiny_svg("again", width=30), 1.0)) == 30  # a new worker
@@ -292,14 +327,14 @@ def test_a_worker_that_dies_becomes_a_notification_and_the_next_png_works():
         tab.request("warm.png", tiny_svg("warm", width=12))
         assert wait_until(lambda: len(client.files) == 1, timeout=30)
         (pid,) = renderer.worker_pids()
-        lines = "".join(f'<line x1="0" y1="{k % 400}" x2="1000" y2="{(7 * k) % 400}" stroke="#000"/>'
-                        for k in range(4000))
-        tab.request("heavy.png", f'<svg xmlns="http://www.w3.org/2000/svg" width="1000" height="400">{lines}</svg>')
+        assert png_refusal(heavy_svg()) is None
+        tab.request("heavy.png", heavy_svg())
         assert wait_until(lambda: renderer.renders == 2)
         os.kill(pid, signal.SIGKILL)
         assert wait_until(lambda: any(n.title == "Could not make the PNG" for n in client.notes), timeout=30)
         failed = next(n for n in client.notes if n.title == "Could not make the PNG")
-        assert failed.body == "heavy.png: the PNG renderer stopped unexpectedly; try again. The SVG download still works."
+        assert failed.body == ("heavy.png: the PNG renderer stopped unexpectedly; try again. "
+                               "The SVG download still works.")
         assert all(n.removed for n in client.notes if n.title == "Rendering PNG...")
         tab.request("next.png", tiny_svg("next", width=14))
         assert wait_until(lambda: len(client.files) == 2, timeout=30)
