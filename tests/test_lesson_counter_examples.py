@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
 import pytest
 
 from egtviz.lessons import LessonError, LessonRun, list_lessons, load
@@ -15,6 +16,7 @@ from egtviz.lessons.changes import Lock, MoveCamera, SetLab
 from egtviz.lessons.cli import check_file, run_check
 from egtviz.lessons.format import parse_lesson
 from egtviz.lessons.proof import prove_counter_examples
+from egtviz.lessons.tasks import TaskContext
 from egtviz.scene import SceneError
 from egtviz.scene.lens import LensToggles
 from egtviz.viewer.lens_view import HIDDEN_NOTE, LensPanel
@@ -190,17 +192,22 @@ def test_lesson_6_step_2_keeps_cam2_where_the_step_put_it():
         with pytest.raises(SceneError, match="cam2: the camera is locked in this step"):
             run.model.update_camera("cam2", **fields)
     assert run.model.scene.camera("cam2") == start
-    # The routes round the lock: lifted, or cam2 removed and added again elsewhere; the check measures the step's pose.
+    # The routes round the lock: lifted, or cam2 removed and added again, each putting cam2 where e1 lands on
+    # the learner's target (so a check measuring the moved pair would pass); the check measures the step's pose.
     (resolved,) = run.tasks()
+    cam1 = run.model.scene.camera("cam1")
+    ray = np.linalg.solve(cam1.intrinsics.K, [resolved.params["u"], resolved.params["v"], 1.0])
+    there = tuple(float(x) for x in np.array(cam1.position) + 6.0 * cam1.pose.R @ ray)
     for route in ("unlock", "re-add"):
         run.reset_step()
         if route == "unlock":
             run.apply(Lock(("cam2",), False))
-            run.model.update_camera("cam2", position=(1.0, -7.0, 1.5))
+            run.model.update_camera("cam2", position=there)
         else:
             run.model.remove_camera("cam2")
-            run.model.add_camera("pinhole", "cam2", position=(1.0, -7.0, 1.5), ypr_deg=tuple(start.ypr_deg))
+            run.model.add_camera("pinhole", "cam2", position=there, ypr_deg=tuple(start.ypr_deg))
             run.model.set_pair("cam1", "cam2")
+        assert resolved.task.judge(TaskContext(run.model.scene), resolved.params).passed  # the moved pair
         result = run.check(resolved.task.id).result
         assert not result.passed and "cam2 is locked in this step but has moved" in result.feedback
     run.reset_step()
