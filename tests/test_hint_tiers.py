@@ -143,3 +143,67 @@ def test_the_next_lesson_is_the_next_shipped_file_and_the_last_has_none():
     title = tomllib.loads((lessons_folder() / f"{names[6]}.toml").read_text())["title"]
     assert next_lesson_title(names[5]) == title
     assert next_lesson_title(names[-1]) is None
+
+
+def _numbers(value) -> list[float]:
+    if isinstance(value, bool):
+        return []
+    if isinstance(value, (int, float)):
+        return [float(value)]
+    if isinstance(value, (list, tuple)):
+        return [x for v in value for x in _numbers(v)]
+    if isinstance(value, dict):
+        return [x for v in value.values() for x in _numbers(v)]
+    return []
+
+
+def _given_away(number: float, tier: str, prompt: str) -> bool:
+    """Whether ``number`` is written in ``tier`` as a number of its own, and not already in the prompt."""
+    import re
+
+    forms = {f"{number:g}", f"{number:.1f}", f"{number:.2f}"} | ({str(int(number))} if number == int(number) else set())
+    for form in forms:
+        token = re.compile(rf"(?<![\w.]){re.escape(form)}(?![\w]|\.\d)")
+        if token.search(tier) and not token.search(prompt):
+            return True
+    return False
+
+
+def test_every_shipped_task_has_three_tiers_and_the_first_gives_nothing_away():
+    """Read from the files, so the answers and solutions are the ones the author wrote."""
+    checked = 0
+    for path in sorted(lessons_folder().glob("*.toml")):
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        for step in doc["steps"]:
+            for task in step.get("tasks", []):
+                where = f"{path.name}: {task.get('id')}"
+                hint, prompt = task.get("hint"), task["prompt"]
+                assert isinstance(hint, list) and len(hint) == 3, where
+                idea = hint[0]
+                answer = task.get("answer")
+                if isinstance(answer, str):
+                    assert answer.lower() not in idea.lower(), where
+                elif answer is not None:
+                    assert not _given_away(float(answer), idea, prompt), where
+                for change in task.get("solution", []):
+                    values = {k: v for k, v in change.items() if k not in ("do", "camera", "point", "names", "seed")}
+                    assert not any(_given_away(x, idea, prompt) for x in _numbers(values)), (where, change)
+                    word = values.get("value")
+                    if isinstance(word, str) and word.lower() not in prompt.lower():
+                        assert word.lower() not in idea.lower(), (where, change)
+                checked += 1
+    assert checked >= 80
+
+
+@pytest.mark.parametrize("lesson, task, words", [
+    ("01-frames-and-poses", "roll", "between"),
+    ("05-unified-sphere", "horizon-400", "between"),
+    ("05-unified-sphere", "xi-zero", "{low}"),
+    ("05-unified-sphere", "xi-one", "{high}"),
+    ("12-visual-servoing", "reach-x", "{low}"),
+    ("13-panoramic-servoing", "drive-y", "{low}"),
+])
+def test_a_prompt_does_not_write_the_answers_range(lesson, task, words):
+    doc = tomllib.loads((lessons_folder() / f"{lesson}.toml").read_text(encoding="utf-8"))
+    (prompt,) = [t["prompt"] for s in doc["steps"] for t in s.get("tasks", []) if t.get("id") == task]
+    assert words not in prompt
