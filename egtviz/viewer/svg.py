@@ -924,7 +924,7 @@ def image_plane_svg(
         out.append(
             f'<text data-kind="crowded-note" data-unnumbered="{n_unnumbered}" x="{_f(view.u1)}" '
             f'y="{_f(lay.rows_y[-1])}" text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">'
-            f"{n_unnumbered} point {what} not shown (crowded: zoom in)</text>"
+            f"{n_unnumbered} point {what} not shown (no room beside their points)</text>"
         )
     if plane.message:
         cu, cv = view.centre
