@@ -29,12 +29,18 @@ def _add_bench(subparsers) -> None:
                         "and drawing loops with tabs open, neither in all)")
     p.add_argument("--repeats", type=whole_number_in(1, 10_000), default=20,
                    help="timed repetitions per case, 1..10000 (median is reported; default 20)")
+    p.add_argument("--json", metavar="FILE", default=None,
+                   help="classroom only: also write the figures (CPU per update, the viser floor at the same rate, "
+                        "the parts, the lag per tab count) to FILE as JSON")
+    p.add_argument("--scene", default=None, help="classroom only: the scene the tabs drag (default: the default)")
+    p.add_argument("--points", type=whole_number_in(1, 1000), default=None,
+                   help="classroom only: give the scene that many random points (1..1000)")
 
 
 def _run_bench(args) -> int:
     from .bench.runner import run
 
-    return run(args.suite, repeats=args.repeats)
+    return run(args.suite, repeats=args.repeats, json_path=args.json, scene=args.scene, points=args.points)
 
 
 def _add_scene(subparsers) -> None:

@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ClassroomRun", "format_classroom", "profile_classroom", "run_classroom", "run_classroom_bench"]
+__all__ = ["ClassroomRun", "classroom_record", "format_classroom", "profile_classroom", "run_classroom", "run_classroom_bench"]
 
 #: Tab counts of ``egtviz bench classroom``.
 TAB_COUNTS = (1, 5, 15, 30)
@@ -524,21 +524,100 @@ def format_classroom(runs: Sequence[ClassroomRun]) -> str:
     return "\n".join(lines)
 
 
-def run_classroom_bench(tab_counts: Sequence[int] = TAB_COUNTS, *, seconds: float = DRAG_SECONDS,
-                        scene: str | None = None, profile: bool = True) -> str:
-    """``egtviz bench classroom``: a run per tab count, then (``profile``) one profiled run; the report as text."""
-    from .viser_floor import FLOOR_RATES_HZ, format_floor, viser_floor
+def _scene_with_points(scene: str | None, points: int, folder: str) -> str:
+    """A scene file: ``scene`` (None: the default) with ``points`` random points (seed 0) in a cube of side 4 m
+    around its points' centre (as ``egtviz bench viewer`` places its 200 points); returns the file's path."""
+    from ..scene import SceneModel, save_scene_file, scene_from_argument
 
-    runs = [run_classroom(k, seconds=seconds, scene=scene)[0] for k in tab_counts]
+    model = SceneModel(scene_from_argument(scene) if scene is not None else None)
+    X = model.scene.points_array()
+    model.randomize_points(points, seed=0, center=tuple(X.mean(axis=0)), extent=2.0)
+    path = Path(folder) / f"classroom-{points}-points.json"
+    save_scene_file(model.scene, path)
+    return str(path)
+
+
+def _machine() -> dict[str, Any]:
+    import platform
+
+    return {"python": platform.python_version(), "machine": platform.machine(), "cpus": os.cpu_count(),
+            "load_average": list(os.getloadavg())}
+
+
+def _json_safe(value: Any) -> Any:
+    """``value`` with every NaN or infinite float as None (strict JSON has neither)."""
+    if isinstance(value, float):
+        return value if np.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def classroom_record(runs: Sequence[ClassroomRun], floors: Sequence[Any], *, scene: str | None,
+                     points: int | None, areas: Sequence[tuple[str, float]] = (), profiled: ClassroomRun | None = None
+                     ) -> dict[str, Any]:
+    """The runs as the JSON record of ``egtviz bench classroom --json FILE``.
+
+    Args:
+        runs: one run per tab count.
+        floors: the bare-viser floor (:class:`~egtviz.bench.viser_floor.FloorRun`) measured just before each run,
+            at that run's rate (tabs x :data:`RATE_HZ` updates a second).
+        scene: the scene dragged (None: the default).
+        points: the points it was given (None: its own).
+        areas: the profiled run's own time by area (:func:`profile_areas`), if any.
+        profiled: that run.
+    """
+    rows = []
+    for r, f in zip(runs, floors, strict=True):
+        floor = f.cpu_ms_per_update
+        rows.append({
+            "tabs": r.tabs, "rate_hz": RATE_HZ * r.tabs, "seconds": r.seconds, "sent": r.sent, "applied": r.applied,
+            "cpu_ms_per_update": r.cpu_ms_per_update, "floor_ms_per_update": floor,
+            "floor_callbacks": f.callbacks, "ratio_to_floor": r.cpu_ms_per_update / floor if floor > 0 else None,
+            "parts_ms": dict(r.parts_ms), "lag_ms": {"p50": r.lag_ms[0], "p99": r.lag_ms[1]},
+            "unserved": r.unserved, "rss_per_tab_mb": r.rss_per_tab_mb, "received_mb": r.received_mb,
+            "tabs_cpu_share": r.tabs_cpu_s / r.wall_s if r.wall_s > 0 else None,
+        })
+    total = sum(t for _, t in areas)
+    profile = None
+    if profiled is not None and total > 0:
+        profile = {"tabs": profiled.tabs, "applied": profiled.applied,
+                   "areas": [{"area": a, "ms_per_update": 1e3 * t / max(profiled.applied, 1), "share": t / total}
+                             for a, t in areas]}
+    return {"bench": "classroom", "scene": scene or "default", "points": points, "machine": _machine(),
+            "runs": rows, "profile": profile}
+
+
+def run_classroom_bench(tab_counts: Sequence[int] = TAB_COUNTS, *, seconds: float = DRAG_SECONDS,
+                        scene: str | None = None, profile: bool = True, json_path: str | None = None,
+                        points: int | None = None) -> str:
+    """``egtviz bench classroom``: a run per tab count, each just after the bare-viser floor at its rate (tabs x
+    :data:`RATE_HZ`), then (``profile``) one profiled run; the report as text, and with ``json_path`` the same
+    figures as JSON (:func:`classroom_record`) in that file. ``points``: the scene gets that many random points."""
+    import tempfile
+
+    from .viser_floor import format_floor, viser_floor
+
+    with tempfile.TemporaryDirectory() as folder:
+        drawn_scene = _scene_with_points(scene, points, folder) if points is not None else scene
+        runs, floors = [], []
+        for k in tab_counts:
+            floors.append(viser_floor(RATE_HZ * k, min(seconds, 5.0)))
+            runs.append(run_classroom(k, seconds=seconds, scene=drawn_scene)[0])
+        prun, stats = profile_classroom(scene=drawn_scene) if profile else (None, None)
     title = (f"{len(tab_counts)} runs, {RATE_HZ:g} Hz per tab, {seconds:g} s; CPU ms per applied update by part; "
              "lag ms from a send to its panel")
-    out = [title, format_classroom(runs), "", format_floor([viser_floor(r) for r in FLOOR_RATES_HZ])]
-    if profile:
-        prun, stats = profile_classroom(scene=scene)
-        total = sum(t for _, t in profile_areas(stats))
+    out = [title, format_classroom(runs), "", format_floor(floors),
+           "  ratio to the floor at the same rate: " + ", ".join(
+               f"{r.tabs} tabs {r.cpu_ms_per_update / f.cpu_ms_per_update:.2f}x" for r, f in zip(runs, floors))]
+    areas = profile_areas(stats) if stats is not None else []
+    if prun is not None and stats is not None:
+        total = sum(t for _, t in areas)
         out.append(f"\ncProfile, {prun.tabs} tabs, {prun.applied} updates applied (profiled, so slower): own time "
                    "by area, ms per update and share")
-        for area, t in profile_areas(stats):
+        for area, t in areas:
             out.append(f"  {area:<48} {1e3 * t / max(prun.applied, 1):>7.3f}  {100 * t / total:>5.1f} %")
         out.append("\nTop functions by own time:")
         import io
@@ -549,6 +628,9 @@ def run_classroom_bench(tab_counts: Sequence[int] = TAB_COUNTS, *, seconds: floa
         lines = buf.getvalue().splitlines()
         head = next((i for i, line in enumerate(lines) if "ncalls" in line), 0)
         out.append("\n".join(lines[head:]))
+    if json_path is not None:
+        record = classroom_record(runs, floors, scene=scene, points=points, areas=areas, profiled=prun)
+        Path(json_path).write_text(json.dumps(_json_safe(record), indent=1, allow_nan=False) + "\n")
     return "\n".join(out)
 
 

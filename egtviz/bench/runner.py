@@ -37,12 +37,16 @@ def format_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def run(suite: str = "all", repeats: int = 20) -> int:
+def run(suite: str = "all", repeats: int = 20, *, json_path: str | None = None, scene: str | None = None,
+        points: int | None = None) -> int:
     print(f"egtviz bench {suite}: Python {platform.python_version()}, {platform.machine()}, one run, medians", flush=True)
+    if suite != "classroom" and (json_path, scene, points) != (None, None, None):
+        print("egtviz bench: --json, --scene and --points are options of the classroom suite only", file=sys.stderr)
+        return 2
     if suite == "classroom":  # many tabs on one server: not part of "all" (about two minutes)
         from .classroom import run_classroom_bench
 
-        print(run_classroom_bench(), flush=True)
+        print(run_classroom_bench(json_path=json_path, scene=scene, points=points), flush=True)
         return 0
     for name, fn in _suites(suite, repeats):
         print(f"\n[{name}]", flush=True)
