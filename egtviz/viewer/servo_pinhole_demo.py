@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 import viser
 
-from egtviz.geometry.poses import Pose, quat_wxyz_from_matrix
+from egtviz.geometry.poses import Pose
 from egtviz.servo import ServoResult, simulate_pinhole
 from egtviz.servo.frames import DHChain, ServoFrames, pinhole_frames
 from egtviz.servo.pinhole_arm import (
@@ -28,6 +28,7 @@ from egtviz.servo.pinhole_arm import (
 )
 
 from .fields import NumberRule
+from .servo_nodes import pose_node
 from .servo_player import RUN_RULES, Choice, ServoPlayer
 
 __all__ = ["ESTIMATOR_CHOICES", "PinholeServoDemo", "puma_meshes"]
@@ -133,9 +134,10 @@ class PinholeServoDemo(ServoPlayer):
         self._view(centre, centre + np.array([0.9, -1.6, 0.9]))
 
     def _add_run_fields(self) -> None:
-        self._add_number_field("beta", "beta", "Weight of the translation (secondary) task, >= 0; 0 = rotation only.")
-        self._add_choice_field("estimator", "F estimator",
-                               "F from the true poses, or estimated from the noisy features at every step.")
+        self.form.add_number_field("beta", "beta",
+                                   "Weight of the translation (secondary) task, >= 0; 0 = rotation only.")
+        self.form.add_choice_field("estimator", "F estimator",
+                                   "F from the true poses, or estimated from the noisy features at every step.")
 
     def _simulation_kwargs(self, values: dict[str, Any]) -> dict[str, Any]:
         return {"beta": float(values["beta"]), "f_algorithm": ESTIMATOR_CHOICES[values["estimator"]]}
@@ -157,8 +159,7 @@ class PinholeServoDemo(ServoPlayer):
         """Place the link meshes (or the stick figure) at the link frames (J + 1, 4, 4)."""
         if "links" in self.nodes:
             for h, T in zip(self.nodes["links"], links):
-                h.position = T[:3, 3]
-                h.wxyz = quat_wxyz_from_matrix(T[:3, :3])
+                pose_node(h, T)
         else:
             P = links[:, :3, 3].astype(np.float32)
             self.nodes["sticks"].points = np.stack([P[:-1], P[1:]], axis=1)

@@ -1,0 +1,210 @@
+"""The playback clock of a servo demo: which frame of the run is shown, Play/Pause, steps and the time scrubber.
+
+:class:`ServoClock` owns the *Playback* folder's buttons and time slider and the playback thread, which advances
+the frame at the chosen speed (simulated seconds per real second). It draws nothing: it asks its player to show a
+frame (``show(k)``, called with the lock held), and the player tells it which frame it drew (:attr:`frame`).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import viser
+
+from egtviz.servo import ServoResult
+
+from .fields import FieldError
+
+__all__ = ["FPS", "ServoClock"]
+
+FPS = 15.0
+"""Frames per real second the playback thread looks at the clock (and redraws when the frame changed)."""
+
+
+class ServoClock:
+    """Playback of one demo's run in one tab. Every method takes the player's lock.
+
+    Args:
+        lock: the player's lock (one per tab; the clock's thread and the GUI callbacks share it).
+        closed: set once the player closed; the clock then does nothing and its thread ends.
+        run: the run played (``None`` before the first one or after a failed one).
+        show: draw frame ``k`` everywhere (called with the lock held; sets :attr:`frame`).
+        speed: the playback speed, simulated seconds per real second.
+        name: the playback thread's name.
+    """
+
+    def __init__(self, *, lock: threading.RLock, closed: threading.Event, run: Callable[[], ServoResult | None],
+                 show: Callable[[int], None], speed: Callable[[], float], name: str) -> None:
+        self.lock = lock
+        self._closed = closed
+        self._run = run
+        self._show = show
+        self._speed = speed
+        self._name = name
+        #: The frame shown (index into ``result.time``).
+        self.frame = 0
+        self.playing = False
+        self._gen = 0
+        self._thread: threading.Thread | None = None
+        self._syncing = False
+
+    # -- GUI ----------------------------------------------------------------------------
+
+    def build(self, gui: Any, on: Callable[[Any, Any], None], add_speed_field: Callable[[], None]) -> None:
+        """Add the *Playback* folder: Play/Pause, step back/forward, the speed field (``add_speed_field``) and the
+        time slider; ``on(register, callback)`` attaches each callback."""
+        self.folder = gui.add_folder("Playback", expand_by_default=True)
+        with self.folder:
+            self.btn_play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
+            on(self.btn_play.on_click, lambda _: self.toggle_play())
+            self.btn_step_back = gui.add_button("Step back", icon=viser.Icon.PLAYER_TRACK_PREV)
+            on(self.btn_step_back.on_click, lambda _: self.step(-1))
+            self.btn_step = gui.add_button("Step", icon=viser.Icon.PLAYER_TRACK_NEXT)
+            on(self.btn_step.on_click, lambda _: self.step(1))
+            add_speed_field()
+            self.slider = gui.add_slider("time (s)", min=0.0, max=1.0, step=0.05, initial_value=0.0,
+                                         hint="Drag to any time of the run.")
+            on(self.slider.on_update, self._slider_event)
+
+    def _set_slider(self, **values: float) -> None:
+        """Write the slider's attributes without taking the write for the user's scrubbing."""
+        self._syncing = True
+        try:
+            for key, value in values.items():
+                setattr(self.slider, key, value)
+        finally:
+            self._syncing = False
+
+    def rewind(self, t_end: float, dt: float) -> None:
+        """A new run: the slider spans ``[0, t_end]`` (at least one step ``dt``) in steps of ``dt``, at 0."""
+        self._set_slider(max=max(t_end, dt), step=dt, value=0.0)
+
+    def show_time(self, t: float) -> None:
+        """Put the slider at simulated time ``t`` (the frame drawn), within its range."""
+        self._set_slider(value=float(min(t, self.slider.max)))
+
+    def sync(self) -> None:
+        """Show the time of the frame drawn in the slider again (after a refused value)."""
+        shown_t = float(min(self.time, self.slider.max))
+        if self.slider.value != shown_t:
+            self._set_slider(value=shown_t)
+
+    # -- what is shown ------------------------------------------------------------------
+
+    @property
+    def n_frames(self) -> int:
+        r = self._run()
+        return 0 if r is None else r.n_samples
+
+    @property
+    def time(self) -> float:
+        """Simulated time of the frame shown."""
+        r = self._run()
+        return 0.0 if r is None else float(r.time[self.frame])
+
+    @property
+    def thread(self) -> threading.Thread | None:
+        """The playback thread last started (``None`` before the first Play)."""
+        return self._thread
+
+    # -- control ------------------------------------------------------------------------
+
+    def play(self) -> None:
+        """Play from the current frame (from the start if at the end)."""
+        with self.lock:
+            if self._closed.is_set() or self._run() is None or self.playing:
+                return
+            if self.frame >= self.n_frames - 1:
+                self._show(0)
+            self.playing = True
+            self._gen += 1
+            gen = self._gen
+            self.btn_play.label = "Pause"
+            self.btn_play.icon = viser.Icon.PLAYER_PAUSE
+        self._thread = threading.Thread(target=self._loop, args=(gen,), daemon=True, name=self._name)
+        self._thread.start()
+
+    def pause(self) -> None:
+        with self.lock:
+            self._gen += 1
+            if self.playing:
+                self.playing = False
+                if not self._closed.is_set():
+                    self.btn_play.label = "Play"
+                    self.btn_play.icon = viser.Icon.PLAYER_PLAY
+
+    def halt(self) -> None:
+        """Stop the playback thread for good (the player closes; the buttons are left as they are)."""
+        with self.lock:
+            self._gen += 1
+            self.playing = False
+
+    def toggle_play(self) -> None:
+        with self.lock:
+            if self.playing:
+                self.pause()
+            else:
+                self.play()
+
+    def step(self, n: int = 1) -> None:
+        """Pause and move ``n`` frames (negative: back)."""
+        with self.lock:
+            self.pause()
+            if self._run() is not None:
+                self._show(int(np.clip(self.frame + n, 0, self.n_frames - 1)))
+
+    def seek(self, frame: int) -> None:
+        """Show frame ``frame`` (clipped to the run)."""
+        with self.lock:
+            if self._run() is not None:
+                self._show(int(np.clip(frame, 0, self.n_frames - 1)))
+
+    def seek_time(self, t: float) -> None:
+        """Show the frame at simulated time ``t`` (the nearest sample)."""
+        with self.lock:
+            r = self._run()
+            if r is not None:
+                self._show(int(np.argmin(np.abs(r.time - float(t)))))
+
+    # -- the playback thread and the scrubber -------------------------------------------------
+
+    def _loop(self, gen: int) -> None:
+        t_last = time.perf_counter()
+        with self.lock:
+            pos = float(self.frame)
+        while not self._closed.wait(1.0 / FPS):
+            with self.lock:
+                r = self._run()
+                if gen != self._gen or not self.playing or r is None:
+                    return
+                now = time.perf_counter()
+                dt = float(r.params.get("dt", 0.05))
+                pos += (now - t_last) * self._speed() / dt
+                t_last = now
+                last = self.n_frames - 1
+                k = min(int(pos), last)
+                if k != self.frame:
+                    self._show(k)
+                if k >= last:
+                    self.playing = False
+                    self.btn_play.label = "Play"
+                    self.btn_play.icon = viser.Icon.PLAYER_PLAY
+                    return
+
+    def _slider_event(self, event: Any) -> None:
+        with self.lock:
+            r = self._run()
+            if self._syncing or self._closed.is_set() or r is None:
+                return
+            t = self.slider.value
+            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
+                raise FieldError(f"time: expected a number of seconds, got {repr(t)[:40]}")
+            self.pause()
+            k = int(np.argmin(np.abs(r.time - float(t))))
+            if k != self.frame:
+                self._show(k)
