@@ -15,8 +15,9 @@ __all__ = ["lock_breach"]
 def lock_breach(start: Scene, now: Scene) -> str | None:
     """Why ``now`` does not keep the locks of the step that started at ``start`` (None: it keeps them).
 
-    A locked camera must still be there with the same position and orientation (its other fields may change,
-    as the model allows); a locked point (``point:<i>``) must still be at the same place.
+    A locked camera still there must have the same position and orientation (its other fields may change, as
+    the model allows; one that has gone is the task's to report); a locked point (``point:<i>``) must still be
+    at the same place.
     """
     for name in sorted(start.locked):
         if name.startswith("point:"):
@@ -24,10 +25,8 @@ def lock_breach(start: Scene, now: Scene) -> str | None:
             if i < len(start.points) and (i >= len(now.points) or now.points[i] != start.points[i]):
                 return f"point {i + 1} is locked in this step but has moved"
             continue
-        if name not in start.camera_names:
-            continue
-        if name not in now.camera_names:
-            return f"{name} is locked in this step but is not in the scene any more"
+        if name not in start.camera_names or name not in now.camera_names:
+            continue  # a camera that has gone: the task itself says so (Task.missing)
         a, b = start.camera(name), now.camera(name)
         if a.position != b.position or a.ypr_deg != b.ypr_deg:
             return f"{name} is locked in this step but has moved"
