@@ -16,6 +16,7 @@ from egtviz.lessons.catalog import lessons_folder
 from egtviz.lessons.changes import MoveCamera
 from egtviz.lessons.cli import run_lessons
 from egtviz.lessons.tasks import EpipoleNearTask
+from egtviz.lessons.tasks.computed import typed_text
 from egtviz.scene.lab import run_lab
 
 LEARNERS = ("", "Ada Lovelace", "Grace", "Émilie du Châtelet")
@@ -60,12 +61,16 @@ def aim_epipole(run: LessonRun, task: EpipoleNearTask, params: dict) -> None:
 
 
 def right_answer(task, run: LessonRun) -> str:
+    if task.kind == "computed":  # computed from this learner's scene by the function the check uses
+        return task.answer_text(run.model.scene)
     if task.kind == "servo_number":  # computed by simulating the step's servo run, as the demo does
         return f"{task.answer_for(run.demo):.12g}"
     return f"{task.answer:g}" if task.kind == "number" else task.answer
 
 
 def wrong_answer(task, run: LessonRun) -> str:
+    if task.kind == "computed":  # every component off by more than the tolerance (a line or F: a new scale)
+        return typed_text(task.value(run.model.scene) + 10 * task.tolerance + 1)
     if task.kind in ("number", "servo_number"):
         return f"{float(right_answer(task, run)) + 10 * task.tolerance + 1:g}"
     return next(o for o in task.options if o != task.answer)

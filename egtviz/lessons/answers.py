@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import re
 
-__all__ = ["AnswerError", "EXAMPLE", "read_number"]
+__all__ = ["AnswerError", "EXAMPLE", "read_matrix", "read_number", "read_vector"]
 
 #: The number a refusal shows as an example (not any task's answer: an example must not give one away).
 EXAMPLE = "2.5"
@@ -72,3 +72,76 @@ def read_number(text: str | None, unit: str = "") -> float:
     if not math.isfinite(x):  # decimal text too large for a float, e.g. 1e400
         raise AnswerError(f"{_expected(unit)}; {_shown(m.group(1))} is too large.")
     return x
+
+
+def _numbers_in(body: str, what: str) -> list[float]:
+    """The comma-separated numbers of one bracketed row, each read as :data:`_NUMBER` (nothing else)."""
+    items = body.split(",")
+    out = []
+    for item in items:
+        if re.fullmatch(rf"\s*{_NUMBER}\s*", item) is None:
+            raise AnswerError(f"{what}: {_shown(item)} is not a number.")
+        x = float(item)
+        if not math.isfinite(x):
+            raise AnswerError(f"{what}: {_shown(item)} is too large.")
+        out.append(x)
+    return out
+
+
+def _vector_example(size: int) -> str:
+    return "[" + ", ".join(EXAMPLE for _ in range(size)) + "]"
+
+
+def read_vector(text: str | None, size: int, unit: str = "") -> tuple[float, ...]:
+    """A vector typed as ``[a, b]`` (``size`` numbers in brackets, separated by commas), optionally followed by
+    ``unit``; read as strictly as :func:`read_number` reads one number.
+
+    Raises:
+        AnswerError: anything else (no brackets, another count of numbers, a word among them); the message says
+            what was expected.
+    """
+    example = _vector_example(size)
+    expected = f"Type {size} numbers in brackets, e.g. {example}" + (f" (in {unit}: {example} {unit})" if unit else "")
+    if text is None or not text.strip():
+        raise AnswerError(f"{expected}.")
+    unit_part = rf"(?:\s*{re.escape(unit)})?" if unit else ""
+    m = re.fullmatch(rf"\s*\[([^\[\]]*)\]{unit_part}\s*", text, flags=re.IGNORECASE)
+    if m is None:
+        raise AnswerError(f"{expected}; got {_shown(text)}.")
+    values = _numbers_in(m.group(1), expected)
+    if len(values) != size:
+        raise AnswerError(f"{expected}; got {len(values)} number{'s' * (len(values) != 1)}.")
+    return tuple(values)
+
+
+def read_matrix(text: str | None, rows: int, cols: int) -> tuple[tuple[float, ...], ...]:
+    """A matrix typed row by row: ``[[a, b, c], [d, e, f], [g, h, i]]`` or ``[a, b, c; d, e, f; g, h, i]``.
+
+    Raises:
+        AnswerError: anything else (another shape, a word among the numbers); the message says what was
+            expected.
+    """
+    row = ", ".join(EXAMPLE for _ in range(cols))
+    expected = (f"Type a {rows} x {cols} matrix row by row, e.g. [{'; '.join(row for _ in range(rows))}] "
+                f"or [[{'], ['.join(row for _ in range(rows))}]]")
+    if text is None or not text.strip():
+        raise AnswerError(f"{expected}.")
+    nested = re.fullmatch(r"\s*\[((?:\s*\[[^\[\]]*\]\s*,?)+)\]\s*", text)
+    flat = re.fullmatch(r"\s*\[([^\[\]]*)\]\s*", text)
+    if nested is not None:
+        bodies = re.findall(r"\[([^\[\]]*)\]", nested.group(1))
+        if re.fullmatch(r"\s*\[[^\[\]]*\](?:\s*,\s*\[[^\[\]]*\])*\s*", nested.group(1)) is None:
+            raise AnswerError(f"{expected}; separate the rows by commas.")
+    elif flat is not None and ";" in flat.group(1):
+        bodies = flat.group(1).split(";")
+    else:
+        raise AnswerError(f"{expected}; got {_shown(text)}.")
+    if len(bodies) != rows:
+        raise AnswerError(f"{expected}; got {len(bodies)} row{'s' * (len(bodies) != 1)}.")
+    out = []
+    for k, body in enumerate(bodies, start=1):
+        values = _numbers_in(body, expected)
+        if len(values) != cols:
+            raise AnswerError(f"{expected}; row {k} has {len(values)} number{'s' * (len(values) != 1)}.")
+        out.append(tuple(values))
+    return tuple(out)

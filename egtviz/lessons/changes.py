@@ -262,9 +262,57 @@ class OpenDemo(DemoRun):
         return self
 
 
+@dataclass(frozen=True)
+class RandomiseCamera:
+    """Place camera ``camera`` (and set its focal length and principal point) at values drawn per learner.
+
+    Each component is a ``(low, high)`` range, drawn uniformly and rounded to 0.01 (so the value the camera's
+    fields show is the value the core uses), in a fixed order: position x, y, z, yaw, pitch, roll, focal
+    length, u0, v0. ``seed`` is bound by the lesson runner from (learner, lesson, step, camera); unbound (a
+    lesson being validated), the draw of seed 0 is used.
+    """
+
+    camera: str
+    position: tuple[tuple[float, float], ...] | None = None
+    ypr_deg: tuple[tuple[float, float], ...] | None = None
+    focal_length: tuple[float, float] | None = None
+    principal_point: tuple[tuple[float, float], ...] | None = None
+    seed: int | None = None
+
+    do: ClassVar[str] = "randomise_camera"
+
+    def seeded(self, seed: int) -> RandomiseCamera:
+        """This change with its draw bound to ``seed``."""
+        return dataclasses.replace(self, seed=seed)
+
+    def values(self) -> dict[str, Any]:
+        """The drawn fields (``position``, ``ypr_deg``, ``focal_length``, ``principal_point``), by this seed."""
+        import numpy as np
+
+        rng = np.random.default_rng(0 if self.seed is None else self.seed)
+
+        def draw(low: float, high: float) -> float:
+            return round(float(rng.uniform(low, high)), 2) if low < high else low
+
+        out: dict[str, Any] = {}
+        for key in ("position", "ypr_deg", "focal_length", "principal_point"):
+            ranges = getattr(self, key)
+            if ranges is None:
+                continue
+            if key == "focal_length":
+                low, high = ranges
+                out[key] = round(float(rng.uniform(low, high)), 5) if low < high else low
+            else:
+                out[key] = tuple(draw(low, high) for low, high in ranges)
+        return out
+
+    def _apply(self, model: SceneModel) -> None:
+        model.update_camera(self.camera, **self.values())
+
+
 Change = (
     Show | MoveCamera | MovePoint | Highlight | Lock | Select | SetPair | SetField | SetPoints | RandomPoints
-    | SetRange | SetLab | SetLens | OpenDemo
+    | SetRange | SetLab | SetLens | OpenDemo | RandomiseCamera
 )
 Record = SetRange | SetLab | SetLens | OpenDemo
 
@@ -388,6 +436,35 @@ def _open_demo(table: dict, do: str) -> OpenDemo:
     return OpenDemo(demo, parse_run_fields(table, demo))
 
 
+def _ranges(table: dict, key: str, n: int, limit: Range) -> tuple[tuple[float, float], ...] | None:
+    """``n`` components, each a number (fixed) or ``[low, high]`` inside ``limit``."""
+    if key not in table:
+        return None
+    value = table[key]
+    if not isinstance(value, list) or len(value) != n:
+        raise EntryError(key, f"expected a list of {n} numbers or [low, high] pairs, got {fields.short(value)}")
+    out = []
+    for item in value:
+        pair = item if isinstance(item, list) else [item, item]
+        if len(pair) != 2:
+            raise EntryError(key, f"expected a number or [low, high], got {fields.short(item)}")
+        low, high = (fields.as_number(x, key, limit) for x in pair)
+        if low > high:
+            raise EntryError(key, f"expected low <= high, got {fields.short(item)}")
+        out.append((low, high))
+    return tuple(out)
+
+
+def _randomise_camera(table: dict, do: str) -> RandomiseCamera:
+    focal = _ranges({"focal_length": [table["focal_length"]]} if "focal_length" in table else {}, "focal_length",
+                    1, FOCAL_LENGTH)
+    ranges = {k: _ranges(table, k, n, limit) for k, n, limit in
+              (("position", 3, COORDINATE), ("ypr_deg", 3, ANGLE_DEG), ("principal_point", 2, PRINCIPAL_POINT))}
+    if focal is None and all(v is None for v in ranges.values()):
+        raise EntryError("position", "expected at least one of position, ypr_deg, focal_length, principal_point")
+    return RandomiseCamera(fields.text(table, "camera"), focal_length=None if focal is None else focal[0], **ranges)
+
+
 def _highlight(table: dict, do: str) -> Highlight:
     return Highlight(fields.name_list(table, "names"))
 
@@ -416,6 +493,8 @@ _KINDS: dict[str, tuple[tuple[str, ...], Callable[[dict, str], Change]]] = {
     "set_lab": (("do", *(f.name for f in dataclasses.fields(LabSettings))), _set_lab),
     "set_lens": (("do", *(f.name for f in dataclasses.fields(LensToggles))), _set_lens),
     "open_demo": (("do", "demo", *RUN_FIELDS["pinhole"]), _open_demo),
+    "randomise_camera": (("do", "camera", "position", "ypr_deg", "focal_length", "principal_point"),
+                         _randomise_camera),
 }
 """Every change kind (``do``): the keys its table may have and the function that reads it (given ``do``)."""
 CHANGE_KINDS = tuple(_KINDS)

@@ -53,7 +53,7 @@ __all__ = ["MAX_COUNTER_EXAMPLES", "CounterExample", "Lesson", "Step", "load_les
 _TOP = ("title", "summary", "prerequisites", "scene", "steps")
 _STEP = ("title", "text", "changes", "tasks")
 _LESSON_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,79}")
-_COUNTER = ("why", "changes", "answer")
+_COUNTER = ("why", "changes", "answer", "mistake")
 MAX_COUNTER_EXAMPLES = 5
 """Counter-examples of one task."""
 
@@ -70,6 +70,9 @@ class CounterExample:
     """The mistake, in a few words (e.g. "the loose threshold")."""
     changes: tuple[Change, ...] = ()
     answer: str | None = None
+    mistake: str | None = None
+    """A computed task's counter-example: the named classic mistake's value in the learner's scene is typed
+    (:meth:`~egtviz.lessons.tasks.computed.ComputedTask.mistake_text`)."""
     line: int = 1
     """The line of the counter-example's table in the lesson file."""
 
@@ -345,14 +348,25 @@ class _Reader:
             trial = SceneModel(model.scene)
             for change in task.solution:
                 self.apply(trial, change, here + ("solution",), f"{what}.solution", {})
-            if task.question and any(c.answer is None for c in counter[-1]):
+            if task.question and any(c.answer is None and c.mistake is None for c in counter[-1]):
                 raise self.error(here + ("counter_examples",), f"{what}.counter_examples: a question's "
                                  "counter-example is a wrong answer: expected 'answer'")
+            if any(c.mistake is not None for c in counter[-1]):
+                self.mistakes(here, what, task, counter[-1])
             if not task.question and any(c.answer is not None or not c.changes for c in counter[-1]):
                 raise self.error(here + ("counter_examples",), f"{what}.counter_examples: a scene task's "
                                  "counter-example is what a learner does: expected 'changes' and no 'answer'")
             out.append(task)
         return tuple(out), tuple(counter)
+
+    def mistakes(self, here: tuple, what: str, task: Task, examples: tuple[CounterExample, ...]) -> None:
+        """Refuse a ``mistake`` counter-example on a task that has no such computed mistake."""
+        names = {m.name for m in getattr(getattr(task, "spec", None), "mistakes", ())}
+        for k, example in enumerate(examples):
+            if example.mistake is not None and example.mistake not in names:
+                raise self.error(here + ("counter_examples", k), f"{what}.counter_examples[{k}].mistake: expected "
+                                 f"one of {', '.join(sorted(names)) or 'none (not a computed task)'}, got "
+                                 f"{fields.short(example.mistake)}")
 
     def counter_examples(self, here: tuple, what: str, value: object) -> tuple[CounterExample, ...]:
         """A task's ``[[steps.tasks.counter_examples]]``: ``why``, and ``changes`` (a list of changes, as in a
@@ -382,10 +396,13 @@ class _Reader:
                     raise EntryError("answer", f"expected the typed text or a number, got {fields.short(answer)}")
                 if isinstance(answer, str):
                     answer = fields.text(table, "answer")
+                mistake = fields.text(table, "mistake", required=False) or None
+                if mistake is not None and answer is not None:
+                    raise EntryError("mistake", "expected 'answer' or 'mistake', not both")
             except EntryError as exc:
                 raise self.entry(at, exc, name) from None
             shown = None if answer is None else answer if isinstance(answer, str) else f"{answer:g}"
-            out.append(CounterExample(why, parsed, shown, self.where.line(*at)))
+            out.append(CounterExample(why, parsed, shown, mistake, self.where.line(*at)))
         return tuple(out)
 
 

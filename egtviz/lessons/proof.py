@@ -35,8 +35,24 @@ def prove_counter_examples(lesson: Lesson, learners: tuple[str, ...] = PROOF_LEA
         run = LessonRun(lesson, learner)
         for index, step in enumerate(lesson.steps):
             for task in step.tasks:
+                if hasattr(task, "answer_text"):
+                    _prove_computed(lesson, run, index, task)
                 for number, example in enumerate(step.counter_examples_of(task.id), start=1):
                     _prove_one(lesson, run, index, task.id, number, example)
+
+
+def _prove_computed(lesson: Lesson, run: LessonRun, index: int, task) -> None:
+    """A computed task is solvable for this learner: the answer the check computes, typed, passes."""
+    run.go_to(index)
+    try:
+        typed = task.answer_text(run.model.scene)
+    except SceneError as exc:
+        raise LessonError(lesson.source, 1, f"task {task.id}: no answer in learner {run.learner!r}'s scene: "
+                                            f"{exc}") from None
+    attempt = run.check(task.id, typed)
+    if not attempt.result.passed:
+        raise LessonError(lesson.source, 1, f"task {task.id}: its computed answer {typed} does not pass: "
+                                            f"{attempt.result.feedback}")
 
 
 def _prove_one(lesson: Lesson, run: LessonRun, index: int, task_id: str, number: int,
@@ -48,7 +64,14 @@ def _prove_one(lesson: Lesson, run: LessonRun, index: int, task_id: str, number:
             run.apply(change)
         except (SceneError, EntryError) as exc:
             raise LessonError(lesson.source, example.line, f"{where} cannot be applied: {exc}") from None
-    attempt = run.check(task_id, example.answer)
+    answer = example.answer
+    if example.mistake is not None:  # a computed task: the mistake's value in this learner's scene
+        task = next(t for t in run.step.tasks if t.id == task_id)
+        try:
+            answer = task.mistake_text(example.mistake, run.model.scene)
+        except SceneError as exc:
+            raise LessonError(lesson.source, example.line, f"{where} cannot be applied: {exc}") from None
+    attempt = run.check(task_id, answer)
     if attempt.result.passed:
         learner = f" (learner {run.learner!r})" if run.learner else ""
         raise LessonError(lesson.source, example.line,
