@@ -233,8 +233,9 @@ class TaskRow:
         elif task.question:
             unit = getattr(task, "unit", "")
             self.answer = gui.add_text(f"answer {number}" + (f" ({unit})" if unit else ""), "",
-                                       hint=f"One number, e.g. {EXAMPLE}" + (f", in {unit} (the unit may follow it)"
-                                                                         if unit else "") + ".")
+                                       hint=getattr(task, "answer_format", None)
+                                       or f"One number, e.g. {EXAMPLE}" + (f", in {unit} (the unit may follow it)"
+                                                                           if unit else "") + ".")
         self.button = gui.add_button(f"Check task {number}")
         self.feedback = gui.add_markdown("\u2713 passed before." if passed_before else "")
 
