@@ -18,8 +18,9 @@ __all__ = ["GLYPH_FRACTION", "GLYPH_RANGE", "SceneExtent", "scene_extent"]
 
 #: A glyph (a camera's gizmo, its axes, the world axes) is this fraction of the scene's bounding-box diagonal ...
 GLYPH_FRACTION = 1.0 / 15.0
-#: ... within these bounds (metres): the tutorial's scenes keep their 1 m gizmos, a table top gets 0.1 m ones.
-GLYPH_RANGE = (0.1, 1.0)
+#: ... within these bounds (metres): the default scene's gizmos stay near 1 m, the tutorial's 25 m scenes get
+#: 1.6 m ones (a 1 m gizmo is a speck there), a table top of 0.4 m mirrors 0.4 m ones.
+GLYPH_RANGE = (0.1, 2.0)
 #: Samples of a mirror's surface (rings, around) taken as its extent.
 _MIRROR_SAMPLES = (4, 12)
 
