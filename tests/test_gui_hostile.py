@@ -384,7 +384,7 @@ def upload(view, name: str, content) -> None:
 
 
 def test_an_oversized_upload_is_refused_before_parsing(tab, monkeypatch):
-    import egtviz.viewer.app as app_module
+    import egtviz.viewer.workbench_controls as app_module
 
     app, fake, view = tab
     parsed = []
@@ -527,7 +527,7 @@ def test_a_servo_demo_that_cannot_open_leaves_a_working_workbench(tab, monkeypat
 
 
 def test_a_render_failure_shows_the_message_and_the_tab_stays_usable(tab, monkeypatch):
-    from egtviz.viewer import app as app_module
+    from egtviz.viewer import panel_dock as app_module
 
     app, fake, view = tab
     real = app_module.image_plane_svg

@@ -12,14 +12,14 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
 * the learner's name: progress (the step, the tasks passed) is kept under it in the
   :class:`~egtviz.lessons.ProgressStore`, so a reload, a new tab or a restarted server resumes there;
 * the estimation lab (:mod:`egtviz.viewer.lab_view`) or the convention lens (:mod:`egtviz.viewer.lens_view`)
-  when the lesson uses them; they draw the panels through the tab's ``panel_filter``;
+  when the lesson uses them; they draw the panels through the tab's lesson policy's ``panel_filter``;
 * when the step has a servo run (an ``open_demo`` change), its settings and a button that opens that demo
   with them in this tab (the demo's *Back* button returns to the lesson, at the same step).
 
-A ``set_range`` change of a step limits a camera field: the tab's ``field_guard`` refuses a typed value
+A ``set_range`` change of a step limits a camera field: the tab's lesson policy (``field_guard``) refuses a typed value
 outside it (the field reverts, with the range in the message, in the field's own unit), the panel lists it,
 and a task is not checked while the scene breaks it (a script may still move a camera out of a range). A
-gizmo drag cannot (:func:`pose_within_ranges`, the tab's ``pose_guard``): a ``position`` range stops the camera at its edge,
+gizmo drag cannot (:func:`pose_within_ranges`, the lesson policy's ``pose_guard``): a ``position`` range stops the camera at its edge,
 each coordinate clamped like a mechanical stop; under a ``ypr_deg`` range the camera keeps the last
 orientation that respected it. The gizmo follows the pointer while it is held and shows the applied pose when
 the drag ends. The browser's own gizmo limits (viser's ``translation_limits``, ``rotation_limits``) are not
@@ -53,6 +53,7 @@ from ..scene.constraints import CameraRanges
 from .camera_fields import field_of_spec
 from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
 from .progress_notice import progress_notice_html, show_name_in_use
+from .lesson_policy import LessonPolicy
 
 __all__ = [
     "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "lock_refusal",
@@ -163,7 +164,7 @@ def _inside(limit: SetRange, value: float) -> bool:
 
 def pose_within_ranges(run: LessonRun, camera: str, position: np.ndarray,
                        R_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    r"""The pose a gizmo drag gives ``camera`` under the step's ``set_range`` limits (the tab's ``pose_guard``).
+    r"""The pose a gizmo drag gives ``camera`` under the step's ``set_range`` limits (the lesson policy's ``pose_guard``).
 
     Args:
         run: the lesson run (its ``ranges`` and its model's scene).
@@ -318,20 +319,23 @@ class LessonPanel:
                                                  "or after a restart, to resume where you were.")
                 self.btn_back = gui.add_button("Back to the course") if on_back is not None else None
             use_lab, use_lens = lesson_instruments(lesson)
+            panel_filter = None
             if use_lab:
                 from .lab_view import LabPanel
 
                 self.lab = LabPanel(client, run, redraw=view.redraw, report=view.report, order=LAB_ORDER,
                                     drawn="ransac" if any(t.kind == "inliers_recall" for s in lesson.steps
                                                           for t in s.tasks) else "normalized")
-                view.panel_filter = self.lab.panel_filter
+                panel_filter = self.lab.panel_filter
             elif use_lens:
                 from .lens_view import LensPanel
 
                 self.lens = LensPanel(gui, run, redraw=view.redraw, report=view.report, order=LENS_ORDER)
-                view.panel_filter = self.lens.panel_filter
-            view.field_guard = lambda camera, fields: field_range_refusal(self.run, camera, fields)
-            view.pose_guard = lambda camera, position, R: pose_within_ranges(self.run, camera, position, R)
+                panel_filter = self.lens.panel_filter
+            view.policy = LessonPolicy(
+                panel_filter=panel_filter,
+                field_guard=lambda camera, fields: field_range_refusal(self.run, camera, fields),
+                pose_guard=lambda camera, position, R: pose_within_ranges(self.run, camera, position, R))
             # The model holds the ranges too, for every route into it (a raw client message, a script).
             view.model.set_constraints(CameraRanges(lambda: self.run.ranges,
                                                     lambda camera, fields: field_range_refusal(self.run, camera, fields)))

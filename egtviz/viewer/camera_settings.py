@@ -1,0 +1,238 @@
+"""One camera's settings folder in the workbench: its pose, its model's choices and parameters, its Remove button.
+
+Every field is judged on the server in the field's own units (:mod:`egtviz.viewer.fields`, ranges from
+:mod:`egtviz.scene.limits` and the model's parameter specs); a lesson's narrower ranges are asked of the tab's
+:class:`~egtviz.viewer.lesson_policy.LessonPolicy` before a value is committed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
+
+from ..geometry.camera_model import CAMERA_MODELS
+from ..scene import SceneError, limits
+from ..scene.specs import OutOfRangeError, model_choices
+from .camera_fields import CameraField, camera_fields
+from .fields import FieldError, NumberRule, format_number, format_numbers, parse_numbers
+from .models import SHORT_LABELS
+from .gui_text import plain, set_value
+
+if TYPE_CHECKING:
+    from .app import ClientView
+
+__all__ = ["FIELD_RULES", "CameraSettings", "field_rules", "spec_values"]
+
+
+def _rules(label: str, unit: str, rng: limits.Range, *, scale: float = 1.0,
+           axes: Sequence[str] = ("",)) -> tuple[NumberRule, ...]:
+    """One field rule per axis from a :mod:`egtviz.scene.limits` range, converted to the field's unit by ``scale``."""
+    return tuple(NumberRule(f"{label} {a}".strip(), unit, rng.low * scale, rng.high * scale, integer=rng.integer)
+                 for a in axes)
+
+
+#: What each camera field accepts, in the units the field shows (the scene's limits, converted).
+FIELD_RULES: dict[str, tuple[NumberRule, ...]] = {
+    "position": _rules("position", "m", limits.COORDINATE, axes="xyz"),
+    "ypr": _rules("angle", "deg", limits.ANGLE_DEG, axes=("yaw", "pitch", "roll")),
+}
+"""The pose fields every camera has; a model's own fields take their rules from its parameters
+(:mod:`egtviz.viewer.camera_fields`)."""
+
+#: Spec fields (as :class:`OutOfRangeError` names them) in the words and units of the GUI: label, unit, scale.
+_SPEC_TERMS = {
+    "focal_length": ("focal length", "mm", 1e3),
+    "focal_length * pixels_per_metre": ("focal length in pixels (focal length / pixel size)", "px", 1.0),
+    "b/a": ("b / a", "", 1.0),
+    "focal_pixels": ("focal length", "px", 1.0),
+}
+
+
+def _restated(exc: OutOfRangeError, name: str) -> FieldError:
+    """The model's range refusal restated for the user: the camera, the field's words and units."""
+    label, unit, scale = _SPEC_TERMS.get(exc.field, (exc.field.replace("_", " "), exc.limit.unit, 1.0))
+    rule = NumberRule(label, unit, exc.limit.low * scale, exc.limit.high * scale, integer=exc.limit.integer)
+    try:
+        rule.check(float(exc.value) * scale, owner=name)
+    except FieldError as restated:
+        return restated
+    except (TypeError, ValueError):  # a value that is no number: keep the model's own words
+        pass
+    return FieldError(f"{name}: {exc}")
+
+
+@lru_cache(maxsize=16)
+def _model_fields(model_kind: str) -> tuple[dict[str, CameraField], dict[str, Any]]:
+    """A model's GUI fields by key, and its parameter specs by name (from the registry)."""
+    params = CAMERA_MODELS[model_kind].parameters
+    return {f.key: f for f in camera_fields(params)}, {p.name: p for p in params}
+
+
+def spec_values(spec: Any) -> dict[str, tuple[float, ...]]:
+    """A camera spec's values as its fields show them (model parameters -> the fields' units)."""
+    values: dict[str, tuple[float, ...]] = {"position": tuple(spec.position), "ypr": tuple(spec.ypr_deg)}
+    params = spec.model_values()
+    for key, field in _model_fields(spec.model_kind)[0].items():
+        values[key] = field.shown(params)
+    return values
+
+
+def field_rules(spec: Any, key: str) -> tuple[NumberRule, ...]:
+    """What field ``key`` of this camera accepts (its parameters' ranges in the field's units)."""
+    if key in FIELD_RULES:
+        return FIELD_RULES[key]
+    fields, specs = _model_fields(spec.model_kind)
+    if key not in fields:
+        raise FieldError(f"{spec.name}: no field {key!r} on a {spec.model.label.lower()}")
+    return fields[key].rules(specs)
+
+
+def _spec_fields(spec: Any, key: str, v: tuple[float, ...]) -> dict[str, Any]:
+    """Parsed field values as spec fields (the fields' units -> model parameters -> spec fields)."""
+    if key == "position":
+        return {"position": v}
+    if key == "ypr":
+        return {"ypr_deg": v}
+    field = _model_fields(spec.model_kind)[0].get(key)
+    if field is None:
+        raise FieldError(f"unknown field {key!r}")
+    return spec.fields_for_parameters(**field.parameters_of(v))
+
+
+class CameraSettings:
+    """One camera's folder: its fields by key (:attr:`fields`), what they do, and their write-back.
+
+    Args:
+        view: the tab (its GUI, model, lock-taking event runners and lesson policy are used).
+        spec: the camera's spec when the folder is built (its name and model kind stay for the folder's life).
+        parent: the folder the camera's folder goes in.
+        expand: whether the folder starts open.
+    """
+
+    def __init__(self, view: ClientView, spec: Any, parent: Any, *, expand: bool) -> None:
+        self.view = view
+        self.name = spec.name
+        gui = view.client.gui
+        with parent:
+            self.folder = gui.add_folder(f"{spec.name} ({SHORT_LABELS[spec.model_kind]})", expand_by_default=expand)
+        #: The folder's GUI fields by key (``position``, ``ypr``, a model choice, a model parameter).
+        self.fields = self._build(spec)
+        self._synced: Any = None
+        self._attach(spec)
+
+    def _build(self, spec: Any) -> dict[str, Any]:
+        """The pose fields, the model choices and one field per model parameter (or pair), units in the labels."""
+        gui = self.view.client.gui
+        values = spec_values(spec)
+        fields, params = _model_fields(spec.model_kind)
+        f: dict[str, Any] = {}
+        with self.folder:
+            f["position"] = gui.add_text("position x, y, z (m)", format_numbers(values["position"]),
+                                         hint="Camera centre (single viewpoint) in world coordinates: x, y, z.")
+            hint = spec.ANGLE_CONVENTION
+            f["ypr"] = gui.add_text("yaw, pitch, roll (deg)", format_numbers(values["ypr"]), hint=hint)
+            gui.add_markdown(f"<small>{hint}</small>")
+            for key, options in model_choices(type(spec)).items():
+                f[key] = gui.add_dropdown(key, options, initial_value=getattr(spec, key))
+            for key, field in fields.items():
+                if field.slider:
+                    (p,) = field.rules(params)
+                    f[key] = gui.add_slider(field.title, min=p.lo, max=p.hi, step=0.01, initial_value=values[key][0],
+                                            hint=field.hint or None)
+                else:
+                    f[key] = gui.add_text(field.title, format_numbers(values[key]), hint=field.hint or None)
+            remove = gui.add_button(f"Remove {spec.name}", color="red")
+        view, name = self.view, self.name
+        view._on(remove.on_click, lambda _: view._user_event(lambda: view.model.remove_camera(name)))
+        return f
+
+    def _attach(self, spec: Any) -> None:
+        view = self.view
+        choices = model_choices(type(spec))
+        fields = _model_fields(spec.model_kind)[0]
+        for key, handle in self.fields.items():
+            if key in choices:
+                view._on(handle.on_update, lambda e, k=key: view._user_event(lambda: self.set_choice(k, e.target.value)))
+            elif key in fields and fields[key].slider:
+                # A slider acts at once (the image morphs as it moves); one slide is one undo step.
+                view._on(handle.on_update,
+                         lambda e, k=key: view._user_event(lambda: self.apply_slider(k, e.target.value)))
+            else:
+                view._on(handle.on_update, lambda e, k=key: view._text_event(
+                    (self.name, k), lambda text, k=k: self.apply_field(k, text), e.target.value))
+
+    def _spec(self) -> Any:
+        """The camera's current spec, or None once it was removed (the user may still be typing)."""
+        scene = self.view.model.scene
+        return scene.camera(self.name) if self.name in scene.camera_names else None
+
+    def apply_field(self, key: str, text: Any) -> None:
+        """Judge a text field's text and commit it (a number left as shown keeps the model's full precision)."""
+        spec = self._spec()
+        if spec is None:
+            return
+        values = parse_numbers(text, field_rules(spec, key), owner=self.name)
+        current = spec_values(spec).get(key)
+        if current is None:
+            raise FieldError(f"{self.name}: no field {key!r} on a {spec.model.label.lower()}")
+        values = tuple(c if format_number(v) == format_number(c) else v for v, c in zip(values, current))
+        if values == current:
+            return  # nothing edited (e.g. our own write-back, or the same text again)
+        self._update(spec, _spec_fields(spec, key, values))
+
+    def apply_slider(self, key: str, value: Any) -> None:
+        """Commit a slider's value (one slide merges into one undo step)."""
+        spec = self._spec()
+        if spec is None:
+            return
+        (rule,) = field_rules(spec, key)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):  # a raw client can send anything
+            raise FieldError(f"{self.name}: {rule.label} must be a number, got {plain(repr(value), 40)}")
+        x = (rule.check(float(value), owner=self.name),)
+        if x == spec_values(spec).get(key):
+            return
+        self._update(spec, _spec_fields(spec, key, x), merge_key=("slider", self.name, key))
+
+    def _update(self, spec: Any, fields: dict[str, Any], merge_key: Any = None) -> None:
+        name = spec.name
+        if all(getattr(spec, k) == v for k, v in fields.items()):
+            return
+        refusal = self.view.policy.refusal(name, fields)
+        if refusal is not None:
+            raise FieldError(refusal)
+        try:
+            self.view.model.update_camera(name, merge_key=merge_key, **fields)
+        except OutOfRangeError as exc:  # a limit across fields (e.g. focal length in pixels): say it in UI terms
+            raise _restated(exc, name) from exc
+        except SceneError as exc:
+            if str(exc).startswith(f"{name}:"):
+                raise
+            raise SceneError(f"{name}: {exc}") from exc
+
+    def set_choice(self, key: str, value: Any) -> None:
+        """Switch the camera among the models its spec builds (a mirror's shape); the spec adapts its parameters."""
+        spec = self._spec()
+        if spec is None:
+            return
+        options = model_choices(type(spec)).get(key, ())
+        if value not in options:  # a raw client can send any string
+            raise FieldError(f"{self.name}: {key} must be one of {', '.join(options)}, got {plain(repr(value), 40)}")
+        if getattr(spec, key) != value:
+            self.view.model.update_camera(self.name, **{key: value})
+
+    def sync(self, spec: Any, *, force: bool) -> None:
+        """Write ``spec``'s values into the fields (``force=False``: skipped when ``spec`` is the one last written)."""
+        if not force and self._synced is spec:
+            return
+        self._synced = spec
+        sliders = {k for k, fld in _model_fields(spec.model_kind)[0].items() if fld.slider}
+        f = self.fields
+        for key, values in spec_values(spec).items():
+            set_value(f[key], values[0] if key in sliders else format_numbers(values))
+        for key in model_choices(type(spec)):
+            set_value(f[key], getattr(spec, key))
+
+    def remove(self) -> None:
+        """Take the folder off the page."""
+        self.folder.remove()

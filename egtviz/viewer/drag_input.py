@@ -1,0 +1,125 @@
+"""Gizmo input of a workbench tab: late events dropped by their timestamps, one undo step per drag.
+
+viser runs callbacks in a thread pool, so a gizmo's events can arrive out of order: an event older than one already
+applied is dropped. A drag's ``start`` opens a new drag id; every update of that drag merges into one undo step.
+The pose a camera gizmo sent passes through the tab's lesson policy before the model sees it.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..geometry import GeometryError
+from ..geometry.poses import matrix_from_quat_wxyz
+from ..scene import SceneError
+
+if TYPE_CHECKING:
+    from .app import ClientView
+
+__all__ = ["DragInput"]
+
+
+def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:
+    """``np.allclose(a, b, atol=atol)`` (rtol 1e-5) without its per-call overhead (runs on every drag event)."""
+    return bool((np.abs(a - b) <= atol + 1e-5 * np.abs(b)).all())
+
+
+def _position(target: Any, who: str) -> np.ndarray:
+    position = np.asarray(target.position, float)
+    if position.shape != (3,) or not np.isfinite(position).all():
+        raise SceneError(f"{who}: the gizmo sent a position that is not 3 finite numbers")
+    return position
+
+
+class DragInput:
+    """The tab's camera and point gizmo events.
+
+    Args:
+        view: the tab (its lock, model, policy and render are used).
+    """
+
+    def __init__(self, view: ClientView) -> None:
+        self.view = view
+        #: The camera being dragged while its update is drawn (its 3D nodes take the fast path).
+        self.moving: str | None = None
+        #: Whether the update being drawn is a step of a gizmo drag (fitted panels then keep a steady view).
+        self.step = False
+        self._stamp: dict[str, float] = {}
+        self._seq: dict[str, int] = {}
+
+    def _fresh(self, key: str, target: Any) -> bool:
+        """Whether this event is not older than one already applied (and remember its stamp)."""
+        stamp = float(getattr(target, "update_timestamp", 0.0))
+        if stamp < self._stamp.get(key, -1.0):
+            return False
+        self._stamp[key] = stamp
+        return True
+
+    def camera_event(self, name: str, event: Any) -> None:
+        """A camera gizmo moved (``phase``: start, update or end of a drag)."""
+        view = self.view
+        t0, c0 = time.perf_counter(), time.thread_time()
+        with view.lock:
+            if view.closed or not self._fresh(name, event.target):
+                return
+            phase = getattr(event, "phase", "update")
+            if phase == "start":
+                self._seq[name] = self._seq.get(name, 0) + 1  # one drag = one undo step
+                return
+            view.event_started(t0, c0)
+            self.moving = name if phase == "update" else None
+            self.step = phase == "update"
+            try:
+                self._move_camera(name, event.target, phase)
+            finally:
+                self.moving = None
+                self.step = False
+
+    def _move_camera(self, name: str, target: Any, phase: str) -> None:
+        model = self.view.model
+        if name not in model.scene.camera_names:
+            return
+        if name in model.scene.locked:  # a lesson's lock: the drag is undone when it ends
+            if phase == "end":
+                raise SceneError(f"{name} is locked: its gizmo cannot move it now")
+            return
+        try:
+            R = matrix_from_quat_wxyz(target.wxyz)
+        except GeometryError as exc:
+            raise SceneError(f"{name}: the gizmo sent an orientation that is not a rotation ({exc})") from exc
+        position = _position(target, name)
+        position, R = self.view.policy.pose(name, position, R)  # whatever the browser sent: what the lesson allows
+        pose = model.scene.camera(name).camera().pose  # the spec's cached camera: no new Pose
+        if _allclose(pose.t, position, 1e-9) and _allclose(pose.R, R, 1e-9):
+            if phase == "end":  # nothing moved since the last update: just resync the fields
+                self.view.redraw_now()
+            return
+        model.set_camera_pose(name, tuple(position), R, drag_id=self._seq.get(name))
+
+    def point_event(self, index: int, event: Any) -> None:
+        """A point gizmo moved; its drag's start selects the point."""
+        view = self.view
+        t0, c0 = time.perf_counter(), time.thread_time()
+        with view.lock:
+            key = f"point:{index}"
+            if view.closed or not self._fresh(key, event.target):
+                return
+            view.event_started(t0, c0)
+            model = view.model
+            scene = model.scene
+            phase = getattr(event, "phase", "update")
+            if phase == "start":
+                self._seq[key] = self._seq.get(key, 0) + 1  # one drag = one undo step
+                if scene.selected_point != index and index < len(scene.points):
+                    model.select_point(index)
+                return
+            if index < len(scene.points):
+                position = _position(event.target, f"point {index + 1}")
+                self.step = phase == "update"
+                try:
+                    model.set_point(index, tuple(position), drag_id=self._seq.get(key))
+                finally:
+                    self.step = False
