@@ -20,16 +20,22 @@ def test_the_last_step_shows_the_summary_and_each_check_updates_it(tmp_path):
         panel = open_lesson(app, page, LESSON6)
         panel.row("meet").answer.value = "at the principal point"
         panel.row("meet").button.value = True
+        shown = panel.row("meet").feedback.content
+        assert "*(1 of 3)* Every epipolar plane contains the baseline" in shown and "(2 of 3)" not in shown
+        panel.row("meet").button.value = True  # a second failure: the pointer joins the idea
+        shown = panel.row("meet").feedback.content
+        assert "(1 of 3)" in shown and "*(2 of 3)* Where does the baseline cross" in shown and "(3 of 3)" not in shown
+        assert store.hints_shown("Ada", LESSON6, 0, "meet") == 2
         assert panel.summary is None  # not the last step
         last = len(panel.run.lesson.steps) - 1
         panel.go_to(last)
         total = panel.run.lesson.task_count
         assert panel.summary.content == (
-            f"**End of the lesson.** Tasks passed: 0 of {total}; attempts: 1; hints used: 1; "
+            f"**End of the lesson.** Tasks passed: 0 of {total}; attempts: 2; hints used: 2; "
             "next lesson: *The fundamental and essential matrices*.")
         row = panel.rows[0]
         row.button.value = True  # the step's starting scene: not solved yet
-        assert f"Tasks passed: 0 of {total}; attempts: 2; hints used: 2;" in panel.summary.content
+        assert f"Tasks passed: 0 of {total}; attempts: 3; hints used: 3;" in panel.summary.content
 
 
 def test_download_my_record_sends_the_learners_rows_as_csv(tmp_path):
