@@ -537,29 +537,27 @@ class _EpipoleLabel:
     obstacle: tuple[float, float, float, float]
 
 
-@lru_cache(maxsize=16)
-def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
-           highlighted: frozenset, show_labels: bool, style: PanelStyle, k: float, dp: int,
-           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple]:
-    """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
+def _marked_points(P: np.ndarray, drawn: np.ndarray, selected_point: int | None, highlighted: frozenset) -> set[int]:
+    """The selected and highlighted points that are drawn (each gets a ring)."""
+    candidates = set(highlighted) | ({selected_point} if selected_point is not None else set())
+    return {i for i in candidates if isinstance(i, (int, np.integer)) and 0 <= i < len(P) and drawn[i]}
 
-    Cached: during a drag the panel of the camera that does not move keeps its
-    pixels, and often its epipoles.
+
+def _place_numbers(P: np.ndarray, in_image: np.ndarray, in_view: np.ndarray, marked: set[int],
+                   selected_point: int | None, show_labels: bool, style: PanelStyle, k: float,
+                   bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]
+                   ) -> tuple[dict[int, Any], dict[int, Any], tuple, int]:
+    """Where the epipole labels and the point numbers go, clear of the marks and of each other.
+
+    Returns:
+        ``(label_of, leader_of, ep_boxes, n_unnumbered)``: the box of each drawn number by point, the boxes of the
+        numbers that need a leader line, the epipole labels' boxes, and how many numbers found no free box.
     """
-    P = np.frombuffer(P_bytes).reshape(-1, 2)
-    in_image = np.frombuffer(in_image_bytes, dtype=bool)
-    in_view = np.frombuffer(in_view_bytes, dtype=bool)
-    colours = style.point_colours
-    nc = len(colours)
-    c = f"%.{dp}f"
     r_pt = style.mark_px * k
     ring_r = r_pt * 2.0
     lw = style.line_px * k
     idx, outside = np.flatnonzero(in_image).tolist(), np.flatnonzero(in_view & ~in_image).tolist()
     number_all = numbered_points(len(idx), show_labels)
-    drawn = in_image | in_view
-    candidates = set(highlighted) | ({selected_point} if selected_point is not None else set())
-    marked = {i for i in candidates if isinstance(i, (int, np.integer)) and 0 <= i < len(P) and drawn[i]}
     # Points outside the view (zoomed in) keep their disc for the contract, clipped, but get no number. Only the
     # marked ones are numbered above MAX_NUMBERED_POINTS (the sort below fixes the order).
     numbered = [i for i in (idx + outside if number_all else marked) if show_labels and in_view[i]
@@ -586,9 +584,54 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
                               np.asarray(radii, float) + gap, O, shown)
     label_of = {i: b for i, b, ok in zip(numbered, boxes[len(epipoles):], keep) if ok}
     leader_of = {i: b for i, b, ok, f in zip(numbered, boxes[len(epipoles):], keep, far) if ok and f}
-    n_unnumbered = len(numbered) - len(label_of)
-    disc = f'" r="{_f(r_pt)}" fill="'
-    halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}"'
+    return label_of, leader_of, ep_boxes, len(numbered) - len(label_of)
+
+
+def _point_group(i: int, kind: str, xy: np.ndarray, *, ring: bool, selected: bool, label_box: Any, leader_box: Any,
+                 style: PanelStyle, k: float, dp: int) -> str:
+    """Point ``i``'s ``<g>``: its disc with (if any) its ring, its number and the number's leader line."""
+    c = f"%.{dp}f"
+    r_pt = style.mark_px * k
+    lw = style.line_px * k
+    size = style.label_px * k
+    halo = 0.25 * style.label_px * k
+    x, y = xy
+    col = style.point_colours[i % len(style.point_colours)]
+    hollow = kind == "point-outside"
+    fill = "#fff" if hollow else col
+    stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
+    ring_svg = label = leader = ""
+    if ring:
+        ring_svg = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(r_pt * 2.0)}" fill="none" stroke="{style.ink}" '
+                    f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if selected else "false"}"/>')
+    if label_box is not None:
+        label = _label_text(label_box, size, str(i + 1), f' stroke="#fff" stroke-width="{_f(halo)}"', x)
+    if leader_box is not None:
+        # From the box's nearest point to the disc's centre, under the disc: it ends at the point.
+        x0, y0, x1, y1 = (float(b) for b in leader_box)
+        lx, ly = min(max(x, x0), x1), min(max(y, y0), y1)
+        leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{_f(lx)}" y1="{_f(ly)}" x2="{c % x}" '
+                  f'y2="{c % y}" stroke="{style.ink}" stroke-width="{_f(lw * 0.6)}"/>')
+    return (f'<g data-kind="{kind}" data-index="{i}">{leader}{ring_svg}<circle cx="{c % x}" cy="{c % y}" '
+            f'r="{_f(r_pt)}" fill="{fill}"{stroke}/>{label}</g>')
+
+
+@lru_cache(maxsize=16)
+def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
+           highlighted: frozenset, show_labels: bool, style: PanelStyle, k: float, dp: int,
+           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple]:
+    """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
+
+    Cached: during a drag the panel of the camera that does not move keeps its
+    pixels, and often its epipoles.
+    """
+    P = np.frombuffer(P_bytes).reshape(-1, 2)
+    in_image = np.frombuffer(in_image_bytes, dtype=bool)
+    in_view = np.frombuffer(in_view_bytes, dtype=bool)
+    idx, outside = np.flatnonzero(in_image).tolist(), np.flatnonzero(in_view & ~in_image).tolist()
+    marked = _marked_points(P, in_image | in_view, selected_point, highlighted)
+    label_of, leader_of, ep_boxes, n_unnumbered = _place_numbers(P, in_image, in_view, marked, selected_point,
+                                                                 show_labels, style, k, bounds, epipoles)
     rows = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
     special = sorted(set(label_of) | marked)
     if special:
@@ -598,29 +641,12 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
             kind, row = "point", bisect_left(idx, i)
         else:
             kind, row = "point-outside", len(idx) + bisect_left(outside, i)
-        x, y = P[i]
-        col = colours[i % nc]
-        hollow = kind == "point-outside"
-        fill = "#fff" if hollow else col
-        stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
-        ring = ""
-        if i in marked:
-            ring = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(ring_r)}" fill="none" stroke="{style.ink}" '
-                    f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if i == selected_point else "false"}"/>')
-        label = leader = ""
-        if i in label_of:
-            label = _label_text(label_of[i], size, str(i + 1), halo_attr, x)
-        if i in leader_of:
-            # From the box's nearest point to the disc's centre, under the disc: it ends at the point.
-            x0, y0, x1, y1 = (float(b) for b in leader_of[i])
-            lx, ly = min(max(x, x0), x1), min(max(y, y0), y1)
-            leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{_f(lx)}" y1="{_f(ly)}" x2="{c % x}" '
-                      f'y2="{c % y}" stroke="{style.ink}" stroke-width="{_f(lw * 0.6)}"/>')
-        group = (f'<g data-kind="{kind}" data-index="{i}">{leader}{ring}<circle cx="{c % x}" cy="{c % y}{disc}{fill}"'
-                 f'{stroke}/>{label}</g>')
+        group = _point_group(i, kind, P[i], ring=i in marked, selected=i == selected_point,
+                             label_box=label_of.get(i), leader_box=leader_of.get(i), style=style, k=k, dp=dp)
         rows[row] = (group, "", "", "", "", "", "")
-    body = (f'<g stroke="{style.ink}" stroke-width="{_f(lw * 0.5)}" font-size="{_f(size)}" font-weight="bold" '
-            f'fill="{style.ink}" paint-order="stroke">{"".join(rows.ravel().tolist())}</g>')
+    body = (f'<g stroke="{style.ink}" stroke-width="{_f(style.line_px * k * 0.5)}" '
+            f'font-size="{_f(style.label_px * k)}" font-weight="bold" fill="{style.ink}" paint-order="stroke">'
+            f'{"".join(rows.ravel().tolist())}</g>')
     return body, ep_boxes, n_unnumbered
 
 
