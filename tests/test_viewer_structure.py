@@ -20,7 +20,6 @@ MAX_FUNCTION_LINES = 80
 #: Known offenders outside the workbench split (file, qualified name): each to be split, then removed from here.
 ALLOWED = {
     ("svg.py", "image_plane_svg"),  # the image-plane panel's SVG in one function
-    ("svg.py", "_marks"),  # every mark of the image-plane panel in one function
     ("servo_svg.py", "servo_image_svg"),  # the servo demos' image panel in one function
     ("panel_view.py", "place_labels"),  # label placement in one function
 }
