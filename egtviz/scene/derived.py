@@ -152,14 +152,19 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
-_PLANE_FIELDS = tuple(f.name for f in fields(ImagePlane))
+_PLANE_FIELDS = frozenset(f.name for f in fields(ImagePlane))
 
 
 def _replaced(plane: ImagePlane, **changes) -> ImagePlane:
-    """``dataclasses.replace(plane, **changes)`` without its per-call introspection (twice per drag)."""
-    values = {name: getattr(plane, name) for name in _PLANE_FIELDS}
+    """``dataclasses.replace(plane, **changes)`` without its per-call introspection and keyword call (twice per
+    drag): ImagePlane has no ``__post_init__`` and no slots, so a copy of its ``__dict__`` is the same object."""
+    if not _PLANE_FIELDS.issuperset(changes):
+        raise TypeError(f"ImagePlane has no field {sorted(set(changes) - _PLANE_FIELDS)[0]!r}")
+    new = object.__new__(ImagePlane)
+    values = new.__dict__
+    values.update(plane.__dict__)
     values.update(changes)
-    return ImagePlane(**values)
+    return new
 
 
 class _CameraBlock(NamedTuple):
