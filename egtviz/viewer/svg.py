@@ -61,6 +61,7 @@ from bisect import bisect_left
 from dataclasses import dataclass
 from functools import lru_cache
 from html import escape
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -799,7 +800,6 @@ def image_plane_svg(
         The ``<svg>`` element as a string (see the module docstring for the
         ``data-*`` attributes).
     """
-    w, h = float(plane.width), float(plane.height)
     image = image_view(plane)
     view = image if view is None else view
     panel_px = float(style.panel_px if panel_px is None else panel_px)
@@ -807,29 +807,61 @@ def image_plane_svg(
         raise ValueError(f"panel_px must be a finite number of CSS pixels > 0, got {panel_px}")
     P = np.ascontiguousarray(np.asarray(plane.points, float).reshape(-1, 2))
     in_image = np.ascontiguousarray(np.asarray(plane.in_image, bool).reshape(-1))
-    n_in = int(in_image.sum())
     epipoles = tuple(plane.epipoles or ())
+    status_lines, numbering_note = _status_lines(plane, len(P), int(in_image.sum()), show_labels, style, panel_px)
+    at_inf = [ep for ep in epipoles if ep.at_infinity or ep.xy is None]
+    lay = panel_layout(view, style, panel_px, len(at_inf) + len(status_lines) + int(numbering_note))
+    k = lay.k
+    rev = "" if revision is None else f' data-rev="{int(revision)}"'
+    attrs = (f' data-camera="{escape(str(plane.camera))}"{rev} '
+             f'data-view="{_f(view.u0)} {_f(view.v0)} {_f(view.width)} {_f(view.height)}"')
+    out = [_svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
+           *_frame_svg(plane, view, lay, style)]
+    # Decimals: a quarter of a CSS pixel; whole image pixels once one is at most a CSS pixel wide.
+    dp = int(min(6, max(0, math.ceil(math.log10(4.0 / k)))))
+    if plane.lines is not None:
+        out.append(_lines_svg(plane, view, image, selected_point, style, k, dp))
+    if plane.conics is not None:
+        lw = style.line_px * k
+        out.append(f'<g fill="none" stroke-width="{_f(lw)}">'
+                   f'{_conics_svg(plane.conics, selected_point, lw, k >= 1.0, style.point_colours)}</g>')
+    row = iter(lay.rows_y)  # the epipoles at infinity take the first status rows
+    ep_marks, ep_labels = _epipole_marks(epipoles, view, style, k, row)
+    in_view = np.ascontiguousarray(view.contains(P))
+    points_svg, ep_boxes, n_unnumbered = _marks(P.tobytes(), in_image.tobytes(), in_view.tobytes(), selected_point,
+                                                frozenset(highlighted), show_labels, style, k, dp,
+                                                (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
+    if n_unnumbered:  # one more status row (the scale, and so every size drawn so far, does not depend on the rows)
+        lay = panel_layout(view, style, panel_px, len(lay.rows_y) + 1)
+        out[0] = _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height)
+    out += [points_svg, "</g>"]  # the points end the clipped group
+    out.extend(_epipole_groups(ep_marks, ep_labels, ep_boxes, style, k))
+    out.extend(_notes_svg(plane, view, style, k, row, status_lines, numbering_note, n_unnumbered,
+                          lay.rows_y[-1] if n_unnumbered else 0.0))
+    out.append("</svg>")
+    return "".join(out)
 
-    # Status rows under the frame: epipoles at infinity, the counts, the numbering note.
-    n_points, n_hidden = len(P), int(plane.n_hidden)
+
+def _status_lines(plane: Any, n_points: int, n_in: int, show_labels: bool, style: PanelStyle, panel_px: float
+                  ) -> tuple[list[str], bool]:
+    """The status rows under the frame (the point counts, wrapped to the panel's width) and whether the numbering
+    note takes one more."""
+    n_hidden = int(plane.n_hidden)
     n_outside = int(n_points - n_hidden - n_in)
     clauses = [f"{n_in} of {n_points} points in the image"]
     if n_hidden:
         clauses.append(f"{n_hidden} hidden ({plane.no_image})")
     if n_outside > 0:
         clauses.append(f"{n_outside} outside the image")
-    status_lines = _wrap(clauses, 0.8 * panel_px, style.status_px)
-    at_inf = [ep for ep in epipoles if ep.at_infinity or ep.xy is None]
-    numbering_note = show_labels and not numbered_points(n_in, True)
-    lay = panel_layout(view, style, panel_px, len(at_inf) + len(status_lines) + int(numbering_note))
+    return _wrap(clauses, 0.8 * panel_px, style.status_px), show_labels and not numbered_points(n_in, True)
+
+
+def _frame_svg(plane: Any, view: ViewBox, lay: PanelLayout, style: PanelStyle) -> list[str]:
+    """The image's border and the axes, then the group clipped to the view opened with the rim and the horizon."""
+    w, h = float(plane.width), float(plane.height)
     k = lay.k
     lw = style.line_px * k
-
-    rev = "" if revision is None else f' data-rev="{int(revision)}"'
-    attrs = (f' data-camera="{escape(str(plane.camera))}"{rev} '
-             f'data-view="{_f(view.u0)} {_f(view.v0)} {_f(view.width)} {_f(view.height)}"')
-    out: list[str] = [
-        _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
+    out = [
         f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#ffffff" '
         f'stroke="{style.ink}" stroke-width="{_f(style.frame_px * k)}"/>',
         _axes_svg(lay, style),
@@ -839,7 +871,6 @@ def image_plane_svg(
     clip_id += f"-{zlib.crc32(str(plane.camera).encode()):08x}"  # "a b" and "a_b" stay distinct
     out.append(f'<defs><clipPath id="{clip_id}"><rect x="{_f(view.u0)}" y="{_f(view.v0)}" width="{_f(view.width)}" '
                f'height="{_f(view.height)}"/></clipPath></defs><g clip-path="url(#{clip_id})">')
-
     if plane.rim is not None:
         for run in _finite_runs(plane.rim):
             out.append(
@@ -852,35 +883,41 @@ def image_plane_svg(
             f'<polyline data-kind="horizon" points="{_points_attr(np.asarray(arc, float), integer=False)}" '
             f'fill="none" stroke="{RIM_COLOUR}" stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw)} {_f(lw * 3)}"/>'
         )
+    return out
 
-    # Decimals: a quarter of a CSS pixel; whole image pixels once one is at most a CSS pixel wide.
-    dp = int(min(6, max(0, math.ceil(math.log10(4.0 / k)))))
-    integer = k >= 1.0
-    colours = style.point_colours
+
+def _lines_svg(plane: Any, view: ViewBox, image: ViewBox, selected_point: int | None, style: PanelStyle, k: float,
+               dp: int) -> str:
+    """The epipolar lines: clipped to the image, or across the whole view when it is not the image rectangle."""
+    lw = style.line_px * k
     thick = f' stroke-width="{_f(lw * 2.5)}"'
-    if plane.lines is not None:
-        L = np.asarray(plane.lines, float).reshape(-1, 4)
-        if view != image:
-            L = _extend_segments(_segments_of_lines(L, plane.line_coefficients, view), view)
-        ok = np.all(np.isfinite(L), axis=1)
-        idx = np.flatnonzero(ok)
-        table = np.empty((len(idx), 9), dtype=object)
-        if len(idx):
-            table[:, 0::2] = _line_tags(idx.tobytes(), selected_point, thick, colours)
-            table[:, 1:9:2] = _fixed_strs(L[ok], max(dp, 1))
-        out.append(f'<g stroke-width="{_f(lw)}">{"".join(table.ravel().tolist())}</g>')
+    L = np.asarray(plane.lines, float).reshape(-1, 4)
+    if view != image:
+        L = _extend_segments(_segments_of_lines(L, plane.line_coefficients, view), view)
+    ok = np.all(np.isfinite(L), axis=1)
+    idx = np.flatnonzero(ok)
+    table = np.empty((len(idx), 9), dtype=object)
+    if len(idx):
+        table[:, 0::2] = _line_tags(idx.tobytes(), selected_point, thick, style.point_colours)
+        table[:, 1:9:2] = _fixed_strs(L[ok], max(dp, 1))
+    return f'<g stroke-width="{_f(lw)}">{"".join(table.ravel().tolist())}</g>'
 
-    if plane.conics is not None:
-        out.append(f'<g fill="none" stroke-width="{_f(lw)}">'
-                   f'{_conics_svg(plane.conics, selected_point, lw, integer, colours)}</g>')
 
-    # Epipoles: in the view, a cross; elsewhere an arrow at the frame pointing to it; labels placed later.
+def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, k: float, row: Iterator[float]
+                   ) -> tuple[list[tuple[Any, str, str, str]], list[_EpipoleLabel]]:
+    """Each epipole's mark: in the view a cross, elsewhere an arrow at the frame pointing to it; one at infinity
+    also gets a status row (from ``row``) saying its direction.
+
+    Returns:
+        ``(marks, labels)``: per epipole ``(epipole, where, drawn, svg of the mark and its text)``, and the labels
+        still to place (the epipoles not at infinity, in order).
+    """
+    lw = style.line_px * k
     size = style.label_px * k
     a = style.mark_px * 1.8 * k
     arrow_len = 2.6 * style.label_px * k
     st = style.status_px * k
-    row = iter(lay.rows_y)
-    ep_marks: list[tuple[Any, str, str, str]] = []  # (epipole, where, drawn, svg of the mark and its text)
+    ep_marks: list[tuple[Any, str, str, str]] = []
     ep_labels: list[_EpipoleLabel] = []
     for ep in epipoles:
         label = str(ep.label)
@@ -907,19 +944,16 @@ def image_plane_svg(
             ep_labels.append(_EpipoleLabel(f"{label} ({format_vector((x, y))})", (float(tail[0]), float(tail[1])),
                                            0.2 * size, tuple(float(b) for b in box)))
             ep_marks.append((ep, where, "arrow", f'<g data-kind="epipole-arrow">{svg}</g>'))
+    return ep_marks, ep_labels
 
-    in_view = np.ascontiguousarray(view.contains(P))
-    points_svg, ep_boxes, n_unnumbered = _marks(P.tobytes(), in_image.tobytes(), in_view.tobytes(), selected_point,
-                                                frozenset(highlighted), show_labels, style, k, dp,
-                                                (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
-    if n_unnumbered:  # one more status row (the scale, and so every size drawn so far, does not depend on the rows)
-        lay = panel_layout(view, style, panel_px, len(lay.rows_y) + 1)
-        out[0] = _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height)
-    out.append(points_svg)
-    out.append("</g>")  # end of clipped group
 
+def _epipole_groups(ep_marks: list[tuple[Any, str, str, str]], ep_labels: list[_EpipoleLabel], ep_boxes: tuple,
+                    style: PanelStyle, k: float) -> list[str]:
+    """Each epipole's ``<g>``: its mark and (not at infinity) its label in the box placed for it."""
+    size = style.label_px * k
     halo = 0.25 * style.label_px * k
     placed = iter(zip(ep_labels, ep_boxes))
+    out = []
     for ep, where, drawn, mark in ep_marks:
         label = escape(str(ep.label))
         text = ""
@@ -932,13 +966,20 @@ def image_plane_svg(
         xy = "" if ep.xy is None else f' data-x="{float(ep.xy[0]):.5g}" data-y="{float(ep.xy[1]):.5g}"'
         out.append(f'<g data-kind="epipole" data-label="{label}" data-where="{where}" data-drawn="{drawn}"{xy}>'
                    f"{mark}{text}</g>")
+    return out
 
-    # Status rows (the epipoles at infinity took the first ones).
+
+def _notes_svg(plane: Any, view: ViewBox, style: PanelStyle, k: float, row: Iterator[float], status_lines: list[str],
+               numbering_note: bool, n_unnumbered: int, crowded_y: float) -> list[str]:
+    """The status rows under the frame (from ``row``): the counts, the numbering note and the crowded note (at
+    ``crowded_y``, the row added for it), then the plane's message over its centre."""
+    st = style.status_px * k
+    halo = 0.25 * style.label_px * k
     ys = [next(row) for _ in status_lines]
     spans = (escape(status_lines[0]) if len(status_lines) == 1 else
              "".join(f'<tspan x="{_f(view.u1)}" y="{_f(y)}">{escape(s)}</tspan>' for s, y in zip(status_lines, ys)))
-    out.append(f'<text data-kind="hidden-count" data-hidden="{n_hidden}" x="{_f(view.u1)}" y="{_f(ys[0])}" '
-               f'text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">{spans}</text>')
+    out = [f'<text data-kind="hidden-count" data-hidden="{int(plane.n_hidden)}" x="{_f(view.u1)}" y="{_f(ys[0])}" '
+           f'text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">{spans}</text>']
     if numbering_note:
         out.append(
             f'<text data-kind="numbering-note" x="{_f(view.u1)}" y="{_f(next(row))}" text-anchor="end" '
@@ -949,7 +990,7 @@ def image_plane_svg(
         what = "number" if n_unnumbered == 1 else "numbers"
         out.append(
             f'<text data-kind="crowded-note" data-unnumbered="{n_unnumbered}" x="{_f(view.u1)}" '
-            f'y="{_f(lay.rows_y[-1])}" text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">'
+            f'y="{_f(crowded_y)}" text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">'
             f"{n_unnumbered} point {what} not shown (no room beside their points)</text>"
         )
     if plane.message:
@@ -959,5 +1000,4 @@ def image_plane_svg(
             f'fill="#a00" paint-order="stroke" stroke="#fff" stroke-width="{_f(halo)}">'
             f"{escape(str(plane.message))}</text>"
         )
-    out.append("</svg>")
-    return "".join(out)
+    return out
