@@ -269,8 +269,14 @@ def test_a_set_range_limit_refuses_the_field_and_is_enforced_when_a_task_is_chec
         panel.view._cam_fields["cam1"]["focal"].value = "60"  # mm: above the step's 50 mm
         assert panel.view.model.scene.camera("cam1").focal_length == before  # refused, not committed
         assert panel.view._cam_fields["cam1"]["focal"].value == format_number(before * 1e3)  # the field reverts
-        # A change from elsewhere (a script, another control) that leaves the range blocks the step's tasks.
-        panel.view.model.update_camera("cam1", focal_length=0.06)
+        # The model holds the range for every route: a raw edit (a script, a client message) is refused too.
+        with pytest.raises(SceneError, match=r"cam1's focal length must stay between 2 mm and 50 mm \(it is 60 mm\)"):
+            panel.view.model.update_camera("cam1", focal_length=0.06)
+        assert panel.view.model.scene.camera("cam1").focal_length == before
+        # A scene loaded whole (not an edit in place) may leave the range: it blocks the step's tasks.
+        scene = panel.view.model.scene
+        panel.view.model.load_scene(scene.replace(cameras=tuple(
+            c.with_fields(focal_length=0.06) if c.name == "cam1" else c for c in scene.cameras)))
         refusal = range_refusal(panel.run)
         assert refusal is not None and "focal length must stay between 2 mm and 50 mm (it is 60 mm)" in refusal
         task = panel.rows[0]

@@ -71,3 +71,21 @@ def test_a_lesson_step_is_not_judged_and_an_unchanged_field_is_not_either():
     model.set_constraints(None)
     model.update_camera("cam1", position=(9.0, 9.0, 9.0))
     assert model.scene.camera("cam1").position == (9.0, 9.0, 9.0)
+
+
+def test_a_dragged_pose_stays_the_pose_the_gizmo_gave():
+    from scipy.spatial.transform import Rotation
+
+    from egtviz.geometry.poses import matrix_from_quat_wxyz, quat_wxyz_from_matrix
+
+    model = SceneModel(default_scene())
+    for name in model.scene.camera_names:
+        R = matrix_from_quat_wxyz(quat_wxyz_from_matrix(Rotation.from_euler("zyx", [0.3, -0.2, 0.1]).as_matrix()))
+        model.set_camera_pose(name, (0.5, -6.0, 1.2), R)
+        spec = model.scene.camera(name)
+        # The camera's rotation is the gizmo's, bit for bit (no rotation -> angles -> rotation round trip) ...
+        assert np.array_equal(spec.camera().pose.R, R) and spec.position == (0.5, -6.0, 1.2)
+        # ... and the angles the fields show describe it (to rounding); a file keeps it to rounding.
+        np.testing.assert_allclose(spec.with_fields(name=spec.name + "x").pose.R, R, atol=1e-12)
+    with pytest.raises(Exception, match="R"):
+        model.set_camera_pose(model.scene.camera_names[0], (0.0, 0.0, 0.0), np.diag([1.0, 1.0, -1.0]))

@@ -81,6 +81,29 @@ def _lock_refusal(old: Scene, new: Scene, change: Change) -> str | None:
     return None
 
 
+def _new_camera(scene: Scene, kind: Any, name: str | None, fields: dict[str, Any]) -> Any:
+    """The spec of a new camera of ``kind`` in ``scene`` (:meth:`SceneModel.add_camera`)."""
+    if type(kind) is str and kind in CAMERA_MODELS:
+        spec_cls, selection = spec_for_model(kind)
+    elif type(kind) is str and kind in CAMERA_KINDS:
+        spec_cls, selection = CAMERA_KINDS[kind], {}
+    else:
+        raise SceneError(f"kind: expected one of {sorted(CAMERA_MODELS)}, got {_short(kind)}")
+    if name is None:
+        prefix = spec_cls.NAME_PREFIX
+        i = 1
+        while f"{prefix}{i}" in scene.camera_names:
+            i += 1
+        name = f"{prefix}{i}"
+    if name in scene.camera_names:
+        raise SceneError(f"name: a camera named {name!r} exists already")
+    if not fields:
+        k = len(scene.cameras)
+        angle = -np.pi / 2 + 0.6 * (k + 1) * (-1) ** k
+        fields = spec_cls.placement((8.0 * np.cos(angle), 8.0 * np.sin(angle)), (0.0, 0.0))
+    return spec_cls(name=name, **{**selection, **fields})
+
+
 @dataclass(frozen=True)
 class Change:
     """What a notification is about: ``kind`` (e.g. ``"camera"``, ``"points"``, ``"load"``) and the names touched."""
@@ -252,36 +275,16 @@ class SceneModel:
 
         A change that alters nothing is not committed (no undo step, no notification).
         """
-        scene = self._scene
-        spec = scene.camera(name)
+        spec = self._scene.camera(name)
+        drag = fields.keys() <= spec.POSE_FIELDS
         try:
-            if fields.keys() <= spec.POSE_FIELDS:  # a drag
-                new_spec = spec.with_pose(**fields)
-            else:
-                new_spec = spec.with_fields(**fields)
+            new_spec = spec.with_pose(**fields) if drag else spec.with_fields(**fields)
         except (TypeError, GeometryError) as exc:
             raise SceneError(f"camera {name!r}: {exc}") from exc
-        ranges = self._ranges
-        if ranges is not None and not self._has_authority():
-            new_spec = ranges.judge(spec, new_spec, drag=fields.keys() <= spec.POSE_FIELDS)
-        if new_spec == spec:
-            return
-        cameras = tuple(new_spec if c.name == name else c for c in scene.cameras)
-        pair = scene.pair
-        if pair and new_spec.name != name:
-            pair = tuple(new_spec.name if n == name else n for n in pair)  # type: ignore[assignment]
-        if new_spec.name != name:
-            rename = {name: new_spec.name}
-            self._replace(
-                Change("camera", (name, new_spec.name), in_place=True), merge_key, cameras=cameras, pair=pair,
-                locked=frozenset(rename.get(m, m) for m in scene.locked),
-                highlighted=frozenset(rename.get(m, m) for m in scene.highlighted),
-            )
-            return
-        self._replace(Change("camera", (name,), in_place=True), merge_key, cameras=cameras, pair=pair)
+        self._place(spec, new_spec, drag, merge_key)
 
     def set_camera_pose(self, name: str, position: Any, R_world: Any, *, drag_id: object = None) -> None:
-        """Place a camera from a world pose (a gizmo drag): the spec keeps its own angle convention.
+        """Place a camera at a world pose (a gizmo drag): the spec holds that pose (its fields show its angles).
 
         Successive calls with the same non-None ``drag_id`` (one drag) are one undo step.
         """
@@ -289,9 +292,27 @@ class SceneModel:
         R = np.asarray(R_world, dtype=np.float64)
         if R.shape != (3, 3) or (not math.isfinite(R.sum()) and not np.isfinite(R).all()):
             raise SceneError("R_world: expected a finite 3x3 rotation")
-        merge = None if drag_id is None else ("camera", name, drag_id)
-        self.update_camera(
-            name, merge_key=merge, position=_triple(position, "position"), ypr_deg=spec.ypr_from_world_rotation(R)
+        new_spec = spec.with_world_pose(_triple(position, "position"), R)  # GeometryError: not a rotation
+        self._place(spec, new_spec, True, None if drag_id is None else ("camera", name, drag_id))
+
+    def _place(self, spec: Any, new_spec: Any, drag: bool, merge_key: object) -> None:
+        """Commit ``new_spec`` in place of ``spec`` (an edit in place), as the model's ranges allow it."""
+        ranges, scene, name = self._ranges, self._scene, spec.name
+        if ranges is not None and not self._has_authority():
+            new_spec = ranges.judge(spec, new_spec, drag=drag)
+        if new_spec == spec:
+            return
+        cameras = tuple(new_spec if c.name == name else c for c in scene.cameras)
+        pair = scene.pair
+        if new_spec.name == name:
+            self._replace(Change("camera", (name,), in_place=True), merge_key, cameras=cameras, pair=pair)
+            return
+        rename = {name: new_spec.name}
+        self._replace(
+            Change("camera", (name, new_spec.name), in_place=True), merge_key, cameras=cameras,
+            pair=tuple(rename.get(n, n) for n in pair) if pair else pair,
+            locked=frozenset(rename.get(m, m) for m in scene.locked),
+            highlighted=frozenset(rename.get(m, m) for m in scene.highlighted),
         )
 
     def add_camera(self, kind: str = PinholeCamera.kind, name: str | None = None, **fields: Any) -> str:
@@ -300,28 +321,10 @@ class SceneModel:
 
         Without ``fields`` the newcomer is placed where it sees the points, away from the others.
         """
-        if type(kind) is str and kind in CAMERA_MODELS:
-            spec_cls, selection = spec_for_model(kind)
-        elif type(kind) is str and kind in CAMERA_KINDS:
-            spec_cls, selection = CAMERA_KINDS[kind], {}
-        else:
-            raise SceneError(f"kind: expected one of {sorted(CAMERA_MODELS)}, got {_short(kind)}")
         scene = self._scene
-        if name is None:
-            prefix = spec_cls.NAME_PREFIX
-            i = 1
-            while f"{prefix}{i}" in scene.camera_names:
-                i += 1
-            name = f"{prefix}{i}"
-        if name in scene.camera_names:
-            raise SceneError(f"name: a camera named {name!r} exists already")
-        if not fields:
-            k = len(scene.cameras)
-            angle = -np.pi / 2 + 0.6 * (k + 1) * (-1) ** k
-            fields = spec_cls.placement((8.0 * np.cos(angle), 8.0 * np.sin(angle)), (0.0, 0.0))
-        spec = spec_cls(name=name, **{**selection, **fields})
-        self._replace(Change("add_camera", (name,)), cameras=scene.cameras + (spec,))
-        return name
+        spec = _new_camera(scene, kind, name, fields)
+        self._replace(Change("add_camera", (spec.name,)), cameras=scene.cameras + (spec,))
+        return spec.name
 
     def remove_camera(self, name: str) -> None:
         scene = self._scene

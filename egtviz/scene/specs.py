@@ -20,7 +20,7 @@ from ..geometry import GeometryError, Intrinsics, PinholeCamera, Pose
 from ..geometry.camera_model import CAMERA_MODELS, CameraModel, CameraModelInfo
 from ..geometry.catadioptric import HYPERBOLIC, PARABOLIC
 from ..geometry.fisheye import FisheyeCamera
-from ..geometry.poses import EGT_CAMERA_BASE, rotx, roty, rotz, ypr_from_egt_rotation
+from ..geometry.poses import EGT_CAMERA_BASE, egt_rotation_from_ypr, rotx, roty, rotz, ypr_from_egt_rotation
 from ..geometry.unified import UnifiedCamera
 from ._values import (
     NUMBER_TYPES,
@@ -50,24 +50,6 @@ from .limits import (
 
 _isfinite = math.isfinite
 _BASE_T = EGT_CAMERA_BASE.T.tolist()
-
-
-def _egt_rotation(yaw: float, pitch: float, roll: float) -> list[list[float]]:
-    """``egt_rotation_from_ypr`` (``roty(yaw) rotx(pitch) rotz(roll)``, radians) in plain floats."""
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cr, sr = math.cos(roll), math.sin(roll)
-    rows = ((cy, sy * sp, sy * cp), (0.0, cp, -sp), (-sy, cy * sp, cy * cp))  # roty(yaw) rotx(pitch)
-    return [[a0 * cr + a1 * sr, a1 * cr - a0 * sr, a2] for a0, a1, a2 in rows]
-
-
-def _panoramic_rotation(yaw: float, pitch: float, roll: float) -> list[list[float]]:
-    """:func:`panoramic_rotation_from_ypr` (``rotz(yaw) roty(pitch) rotx(roll)``, radians) in plain floats."""
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cr, sr = math.cos(roll), math.sin(roll)
-    rows = ((cy * cp, -sy, cy * sp), (sy * cp, cy, sy * sp), (-sp, 0.0, cp))  # rotz(yaw) roty(pitch)
-    return [[a0, a1 * cr + a2 * sr, a2 * cr - a1 * sr] for a0, a1, a2 in rows]
 
 
 def _is_rotation(m: list[list[float]], tol: float = 1e-6) -> bool:
@@ -112,10 +94,10 @@ def _parameter_pair(value: Any, kind: str, parameters: tuple[str, str], field: s
 
 def _egt_pose(ypr_deg: tuple[float, float, float], position: tuple[float, float, float]) -> Pose:
     """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``: the camera-axes convention of a
-    pin-hole (and of the unified camera, whose frame is a pin-hole's)."""
+    pin-hole (and of the unified and fisheye cameras, whose frame is a pin-hole's)."""
     yaw, pitch, roll = (math.radians(a) for a in ypr_deg)
     # Built from checked angles and a checked position: a rotation to rounding, nothing to check again.
-    return Pose(EGT_CAMERA_BASE @ np.array(_egt_rotation(yaw, pitch, roll)), position, check=False)
+    return Pose(EGT_CAMERA_BASE @ egt_rotation_from_ypr(yaw, pitch, roll), position, check=False)
 
 
 def _egt_ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
@@ -193,6 +175,13 @@ class _CameraSpecBase:
         """The registry entry of :attr:`model_kind`."""
         return CAMERA_MODELS[self.model_kind]
 
+    #: The registered models (``egtviz.geometry.CAMERA_MODELS``) this spec builds, and the field values that select
+    #: each (``{"mirror": "parabolic"}``; empty for a spec of one model): the spec's registry entry.
+    MODELS: ClassVar[dict[str, dict[str, Any]]] = {}
+    #: How the viewer shows each of those models: ``"module:Class"`` of its 3D drawing (in ``egtviz.viewer.models``,
+    #: imported by the viewer on first use) and a few words naming it in the GUI.
+    DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {}
+
     #: Where each model parameter is stored: ``parameter -> (field, index in the field's pair or None)``.
     PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {}
 
@@ -227,7 +216,37 @@ class _CameraSpecBase:
 
     @property
     def pose(self) -> Pose:
+        """The camera's place: the pose a drag gave (:meth:`with_world_pose`, kept as it was given), else the one
+        ``position`` and ``ypr_deg`` describe (a typed value, a file)."""
+        pose = self.__dict__.get("_pose")
+        if pose is None:
+            pose = self._pose_from_fields()
+            object.__setattr__(self, "_pose", pose)
+        return pose
+
+    def _pose_from_fields(self) -> Pose:
         raise NotImplementedError
+
+    def with_world_pose(self, position: Any, R_world: Any) -> Any:
+        """This spec at the world pose (``position``, ``R_world``) of a gizmo drag: quaternion -> rotation -> this
+        pose, once. The camera is built from that pose itself; ``position`` and ``ypr_deg`` are its view for the
+        fields and the file (a scene saved and read again has the same pose to rounding).
+
+        Raises:
+            GeometryError: ``R_world`` is not a rotation (named by the core's check).
+            SceneError: ``position`` is out of range.
+        """
+        R = np.asarray(R_world, dtype=np.float64)
+        m = R.tolist() if R.shape == (3, 3) else None
+        if m is None or not (_isfinite(sum(m[0]) + sum(m[1]) + sum(m[2])) and _is_rotation(m)):
+            Pose(R, np.zeros(3))  # the core names what is wrong
+            raise GeometryError("R_world: expected a rotation")  # a rotation to the core's tolerance, not ours
+        new = dataclasses.replace(self, position=position, ypr_deg=self.ypr_from_world_rotation(R))  # type: ignore[type-var]
+        # A rotation to rounding (a gizmo's quaternion) and a checked position: nothing for the core to check again.
+        # One only within the looser tolerance (a script's matrix) is made orthonormal by the core.
+        exact = _is_rotation(m, 1e-12)
+        object.__setattr__(new, "_pose", Pose(R, np.array(new.position), check=not exact))
+        return new
 
     def camera(self) -> CameraModel:
         """The camera model of this spec (built once per spec: specs are immutable)."""
@@ -284,6 +303,9 @@ class PinholeSpec(_CameraSpecBase):
     width: int = 640
     height: int = 480
 
+    MODELS: ClassVar[dict[str, dict[str, Any]]] = {PinholeCamera.kind: {}}
+    DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
+        PinholeCamera.kind: ("egtviz.viewer.models.pinhole:PinholeDrawing", "pin-hole")}
     kind: ClassVar[str] = "pinhole"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "cam"
@@ -333,8 +355,7 @@ class PinholeSpec(_CameraSpecBase):
     def intrinsics(self) -> Intrinsics:
         return self.camera().intrinsics  # type: ignore[attr-defined]
 
-    @property
-    def pose(self) -> Pose:
+    def _pose_from_fields(self) -> Pose:
         """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
         return _egt_pose(self.ypr_deg, self.position)
 
@@ -369,6 +390,11 @@ class PanoramicSpec(_CameraSpecBase):
     width: int = 640
     height: int = 480
 
+    MODELS: ClassVar[dict[str, dict[str, Any]]] = {HYPERBOLIC.kind: {"mirror": HYPERBOLIC.kind},
+                                                  PARABOLIC.kind: {"mirror": PARABOLIC.kind}}
+    DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
+        HYPERBOLIC.kind: ("egtviz.viewer.models.catadioptric:CatadioptricDrawing", "panoramic, hyperbolic mirror"),
+        PARABOLIC.kind: ("egtviz.viewer.models.catadioptric:CatadioptricDrawing", "panoramic, parabolic mirror")}
     kind: ClassVar[str] = "panoramic"
     """The entry's ``kind`` in a scene file (the mirror's shape is ``mirror``)."""
     NAME_PREFIX: ClassVar[str] = "pano"
@@ -420,11 +446,10 @@ class PanoramicSpec(_CameraSpecBase):
         """The core mirror (``HyperbolicMirror`` or ``ParabolicMirror``)."""
         return self.camera().mirror  # type: ignore[attr-defined]
 
-    @property
-    def pose(self) -> Pose:
+    def _pose_from_fields(self) -> Pose:
         """``Pose(panoramic_rotation_from_ypr(*radians(ypr_deg)), position)``."""
         yaw, pitch, roll = (math.radians(a) for a in self.ypr_deg)
-        return Pose(_panoramic_rotation(yaw, pitch, roll), self.position, check=False)
+        return Pose(panoramic_rotation_from_ypr(yaw, pitch, roll), self.position, check=False)
 
     def with_fields(self, **fields: Any) -> PanoramicSpec:
         """``dataclasses.replace``; a new ``mirror`` shape alone keeps the image as it was.
@@ -493,6 +518,9 @@ class UnifiedSpec(_CameraSpecBase):
     width: int = 640
     height: int = 480
 
+    MODELS: ClassVar[dict[str, dict[str, Any]]] = {UnifiedCamera.kind: {}}
+    DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
+        UnifiedCamera.kind: ("egtviz.viewer.models.unified:UnifiedDrawing", "unified sphere")}
     kind: ClassVar[str] = "unified"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "uni"
@@ -527,8 +555,7 @@ class UnifiedSpec(_CameraSpecBase):
         return UnifiedCamera.kind
 
 
-    @property
-    def pose(self) -> Pose:
+    def _pose_from_fields(self) -> Pose:
         """As a pin-hole's: ``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
         return _egt_pose(self.ypr_deg, self.position)
 
@@ -556,6 +583,9 @@ class FisheyeSpec(_CameraSpecBase):
     width: int = 640
     height: int = 480
 
+    MODELS: ClassVar[dict[str, dict[str, Any]]] = {FisheyeCamera.kind: {}}
+    DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
+        FisheyeCamera.kind: ("egtviz.viewer.models.fisheye:FisheyeDrawing", "equidistant fisheye")}
     kind: ClassVar[str] = "fisheye"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "fish"
@@ -589,8 +619,7 @@ class FisheyeSpec(_CameraSpecBase):
     def model_kind(self) -> str:
         return FisheyeCamera.kind
 
-    @property
-    def pose(self) -> Pose:
+    def _pose_from_fields(self) -> Pose:
         """As a pin-hole's: ``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
         return _egt_pose(self.ypr_deg, self.position)
 
@@ -603,7 +632,10 @@ class FisheyeSpec(_CameraSpecBase):
 CameraSpec = PinholeSpec | PanoramicSpec | UnifiedSpec | FisheyeSpec
 #: The scene file's camera entries: ``kind`` -> spec class. Every spec builds a registered camera model
 #: (``spec.model_kind``); a ``panoramic`` entry is a hyperbolic or parabolic one as its ``mirror`` says.
-CAMERA_KINDS: dict[str, type] = {cls.kind: cls for cls in (PinholeSpec, PanoramicSpec, UnifiedSpec, FisheyeSpec)}
+SPEC_CLASSES: tuple[type, ...] = (PinholeSpec, PanoramicSpec, UnifiedSpec, FisheyeSpec)
+"""Every camera spec, one entry per spec class: the scene's registry of camera models (each class names the models
+it builds, their parameters' fields and their drawings)."""
+CAMERA_KINDS: dict[str, type] = {cls.kind: cls for cls in SPEC_CLASSES}
 
 
 def spec_for_model(model_kind: str) -> tuple[type, dict[str, Any]]:
@@ -631,10 +663,7 @@ def model_choices(spec_cls: type) -> dict[str, tuple[str, ...]]:
 
 
 _SPEC_FOR_MODEL: dict[str, tuple[type, dict[str, Any]]] = {
-    PinholeCamera.kind: (PinholeSpec, {}),
-    UnifiedCamera.kind: (UnifiedSpec, {}),
-    FisheyeCamera.kind: (FisheyeSpec, {}),
-    **{mirror: (PanoramicSpec, {"mirror": mirror}) for mirror in _MIRROR_KINDS},
+    model: (cls, selection) for cls in SPEC_CLASSES for model, selection in cls.MODELS.items()
 }
 
 

@@ -1,12 +1,14 @@
-"""How each camera model is drawn in the 3D view: one drawing module per model, one registry line each.
+"""How each camera model is drawn in the 3D view: one drawing module per model, named by the model's spec class.
 
-A drawing owns the nodes of one camera's body (a frustum, a mirror over its CCD, a sphere) under the camera's
+A drawing owns the nodes of one camera's body (a frustum, a mirror over its CCD, a sphere, a lens) under the camera's
 gizmo node ``root`` (so they move with the gizmo, in the model frame) and any world-level nodes it needs. It draws
 only what the core model and the scene layer computed (``egtviz.scene.Derived``): the geometry comes from the
 camera model's public methods, never from a formula here.
 
-``scene3d.Scene3D`` looks a camera's drawing up by its model's ``kind`` (:func:`drawing_class`); no kind is tested
-anywhere else. How to add a model: ``docs/camera_models.md``.
+There is no registry here: each spec class of ``egtviz.scene.specs`` (the scene's one entry per camera spec) names
+the drawing and short label of every model it builds (``DRAWINGS``), and :data:`DRAWINGS` and :data:`SHORT_LABELS`
+are read from them. ``scene3d.Scene3D`` looks a camera's drawing up by its model's ``kind`` (:func:`drawing_class`);
+no kind is tested anywhere else. How to add a model: ``docs/camera_models.md``.
 """
 
 from __future__ import annotations
@@ -16,6 +18,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from ...geometry.camera_model import CAMERA_MODELS
+from ...scene.specs import SPEC_CLASSES
 
 __all__ = ["DRAWINGS", "SHORT_LABELS", "CameraDrawing", "DrawContext", "drawing_class"]
 
@@ -68,17 +73,17 @@ class CameraDrawing:
         """Remove the world-level nodes (the children of ``root`` go with the gizmo)."""
 
 
-DRAWINGS: dict[str, str] = {}
-"""``"module:Class"`` of the drawing of each registered camera model kind; one :func:`_register` line per model."""
-SHORT_LABELS: dict[str, str] = {}
-"""A few words naming each model in the GUI (a camera's folder: ``cam1 (pin-hole)``)."""
+def _drawings() -> tuple[dict[str, str], dict[str, str]]:
+    """The drawing and short label of each registered model, in the registry's order, from the scene's spec classes
+    (each names the drawings of the models it builds)."""
+    found = {kind: entry for cls in SPEC_CLASSES for kind, entry in cls.DRAWINGS.items()}
+    order = [kind for kind in CAMERA_MODELS if kind in found]
+    return {k: found[k][0] for k in order}, {k: found[k][1] for k in order}
 
 
-def _register(kind: str, target: str, short_label: str) -> None:
-    if kind in DRAWINGS:
-        raise ValueError(f"kind: {kind!r} has a drawing already")
-    DRAWINGS[kind] = target
-    SHORT_LABELS[kind] = short_label
+DRAWINGS, SHORT_LABELS = _drawings()
+"""``"module:Class"`` of the drawing of each registered camera model kind, and a few words naming each model in the
+GUI (a camera's folder: ``cam1 (pin-hole)``); both read from the spec classes (``egtviz.scene.specs``)."""
 
 
 def drawing_class(kind: str) -> type[CameraDrawing]:
@@ -92,10 +97,3 @@ def drawing_class(kind: str) -> type[CameraDrawing]:
         raise KeyError(f"kind: no drawing registered for camera model {kind!r} (have {sorted(DRAWINGS)})")
     module, _, name = target.partition(":")
     return getattr(importlib.import_module(module), name)
-
-
-_register("pinhole", "egtviz.viewer.models.pinhole:PinholeDrawing", "pin-hole")
-_register("hyperbolic", "egtviz.viewer.models.catadioptric:CatadioptricDrawing", "panoramic, hyperbolic mirror")
-_register("parabolic", "egtviz.viewer.models.catadioptric:CatadioptricDrawing", "panoramic, parabolic mirror")
-_register("unified", "egtviz.viewer.models.unified:UnifiedDrawing", "unified sphere")
-_register("fisheye", "egtviz.viewer.models.fisheye:FisheyeDrawing", "equidistant fisheye")
