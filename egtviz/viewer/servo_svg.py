@@ -24,6 +24,7 @@ presentation mode.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from html import escape
 
@@ -160,10 +161,6 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
     message = _wrap_words(img.message, 0.8 * panel_px, style.status_px * 1.1)  # bold: a little wider
     lay = panel_layout(view, style, panel_px, len(legend) + len(caption) + len(message))
     k = lay.k
-    colours = style.point_colours
-    nc = len(colours)
-    r_pt = style.mark_px * k
-    lw = style.line_px * k
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
     attrs = f' data-demo="{escape(img.demo)}" data-frame="{int(img.frame)}"{rev}'
     out = [
@@ -174,13 +171,28 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
         f'<defs><clipPath id="servo-clip-{escape(img.demo)}"><rect x="0" y="0" width="{_f(w)}" '
         f'height="{_f(h)}"/></clipPath></defs><g clip-path="url(#servo-clip-{escape(img.demo)})">',
     ]
+    out += _curves_svg(img, style, k)
+    out += _features_svg(img, style, k)
+    out.append("</g>")
+    # Under the frame: the legend rows, then the caption and the message.
+    rows = iter(lay.rows_y)
+    out += _legend_svg(legend, rows, style, k)
+    out += _texts_svg(img, caption, message, rows, style, k)
+    out.append("</svg>")
+    return "".join(out)
+
+
+def _curves_svg(img: ServoImage, style: PanelStyle, k: float) -> list[str]:
+    """The rim, then the epipolar lines / bi-conics (thin) and the trails, under the features."""
+    colours = style.point_colours
+    nc = len(colours)
+    lw = style.line_px * k
     integer = k >= 1.0
+    out = []
     if img.rim is not None and len(img.rim) >= 3:
         R = np.vstack([img.rim, img.rim[:1]])
         out.append(f'<polyline data-kind="rim" points="{_points_attr(R, integer=integer)}" fill="none" '
                    f'stroke="{RIM_COLOUR}" stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw * 5)},{_f(lw * 3)}"/>')
-    n = len(img.desired)
-    # Epipolar lines / bi-conics first (thin), so the features stay on top.
     if img.lines is not None:
         for i, seg in enumerate(np.asarray(img.lines, float)):
             if not np.all(np.isfinite(seg)):
@@ -195,24 +207,23 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
                            f'points="{_points_attr(run, integer=integer)}" fill="none" stroke="{colours[i % nc]}" '
                            f'stroke-width="{_f(lw * 0.8)}" stroke-opacity="0.75"/>')
     T = np.asarray(img.trails, float)
-    for i in range(n):
+    for i in range(len(img.desired)):
         for run in _finite_runs(T[:, i, :]) if len(T) else []:
             out.append(f'<polyline data-kind="trail" data-index="{i}" points="{_points_attr(run, integer=False)}" '
                        f'fill="none" stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}" '
                        f'stroke-linejoin="round" stroke-opacity="0.9"/>')
+    return out
+
+
+def _label_boxes(C: np.ndarray, D: np.ndarray, eps: list[tuple[str, np.ndarray]], cur: list[int],
+                 style: PanelStyle, k: float, bounds: tuple[float, float, float, float]
+                 ) -> tuple[np.ndarray, list[bool], list[bool]]:
+    """The boxes of the epipole labels and then the current features' numbers, clear of every disc, square and
+    cross, and which numbers are free and which need a leader line (:func:`~egtviz.viewer.svg.number_fates`)."""
+    r_pt = style.mark_px * k
+    lw = style.line_px * k
     a_sq = r_pt * 1.3
-    D = np.asarray(img.desired, float).reshape(-1, 2)
-    C = np.asarray(img.current, float).reshape(-1, 2)
-    for i, p in enumerate(D):
-        if np.all(np.isfinite(p)):
-            out.append(f'<rect data-kind="desired" data-index="{i}" x="{_f(p[0] - a_sq)}" y="{_f(p[1] - a_sq)}" '
-                       f'width="{_f(2 * a_sq)}" height="{_f(2 * a_sq)}" fill="#fff" fill-opacity="0.6" '
-                       f'stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}"/>')
-    # Labels: epipoles first, then the current features' numbers, clear of every disc, square and cross.
     a_ep = r_pt * 1.6
-    eps = [(str(lab), np.asarray(e, float)) for lab, e in img.epipoles]
-    eps = [(lab, e) for lab, e in eps if np.all(np.isfinite(e))]
-    cur = [i for i in range(len(C)) if np.all(np.isfinite(C[i]))]
     size = style.label_px * k
     halo = 0.25 * style.label_px * k
     obstacles = [(p[0] - r_pt - lw, p[1] - r_pt - lw, p[0] + r_pt + lw, p[1] + r_pt + lw) for p in C[cur]]
@@ -223,14 +234,35 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
     radii = [a_ep] * len(eps) + [r_pt] * len(cur)
     sizes = [(_text_px(lab, style.label_px) * k + halo, 0.95 * size + halo) for lab, _ in eps]
     sizes += [(_text_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in cur]
-    boxes = (place_labels(anchors, radii, sizes, obstacles, (0.0, 0.0, w, h), gap=0.3 * size)
-             if anchors else np.zeros((0, 4)))
-    halo_attr = f' stroke="#fff" stroke-width="{_f(halo)}" paint-order="stroke"'
-    # As in the panels, a number is next to its feature or joined to it by a leader line; one that found no free
-    # place is drawn too, with its line (a dozen features: the frame has no row to count hidden ones in).
+    boxes = place_labels(anchors, radii, sizes, obstacles, bounds, gap=0.3 * size) if anchors else np.zeros((0, 4))
     keep, far = number_fates(boxes, len(eps), np.asarray(anchors, float).reshape(-1, 2),
                              np.asarray(radii, float) + 0.3 * size, np.asarray(obstacles, float).reshape(-1, 4),
                              C[cur].reshape(-1, 2))
+    return boxes, keep, far
+
+
+def _features_svg(img: ServoImage, style: PanelStyle, k: float) -> list[str]:
+    """The desired squares, the current features with their numbers, and the epipoles with their labels."""
+    colours = style.point_colours
+    nc = len(colours)
+    r_pt = style.mark_px * k
+    lw = style.line_px * k
+    a_sq = r_pt * 1.3
+    a_ep = r_pt * 1.6
+    size = style.label_px * k
+    D = np.asarray(img.desired, float).reshape(-1, 2)
+    C = np.asarray(img.current, float).reshape(-1, 2)
+    out = [f'<rect data-kind="desired" data-index="{i}" x="{_f(p[0] - a_sq)}" y="{_f(p[1] - a_sq)}" '
+           f'width="{_f(2 * a_sq)}" height="{_f(2 * a_sq)}" fill="#fff" fill-opacity="0.6" '
+           f'stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}"/>'
+           for i, p in enumerate(D) if np.all(np.isfinite(p))]
+    eps = [(str(lab), np.asarray(e, float)) for lab, e in img.epipoles]
+    eps = [(lab, e) for lab, e in eps if np.all(np.isfinite(e))]
+    cur = [i for i in range(len(C)) if np.all(np.isfinite(C[i]))]
+    boxes, keep, far = _label_boxes(C, D, eps, cur, style, k, (0.0, 0.0, float(img.width), float(img.height)))
+    halo_attr = f' stroke="#fff" stroke-width="{_f(0.25 * style.label_px * k)}" paint-order="stroke"'
+    # As in the panels, a number is next to its feature or joined to it by a leader line; one that found no free
+    # place is drawn too, with its line (a dozen features: the frame has no row to count hidden ones in).
     for i, box, free, near_miss in zip(cur, boxes[len(eps):], keep, far):
         p = C[i]
         line = ""
@@ -251,11 +283,17 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
                                  f' font-size="{_f(size)}" font-style="italic" fill="{EPIPOLE_COLOUR}"{halo_attr}',
                                  e[0])
                    + "</g>")
-    out.append("</g>")
-    # Under the frame: the legend rows, then the caption and the message.
+    return out
+
+
+def _legend_svg(legend: list[list[tuple[str, str, float]]], rows: Iterator[float], style: PanelStyle, k: float
+                ) -> list[str]:
+    """The legend, one ``<g>`` per row (its baselines from ``rows``): each symbol drawn as in the image, and its
+    name."""
     st = style.status_px * k
-    rows = iter(lay.rows_y)
+    lw = style.line_px * k
     grey = "#555"
+    out = []
     for entries in legend:
         y = next(rows)
         x = 0.0
@@ -279,6 +317,14 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
             items.append(f'<text x="{_f(x + 2.2 * st)}" y="{_f(y)}">{text}</text>')
             x += width * k
         out.append(f'<g data-kind="legend" font-size="{_f(st)}" fill="{style.ink}">{"".join(items)}</g>')
+    return out
+
+
+def _texts_svg(img: ServoImage, caption: list[str], message: list[str], rows: Iterator[float], style: PanelStyle,
+               k: float) -> list[str]:
+    """The caption and the message, each a ``<text>`` of one or more lines (their baselines from ``rows``)."""
+    st = style.status_px * k
+    out = []
     for kind, lines, attrs in (("caption", caption, f'fill="{style.ink}"'),
                                ("message", message, f'fill="{img.message_colour}" font-weight="bold"')):
         if lines:
@@ -286,5 +332,4 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
             body = (escape(lines[0]) if len(lines) == 1 else
                     "".join(f'<tspan x="0" y="{_f(y)}">{escape(t)}</tspan>' for t, y in zip(lines, ys)))
             out.append(f'<text data-kind="{kind}" x="0" y="{_f(ys[0])}" font-size="{_f(st)}" {attrs}>{body}</text>')
-    out.append("</svg>")
-    return "".join(out)
+    return out
