@@ -122,3 +122,33 @@ def test_the_unchecked_calls_are_the_checked_ones():
     for x, y in zip(a, b, strict=True):
         for u, v in zip(x, y, strict=True):
             np.testing.assert_array_equal(u, v)
+
+
+def test_the_workbench_adds_a_fisheye_and_draws_its_epipolar_curves_through_the_points():
+    import xml.etree.ElementTree as ET
+
+    from egtviz.scene import default_scene
+    from egtviz.viewer.headless import start_headless
+
+    server, _app, fakes, views = start_headless(default_scene())
+    try:
+        view = views[0]
+        view.add_buttons["fisheye"].value = True  # the workbench's "Add equidistant fisheye camera"
+        (name,) = [c.name for c in view.model.scene.cameras if c.model_kind == "fisheye"]
+        assert view.scene3d._cams[name]["lens"].visible
+        view.model.set_pair("cam1", name)
+        ip = view.model.derived.image_planes[name]
+        assert ip.lines is None and ip.rim is not None and ip.visible.any()
+        svg = ET.fromstring(view.svgs[name])
+        arcs = [np.array([[float(x) for x in p.split(",")] for p in el.get("points").split()])
+                for el in svg.iter() if el.get("data-kind") == "epipolar-conic"]
+        assert len(arcs) == ip.visible.sum()
+        # Every drawn point lies on one of the drawn curves (the panel's coordinates are the image's, to a scale).
+        for i in np.flatnonzero(ip.visible):
+            (arc,) = ip.conics[i]
+            assert distance_to_polyline(ip.points[i], arc) < 0.05
+        assert {"position", "ypr"} <= set(view._cam_fields[name]) and len(view._cam_fields[name]) >= 5
+    finally:
+        for f in fakes:
+            f.close()
+        server.stop()
