@@ -138,7 +138,7 @@ REFUSED = [
         dict(d["cameras"][0], name=f"c{i}") for i in range(9)])), r"cameras: at most 8 entries, got 9"),
     ("camera-list", mutated(lambda d: d["cameras"].__setitem__(0, ["pinhole"])), r"cameras\[0\]\.kind: expected one of"),
     ("camera-null", mutated(lambda d: d["cameras"].__setitem__(0, None)), r"cameras\[0\]\.kind: expected one of"),
-    ("kind-orthographic", mutated(cam("kind", "orthographic")), r"cameras\[0\]\.kind: expected one of \['fisheye', 'panoramic', 'pinhole', 'unified'\]"),
+    ("kind-orthographic", mutated(cam("kind", "orthographic")), r"cameras\[0\]\.kind: expected one of \['fisheye', 'hyperbolic', 'panoramic', 'parabolic', 'pinhole', 'unified'\]"),
     ("kind-list", mutated(cam("kind", ["pinhole"])), r"cameras\[0\]\.kind: expected one of"),
     ("kind-missing", mutated(lambda d: d["cameras"][0].pop("kind")), r"cameras\[0\]\.kind: expected one of"),
     ("unknown-camera-field", mutated(cam("zoom", 2)), r"cameras\[0\]\.zoom: unknown field for a pinhole camera"),

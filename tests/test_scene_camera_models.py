@@ -237,3 +237,21 @@ def test_the_registries_name_each_kind_once_and_agree():
     assert set(CAMERA_KINDS) == {"pinhole", "panoramic", "unified", "fisheye"}
     assert {spec_for_model(k)[0] for k in CAMERA_MODELS} == set(CAMERA_KINDS.values())
     assert PinholeCamera.kind in CAMERA_MODELS and UnifiedCamera.kind in CAMERA_MODELS
+
+
+def test_a_file_may_name_the_model_and_old_panoramic_files_still_load():
+    scene = every_kind_scene()
+    data = scene.to_dict()
+    # Written as before: a catadioptric camera is a "panoramic" entry with its mirror (old readers read it).
+    assert [c["kind"] for c in data["cameras"]] == ["pinhole", "panoramic", "panoramic", "unified", "fisheye"]
+    assert [data["cameras"][k]["mirror"] for k in (1, 2)] == ["hyperbolic", "parabolic"]
+    assert scene_from_dict(data) == scene
+    # Read by the models' own kinds too: "hyperbolic" and "parabolic" select the mirror.
+    for k, kind in ((1, "hyperbolic"), (2, "parabolic")):
+        entry = {key: v for key, v in data["cameras"][k].items() if key != "mirror"}
+        data["cameras"][k] = {**entry, "kind": kind}
+    again = scene_from_dict(data)
+    assert again == scene and [c.model_kind for c in again.cameras][1:3] == ["hyperbolic", "parabolic"]
+    data["cameras"][2]["mirror"] = "hyperbolic"
+    with pytest.raises(SceneError, match=r"cameras\[2\]\.mirror: a parabolic camera has mirror 'parabolic'"):
+        scene_from_dict(data)

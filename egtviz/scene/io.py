@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..files import FileSafetyError, printable, read_limited, too_large, write_atomic
+from ..geometry.camera_model import CAMERA_MODELS
 from .limits import (
     MAX_CAMERAS,
     MAX_JSON_DEPTH,
@@ -29,7 +30,7 @@ from .limits import (
 from .annotations import annotations_from_dict
 from .scene import FILE_FORMAT, FILE_VERSION, Scene, SceneFileError, scene_to_bytes, scene_to_dict
 from ._values import SceneError, required_fields, short_text
-from .specs import CAMERA_KINDS, DisplayOptions, SurfaceSpec
+from .specs import CAMERA_KINDS, DisplayOptions, SurfaceSpec, spec_for_model
 from .surfaces import check_surface
 
 __all__ = [
@@ -205,10 +206,16 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     for i, entry in enumerate(_list(data, "cameras", source, MAX_CAMERAS)):
         where = f"cameras[{i}]"
         kind = entry.get("kind") if isinstance(entry, dict) else None
-        if type(kind) is not str or kind not in CAMERA_KINDS:
-            raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(CAMERA_KINDS)}, got {short_text(kind)}")
+        if type(kind) is not str or not (kind in CAMERA_KINDS or kind in CAMERA_MODELS):
+            raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(set(CAMERA_KINDS) | set(CAMERA_MODELS))}, "
+                                 f"got {short_text(kind)}")
         entry = {k: v for k, v in entry.items() if k != "kind"}
-        spec_cls = CAMERA_KINDS[kind]
+        spec_cls, selection = (CAMERA_KINDS[kind], {}) if kind in CAMERA_KINDS else spec_for_model(kind)
+        # A model's own kind (e.g. "parabolic") selects it in its spec; a field that says otherwise is an error.
+        for field, value in selection.items():
+            if entry.setdefault(field, value) != value:
+                raise SceneFileError(f"{source}: {where}.{field}: a {kind} camera has {field} {value!r}, got "
+                                     f"{short_text(entry[field])}")
         try:
             cameras.append(spec_cls(**_fields(entry, where, source, spec_cls, f"a {kind} camera")))
         except SceneError as exc:
