@@ -94,3 +94,16 @@ def test_array_assignment_matches_viser_own(server):
         assign_array(ours, "points", np.ones((2, 3), np.float32))
 
 
+
+
+def test_the_installed_viser_has_the_server_and_gizmo_internals_the_benchmarks_use(server):
+    assert viser_adapter.missing_server_internals(server) == []
+    assert viser_adapter.event_loop(server).is_running()
+    assert hasattr(viser_adapter.callback_pool(server), "submit")
+    gizmo = server.scene.add_transform_controls("/g")
+    assert viser_adapter.missing_gizmo_internals(gizmo) == []
+    viser_adapter.gizmo_moved_by_client(gizmo, np.array([1.0, 2.0, 3.0]))
+    assert np.allclose(gizmo.position, (1.0, 2.0, 3.0))
+    # Objects without them are reported name by name (what a changed viser would look like).
+    assert viser_adapter.missing_server_internals(object()) == list(viser_adapter.SERVER_PRIVATE_NAMES)
+    assert viser_adapter.missing_gizmo_internals(object()) == list(viser_adapter.GIZMO_PRIVATE_NAMES)

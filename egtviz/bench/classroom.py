@@ -15,12 +15,14 @@ Method (also in ``docs/benchmarks.md``):
   threads) over the drag, from the common start until every tab has gone quiet, divided by the
   updates the server applied (renders; the guards merge a tab's waiting updates, latest wins, so a
   saturated server applies fewer than were sent). The parts come from per-thread CPU clocks
-  (``time.thread_time``) around the app's stages: ``compute_derived`` (geometry), the panel SVGs,
-  the GUI fields, the 3D nodes, ``client.flush``; the rest of the render (panel and read-out
-  assignment), the rest of the gizmo callback (the model: checks, the new scene, undo), and what is
-  outside the callbacks (viser: receiving, decoding and dispatching messages, the thread pool,
-  serialising, compressing and sending the updates). One more run under ``cProfile`` (the event loop's
-  thread and every pool thread) splits the time by library.
+  (``time.thread_time``): ``compute_derived`` (geometry, a clock around the scene model's reference
+  to it) and the viewer's public timing hook (``ClientView.on_update_timed``, one
+  ``UpdateTiming`` per applied update): the panels (SVGs and their assignment), the read-out and
+  GUI fields, the 3D nodes, ``client.flush``, the rest of the render, the rest of the user event
+  (the model: checks, the new scene, undo), and what is outside the applied events (viser: receiving,
+  decoding and dispatching messages, the thread pool, gizmo events dropped as stale, serialising,
+  compressing and sending the updates). One more run under ``cProfile`` (the event loop's thread and
+  every callback the server submits to its executor) splits the time by library.
 * **Panel lag.** For each update a tab sent, the time from its send to the arrival at that tab of the
   first panel SVG drawn from it or from a later update of the same tab (latest wins: an update merged
   into a later one is served by that one's panel). Both ends read this machine's wall clock. An update
@@ -188,6 +190,12 @@ class _StageClock:
 
         return timed
 
+    def add(self, parts: dict[str, float]) -> None:
+        """Add CPU seconds by stage (from any thread)."""
+        with self._lock:
+            for stage, dt in parts.items():
+                self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
+
     def reset(self) -> None:
         with self._lock:
             self.seconds = {}
@@ -198,33 +206,27 @@ def _rss_bytes() -> int:
 
 
 class _Drawn:
-    """What each tab's renders drew: ``(revision, camera 1's position)``, recorded after each render."""
+    """What each tab's updates drew: ``(revision, camera 1's position)``, recorded after each update."""
 
     def __init__(self) -> None:
         self.by_view: dict[int, list[tuple[int, tuple[float, float, float]]]] = {}
 
-    def wrap(self, cid: int, view: Any, render: Callable) -> Callable:
+    def hook(self, cid: int, view: Any, clock: _StageClock) -> Callable[[Any], None]:
+        """The view's timing hook: the update's CPU parts to ``clock``, what it drew to the tab's log."""
         log = self.by_view.setdefault(cid, [])
 
-        def recorded(scene: Any, *args: Any, **kwargs: Any) -> Any:
-            try:
-                return render(scene, *args, **kwargs)
-            finally:
-                log.append((view.revision, tuple(float(v) for v in view.model.scene.cameras[0].position)))
+        def timed(timing: Any) -> None:
+            # The event's CPU, from its start to the end of its update, is the stage "callback".
+            clock.add({"callback" if stage == "event" else stage: dt for stage, dt in timing.cpu.items()})
+            log.append((timing.revision, tuple(float(v) for v in view.model.scene.cameras[0].position)))
 
-        return recorded
+        return timed
 
 
 def _instrument(app: Any, clock: _StageClock, drawn: _Drawn) -> None:
-    """Put the stage clocks around each tab's update path (instance attributes: the app's code is unchanged)."""
+    """Hook the stage clocks to each tab's public timing hook (``ClientView.on_update_timed``)."""
     for cid, view in app.views.items():
-        s3 = view.scene3d
-        s3._on_camera_gizmo = clock.wrap("callback", s3._on_camera_gizmo)
-        s3.draw = clock.wrap("scene3d", s3.draw)
-        view._panel_svg = clock.wrap("svg", view._panel_svg)
-        view._sync_fields = clock.wrap("fields", view._sync_fields)
-        view.client.flush = clock.wrap("flush", view.client.flush)
-        view._render = drawn.wrap(cid, view, clock.wrap("render", view._render))
+        view.on_update_timed = drawn.hook(cid, view, clock)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -286,12 +288,13 @@ def _lags(tab: dict, drawn: list[tuple[int, tuple[float, float, float]]], start:
 
 def _parts(stages: dict[str, float], cpu_s: float, applied: int) -> dict[str, float]:
     get = stages.get
-    render_rest = get("render", 0.0) - get("svg", 0.0) - get("fields", 0.0) - get("scene3d", 0.0) - get("flush", 0.0)
+    drawn = ("derived", "svg", "fields", "scene3d", "flush")
+    render_rest = get("render", 0.0) - sum(get(k, 0.0) for k in drawn)
     parts = {
         "geometry": get("geometry", 0.0),
         "model": get("callback", 0.0) - get("render", 0.0) - get("geometry", 0.0),
         "svg": get("svg", 0.0),
-        "panels+readout": render_rest,
+        "panels+readout": render_rest + get("derived", 0.0),
         "fields": get("fields", 0.0),
         "scene3d": get("scene3d", 0.0),
         "flush": get("flush", 0.0),
@@ -346,8 +349,10 @@ class _PoolProfiler:
     """cProfile on the event loop's thread and on every pool thread (each thread its own profiler)."""
 
     def __init__(self, server: Any) -> None:
-        self._loop = server._websock_server._background_event_loop
-        self._pool = server._thread_executor._pool
+        from ..viewer.viser_adapter import callback_pool, event_loop
+
+        self._loop = event_loop(server)
+        self._pool = callback_pool(server)
         self._submit = self._pool.submit
         self._local = threading.local()
         self.profiles: list[cProfile.Profile] = []

@@ -110,24 +110,28 @@ def _scenes(n_points: int) -> dict[str, Any]:
 
 def _drag_event(gizmo: Any, position: np.ndarray) -> Any:
     """What viser does on a TransformControlsUpdateMessage before calling our callback."""
-    gizmo._impl.position = np.asarray(position, float)
-    gizmo._impl_aux.last_updated = time.time()
+    from ..viewer.viser_adapter import gizmo_moved_by_client
+
+    gizmo_moved_by_client(gizmo, position)
     return types.SimpleNamespace(target=gizmo, phase="update", client=None, client_id=None)
 
 
 def _drive(view: Any, name: str, n: int, spacing: float) -> list[tuple[int, float, dict]]:
     """Drag camera ``name`` 2 mm further ``n`` times (always to a new place), ``spacing`` seconds apart.
 
-    Returns ``(revision, wall time at the end of the update, its breakdown)`` per event.
+    Returns ``(revision, wall time at the end of the update, its wall seconds by part)`` per applied update, from
+    the view's timing hook (:attr:`~egtviz.viewer.app.ClientView.on_update_timed`).
     """
-    gizmo = view.scene3d._cams[name]["gizmo"]
+    gizmo = view.scene3d.gizmo(name)
     start = np.array(gizmo.position, float)
-    view.timings.clear()
-    out = []
-    for k in range(n):
-        view._camera_gizmo_event(name, _drag_event(gizmo, start + np.array([0.002 * k, 0.0, 0.0])))
-        out.append((view.revision, view.last_update_wall, dict(view.breakdown)))
-        time.sleep(spacing)
+    out: list[tuple[int, float, dict]] = []
+    view.on_update_timed = lambda t: out.append((t.revision, time.time(), dict(t.wall)))
+    try:
+        for k in range(n):
+            view.drag.camera_event(name, _drag_event(gizmo, start + np.array([0.002 * k, 0.0, 0.0])))
+            time.sleep(spacing)
+    finally:
+        view.on_update_timed = None
     return out
 
 
@@ -142,7 +146,7 @@ def server_latency(scene: Any, n: int = EVENTS, *, spacing: float = 0.005) -> di
     try:
         view = views[0]
         breakdown = [b for _, _, b in _drive(view, scene.cameras[0].name, n, spacing)]
-        t = np.array(view.timings) * 1e3
+        t = np.array([sum(b.values()) for b in breakdown]) * 1e3  # the parts run from the event to the flush
         parts = {k: float(np.median([b[k] for b in breakdown]) * 1e3) for k in breakdown[0]}
         return {"p50": float(np.percentile(t, 50)), "p99": float(np.percentile(t, 99)), **parts}
     finally:

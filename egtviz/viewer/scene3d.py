@@ -210,6 +210,10 @@ class Scene3D:
 
     # -- cameras ---------------------------------------------------------------
 
+    def gizmo(self, name: str) -> Any:
+        """Camera ``name``'s gizmo handle (benchmarks drive a drag through it). KeyError: no such camera."""
+        return self._cams[name]["gizmo"]
+
     def _cam_id(self, name: str) -> int:
         if name not in self._cam_ids:
             self._cam_ids[name] = self._next_id

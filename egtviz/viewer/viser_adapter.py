@@ -5,6 +5,10 @@ the property's type hints and compares it with the old value before queueing the
 property, on every drag step, for arrays this layer has just compared itself. :func:`assign_array` does what that
 assignment does for a changed array of the node's own dtype, and nothing more; everything else goes the public way.
 
+The benchmarks reach viser's server and gizmos through here too (:func:`event_loop`, :func:`callback_pool`,
+:func:`gizmo_moved_by_client`): their private names are in :data:`SERVER_PRIVATE_NAMES` and
+:data:`GIZMO_PRIVATE_NAMES`, checked by :func:`missing_server_internals` and :func:`missing_gizmo_internals`.
+
 The private names used are listed in :data:`PRIVATE_NAMES` and checked by :func:`missing_internals`; the test
 ``tests/test_viser_adapter.py`` fails when the installed viser no longer has them or no longer sends what the public
 assignment sends, so an upgrade of viser is noticed at once (then fall back to the public path: ``FAST_PATH = False``).
@@ -13,6 +17,9 @@ assignment sends, so an upgrade of viser is noticed at once (then fall back to t
 from __future__ import annotations
 
 from typing import Any
+
+import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -110,3 +117,50 @@ def assign(handle: Any, prop: str, value: Any) -> None:
         return
     setattr(handle, prop, value)
     cache[prop] = value.copy() if isinstance(value, np.ndarray) else value
+
+
+# -- what the benchmarks need from viser's server and gizmos ---------------------------------------------------
+
+#: Private members of a :class:`viser.ViserServer` the benchmarks reach (the event loop and the callbacks' pool).
+SERVER_PRIVATE_NAMES = ("_websock_server._background_event_loop", "_thread_executor")
+#: Private members of a transform-controls (gizmo) handle that a client's gizmo message sets.
+GIZMO_PRIVATE_NAMES = ("_impl.position", "_impl_aux.last_updated")
+
+
+def _missing(obj: Any, dotted_names: tuple[str, ...]) -> list[str]:
+    missing = []
+    for dotted in dotted_names:
+        target = obj
+        for part in dotted.split("."):
+            target = getattr(target, part, _MISSING)
+            if target is _MISSING:
+                missing.append(dotted)
+                break
+    return missing
+
+
+def missing_server_internals(server: Any) -> list[str]:
+    """The names of :data:`SERVER_PRIVATE_NAMES` that ``server`` lacks; empty when all exist."""
+    return _missing(server, SERVER_PRIVATE_NAMES)
+
+
+def missing_gizmo_internals(gizmo: Any) -> list[str]:
+    """The names of :data:`GIZMO_PRIVATE_NAMES` that ``gizmo`` lacks; empty when all exist."""
+    return _missing(gizmo, GIZMO_PRIVATE_NAMES)
+
+
+def event_loop(server: Any) -> Any:
+    """The asyncio event loop on which ``server`` receives and sends websocket messages."""
+    return server._websock_server._background_event_loop
+
+
+def callback_pool(server: Any) -> ThreadPoolExecutor:
+    """The executor ``server`` submits GUI and scene callbacks to (viser's thread pool, or egtviz's fair
+    executor over it when the guards of :mod:`egtviz.viewer.guard` are on): each ``submit`` runs a callback."""
+    return server._thread_executor
+
+
+def gizmo_moved_by_client(gizmo: Any, position: np.ndarray) -> None:
+    """Put ``gizmo`` where a client's gizmo message would, before viser calls its callbacks (benchmarks, tests)."""
+    gizmo._impl.position = np.asarray(position, float)
+    gizmo._impl_aux.last_updated = time.time()
