@@ -185,6 +185,27 @@ def _fields(entry: Any, where: str, source: str, cls: type, what: str) -> dict[s
     return {k: tuple(v) if isinstance(v, list) else v for k, v in entry.items()}
 
 
+def _camera(entry: Any, where: str, source: str) -> Any:
+    """The camera spec of a scene file's entry ``where``: its ``kind`` is a spec's (``"panoramic"``) or a registered
+    model's (``"parabolic"``, which selects it in its spec)."""
+    kind = entry.get("kind") if isinstance(entry, dict) else None
+    if type(kind) is not str or not (kind in CAMERA_KINDS or kind in CAMERA_MODELS):
+        raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(set(CAMERA_KINDS) | set(CAMERA_MODELS))}, "
+                             f"got {short_text(kind)}")
+    entry = {k: v for k, v in entry.items() if k != "kind"}
+    spec_cls, selection = (CAMERA_KINDS[kind], {}) if kind in CAMERA_KINDS else spec_for_model(kind)
+    for field, value in selection.items():  # a field that says otherwise than the kind is an error
+        if entry.setdefault(field, value) != value:
+            raise SceneFileError(f"{source}: {where}.{field}: a {kind} camera has {field} {value!r}, got "
+                                 f"{short_text(entry[field])}")
+    try:
+        return spec_cls(**_fields(entry, where, source, spec_cls, f"a {kind} camera"))
+    except SceneError as exc:
+        if isinstance(exc, SceneFileError):
+            raise
+        raise _entry(source, where, exc) from None
+
+
 def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     """A scene from parsed JSON data: every entry type-checked, then the scene drawn once.
 
@@ -202,26 +223,8 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     if "version" in data and (type(data["version"]) is not int or data["version"] != FILE_VERSION):
         raise SceneFileError(f"{source}: version: this egtviz reads version {FILE_VERSION}, got {short_text(data['version'])}")
 
-    cameras = []
-    for i, entry in enumerate(_list(data, "cameras", source, MAX_CAMERAS)):
-        where = f"cameras[{i}]"
-        kind = entry.get("kind") if isinstance(entry, dict) else None
-        if type(kind) is not str or not (kind in CAMERA_KINDS or kind in CAMERA_MODELS):
-            raise SceneFileError(f"{source}: {where}.kind: expected one of {sorted(set(CAMERA_KINDS) | set(CAMERA_MODELS))}, "
-                                 f"got {short_text(kind)}")
-        entry = {k: v for k, v in entry.items() if k != "kind"}
-        spec_cls, selection = (CAMERA_KINDS[kind], {}) if kind in CAMERA_KINDS else spec_for_model(kind)
-        # A model's own kind (e.g. "parabolic") selects it in its spec; a field that says otherwise is an error.
-        for field, value in selection.items():
-            if entry.setdefault(field, value) != value:
-                raise SceneFileError(f"{source}: {where}.{field}: a {kind} camera has {field} {value!r}, got "
-                                     f"{short_text(entry[field])}")
-        try:
-            cameras.append(spec_cls(**_fields(entry, where, source, spec_cls, f"a {kind} camera")))
-        except SceneError as exc:
-            if isinstance(exc, SceneFileError):
-                raise
-            raise _entry(source, where, exc) from None
+    cameras = [_camera(entry, f"cameras[{i}]", source)
+               for i, entry in enumerate(_list(data, "cameras", source, MAX_CAMERAS))]
 
     points = _list(data, "points", source, MAX_POINTS)
     points = [tuple(p) if isinstance(p, list) else p for p in points]
