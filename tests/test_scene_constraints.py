@@ -6,10 +6,17 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from egtviz.geometry import GeometryError
+from egtviz.geometry.poses import matrix_from_quat_wxyz
 
 from egtviz.scene import SceneError, SceneModel
 from egtviz.scene.constraints import CameraRanges
 from egtviz.scene.examples import default_scene
+
+from test_scene_camera_models import every_kind_scene
 
 
 @dataclass(frozen=True)
@@ -73,19 +80,26 @@ def test_a_lesson_step_is_not_judged_and_an_unchanged_field_is_not_either():
     assert model.scene.camera("cam1").position == (9.0, 9.0, 9.0)
 
 
-def test_a_dragged_pose_stays_the_pose_the_gizmo_gave():
-    from scipy.spatial.transform import Rotation
-
-    from egtviz.geometry.poses import matrix_from_quat_wxyz, quat_wxyz_from_matrix
-
-    model = SceneModel(default_scene())
+@settings(max_examples=40, deadline=None)
+@given(st.integers(min_value=0, max_value=2**32 - 1))
+def test_a_dragged_pose_stays_the_pose_the_gizmo_gave(seed):
+    rng = np.random.default_rng(seed)
+    model = SceneModel(every_kind_scene())
     for name in model.scene.camera_names:
-        R = matrix_from_quat_wxyz(quat_wxyz_from_matrix(Rotation.from_euler("zyx", [0.3, -0.2, 0.1]).as_matrix()))
-        model.set_camera_pose(name, (0.5, -6.0, 1.2), R)
+        q = rng.normal(size=4)
+        R = matrix_from_quat_wxyz(q / np.linalg.norm(q))  # what a gizmo's quaternion gives
+        position = tuple(rng.uniform(-5.0, 5.0, 3).tolist())
+        model.set_camera_pose(name, position, R)
         spec = model.scene.camera(name)
         # The camera's rotation is the gizmo's, bit for bit (no rotation -> angles -> rotation round trip) ...
-        assert np.array_equal(spec.camera().pose.R, R) and spec.position == (0.5, -6.0, 1.2)
-        # ... and the angles the fields show describe it (to rounding); a file keeps it to rounding.
-        np.testing.assert_allclose(spec.with_fields(name=spec.name + "x").pose.R, R, atol=1e-12)
-    with pytest.raises(Exception, match="R"):
-        model.set_camera_pose(model.scene.camera_names[0], (0.0, 0.0, 0.0), np.diag([1.0, 1.0, -1.0]))
+        assert np.array_equal(spec.camera().pose.R, R) and spec.position == position
+        # ... and the angles the fields show describe it: a spec rebuilt from its fields (a file) has it to rounding.
+        np.testing.assert_allclose(spec.with_fields(name=spec.name + "x").pose.R, R, atol=1e-9)
+
+
+def test_a_gizmo_rotation_that_is_not_one_is_refused():
+    model = SceneModel(default_scene())
+    with pytest.raises(GeometryError, match="R"):
+        model.set_camera_pose("cam1", (0.0, 0.0, 0.0), np.diag([1.0, 1.0, -1.0]))
+    with pytest.raises(GeometryError, match="R"):
+        model.set_camera_pose("cam1", (0.0, 0.0, 0.0), np.eye(3) * 1.01)
