@@ -267,64 +267,88 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
     n = len(A)
     if n == 0:
         return np.empty((0, 4))
-    # A candidate box lies within (r + gap) * the last ring plus the label's width (height) of its anchor along x
-    # (y): only obstacles and earlier labels reaching into that rectangle can cost it anything. One numpy pass
-    # finds the obstacles; then each label walks its candidates in plain Python, stops adding up a candidate's
-    # cost once it cannot beat the best so far (costs only grow), and stops at the first free box.
-    far = (R + gap) * _RINGS[-1]
-    reach_x, reach_y = far + S[:, 0], far + S[:, 1]
-    if len(O):
-        ax_, ay_ = A[:, None, 0], A[:, None, 1]
-        near = ((O[None, :, 0] <= ax_ + reach_x[:, None]) & (O[None, :, 2] >= ax_ - reach_x[:, None])
-                & (O[None, :, 1] <= ay_ + reach_y[:, None]) & (O[None, :, 3] >= ay_ - reach_y[:, None]))
-        rows = O.tolist()  # once: a list per label's near rows would copy the crowded ones again for each label
-        near_boxes = [[rows[j] for j in np.flatnonzero(m).tolist()] for m in near]
-    else:
-        near_boxes = [[] for _ in range(n)]
-    bx0, by0, bx1, by1 = (float(b) for b in bounds)
+    # Each label walks its candidates in plain Python among the obstacles near it (_near_obstacles), stops adding
+    # up a candidate's cost once it cannot beat the best so far (costs only grow), and stops at the first free box.
+    near_boxes, reach_x, reach_y = _near_obstacles(A, R, S, O, gap)
+    box_bounds = tuple(float(b) for b in bounds)
     placed: list[tuple[float, float, float, float]] = []
     for (ax, ay), r, (w, h), others, rx, ry in zip(A.tolist(), R.tolist(), S.tolist(), near_boxes,
                                                   reach_x.tolist(), reach_y.tolist()):
         lo_x, hi_x, lo_y, hi_y = ax - rx, ax + rx, ay - ry, ay + ry
         # The obstacles, then the earlier labels, in the order given: the same sums as over all of them.
         boxes = others + [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
-        best, best_cost = None, math.inf
-        area = w * h
-        tiny = 1e-6 * area  # rounding, not an overlap
-        # Conditional expressions, not min()/max(): here the builtin calls cost more than the comparisons.
-        for ring in _RINGS:
-            d = (r + gap) * ring
-            # The boxes overlapping each column of candidates (a ring's candidates share three columns, left,
-            # centred and right), with their overlap width, in the given order: a candidate then tests only its
-            # column's boxes, and adds up the same overlaps in the same order as over all of them.
-            columns: dict[int, list[tuple[float, float, float]]] = {}
-            for dx, dy in _DIRECTIONS:
-                # The box touches the square of half-side d around the anchor; above/below it is centred.
-                x0 = ax + d if dx > 0 else ax - d - w if dx < 0 else ax - w / 2
-                y0 = ay + d if dy > 0 else ay - d - h if dy < 0 else ay - h / 2
-                x1, y1 = x0 + w, y0 + h
-                column = columns.get(dx)
-                if column is None:
-                    column = columns[dx] = [
-                        (ow, o[1], o[3]) for o in boxes
-                        if (ow := (x1 if x1 < o[2] else o[2]) - (x0 if x0 > o[0] else o[0])) > 0
-                    ]
-                iw = (x1 if x1 < bx1 else bx1) - (x0 if x0 > bx0 else bx0)
-                ih = (y1 if y1 < by1 else by1) - (y0 if y0 > by0 else by0)
-                c = area - (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)
-                for ow, oy0, oy1 in column:
-                    oh = (y1 if y1 < oy1 else oy1) - (y0 if y0 > oy0 else oy0)
-                    if oh > 0:
-                        c += ow * oh
-                        if c >= best_cost and c > tiny:
-                            break  # this box cannot win
-                if c <= tiny:  # take the first free box
-                    c = 0.0
-                if c < best_cost:
-                    best, best_cost = (x0, y0, x1, y1), c
-                if best_cost == 0.0:
-                    break
-            if best_cost == 0.0:
-                break
-        placed.append(best)
+        placed.append(_best_box(ax, ay, r + gap, w, h, boxes, box_bounds))
     return np.array(placed)
+
+
+def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, gap: float
+                    ) -> tuple[list[list[list[float]]], np.ndarray, np.ndarray]:
+    """Per label, the obstacles that can cost any of its candidates something, and how far its candidates reach.
+
+    A candidate box lies within (r + gap) * the last ring plus the label's width (height) of its anchor along x
+    (y): only obstacles reaching into that rectangle can cost it anything. One numpy pass finds them.
+
+    Returns:
+        ``(near_boxes, reach_x, reach_y)``: per label the near obstacles as lists ``[x0, y0, x1, y1]`` in the
+        given order, and the reach of its candidates along x and y.
+    """
+    far = (R + gap) * _RINGS[-1]
+    reach_x, reach_y = far + S[:, 0], far + S[:, 1]
+    if not len(O):
+        return [[] for _ in range(len(A))], reach_x, reach_y
+    ax_, ay_ = A[:, None, 0], A[:, None, 1]
+    near = ((O[None, :, 0] <= ax_ + reach_x[:, None]) & (O[None, :, 2] >= ax_ - reach_x[:, None])
+            & (O[None, :, 1] <= ay_ + reach_y[:, None]) & (O[None, :, 3] >= ay_ - reach_y[:, None]))
+    rows = O.tolist()  # once: a list per label's near rows would copy the crowded ones again for each label
+    return [[rows[j] for j in np.flatnonzero(m).tolist()] for m in near], reach_x, reach_y
+
+
+def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: list, bounds: tuple[float, ...]
+              ) -> tuple[float, float, float, float] | None:
+    """The first box of least cost among a label's candidates (see :func:`place_labels`).
+
+    Args:
+        ax, ay: the mark's centre.
+        reach: the mark's half-size plus the gap (the first ring's distance).
+        w, h: the label's size.
+        boxes: what may overlap a candidate (the near obstacles, then the earlier labels).
+        bounds: ``(x0, y0, x1, y1)`` the label should stay inside.
+    """
+    bx0, by0, bx1, by1 = bounds
+    best, best_cost = None, math.inf
+    area = w * h
+    tiny = 1e-6 * area  # rounding, not an overlap
+    # Conditional expressions, not min()/max(): here the builtin calls cost more than the comparisons.
+    for ring in _RINGS:
+        d = reach * ring
+        # The boxes overlapping each column of candidates (a ring's candidates share three columns, left,
+        # centred and right), with their overlap width, in the given order: a candidate then tests only its
+        # column's boxes, and adds up the same overlaps in the same order as over all of them.
+        columns: dict[int, list[tuple[float, float, float]]] = {}
+        for dx, dy in _DIRECTIONS:
+            # The box touches the square of half-side d around the anchor; above/below it is centred.
+            x0 = ax + d if dx > 0 else ax - d - w if dx < 0 else ax - w / 2
+            y0 = ay + d if dy > 0 else ay - d - h if dy < 0 else ay - h / 2
+            x1, y1 = x0 + w, y0 + h
+            column = columns.get(dx)
+            if column is None:
+                column = columns[dx] = [
+                    (ow, o[1], o[3]) for o in boxes
+                    if (ow := (x1 if x1 < o[2] else o[2]) - (x0 if x0 > o[0] else o[0])) > 0
+                ]
+            iw = (x1 if x1 < bx1 else bx1) - (x0 if x0 > bx0 else bx0)
+            ih = (y1 if y1 < by1 else by1) - (y0 if y0 > by0 else by0)
+            c = area - (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)
+            for ow, oy0, oy1 in column:
+                oh = (y1 if y1 < oy1 else oy1) - (y0 if y0 > oy0 else oy0)
+                if oh > 0:
+                    c += ow * oh
+                    if c >= best_cost and c > tiny:
+                        break  # this box cannot win
+            if c <= tiny:  # take the first free box
+                c = 0.0
+            if c < best_cost:
+                best, best_cost = (x0, y0, x1, y1), c
+            if best_cost == 0.0:
+                return best
+    return best
