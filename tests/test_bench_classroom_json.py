@@ -72,3 +72,54 @@ def test_a_short_real_classroom_writes_its_figures(tmp_path):
     assert math.isclose(row["ratio_to_floor"], row["cpu_ms_per_update"] / row["floor_ms_per_update"])
     assert math.isclose(sum(row["parts_ms"].values()), row["cpu_ms_per_update"], rel_tol=1e-6)
     assert row["lag_ms"]["p50"] <= row["lag_ms"]["p99"] and row["unserved"] == 0
+
+
+# -- the end of a drag: a tab waiting its turn is not counted as unanswered -------------------------------------
+
+
+def _frame(rev: int) -> bytes:
+    import zstandard
+
+    body = f'<svg data-egtviz="image-plane" data-camera="cam1" data-rev="{rev}">'.encode()
+    packed = zstandard.ZstdCompressor().compress(body)
+    return len(body).to_bytes(8, "little") + len(packed).to_bytes(8, "little") + packed
+
+
+class _SlowServer:
+    """A tab's socket on a saturated server: a panel every ``gap`` seconds (on a fixed schedule, as the listener
+    cancels a receive after 0.1 s), the last one after the drag ended."""
+
+    def __init__(self, gap: float, panels: int) -> None:
+        import time
+
+        self.ws = self
+        self.sent: list[dict] = []
+        t = time.monotonic()
+        self._due = [t + gap * (k + 1) for k in range(panels)]
+        self._rev = 0
+
+    async def send(self, message: dict) -> None:
+        self.sent.append(message)
+
+    async def recv(self) -> bytes:
+        import asyncio
+        import time
+
+        if self._rev == len(self._due):
+            await asyncio.sleep(3600)
+        await asyncio.sleep(max(0.0, self._due[self._rev] - time.monotonic()))
+        self._rev += 1
+        return _frame(self._rev)
+
+
+def test_a_tab_waits_for_its_turn_before_counting_updates_unanswered():
+    import asyncio
+    import time
+
+    # Two updates sent at once; panels every 0.8 s (longer than QUIET_S), the third after the drag ended.
+    client = _SlowServer(gap=0.8, panels=3)
+    pose = {"position": [0.0, 0.0, 0.0], "wxyz": [1.0, 0.0, 0.0, 0.0], "owner": 1}
+    out = asyncio.run(classroom._drag_and_listen(client, pose, 0, 1, seconds=0.2, rate=10.0, t0=time.time()))
+    assert classroom.QUIET_S < 0.8
+    assert [rev for rev, _ in out["panels"]] == [1, 2, 3]  # the listener stayed for the last one
+    assert [m["type"] for m in client.sent][-1] == "TransformControlsDragEndMessage"

@@ -67,6 +67,8 @@ STEP_M = 1e-3
 GIZMO = "/egt/cam_0"
 #: Seconds without a frame after which a tab counts as quiet (the server has drawn everything).
 QUIET_S = 0.5
+#: The longest a tab waits for its next panel once it has sent its last update.
+MAX_QUIET_S = 10.0
 #: The tabs' window (CSS pixels, reported as the 3D canvas when a tab joins): a classroom laptop's screen.
 WINDOW = (1366, 768)
 
@@ -109,7 +111,11 @@ async def _drag_and_listen(client: Any, pose: dict, j: int, tabs: int, seconds: 
         from .ws_client import frame_payload
 
         last = time.time()
-        while not (done.is_set() and time.time() - last > QUIET_S):
+        # Quiet: no frame for QUIET_S, nor for twice the longest wait for a panel so far (from the first send, then
+        # between two panels). A saturated server serves the tabs in turn: a tab may wait longer than QUIET_S for
+        # its next panel, and stopping then would count its last updates unanswered while they wait their turn.
+        quiet = QUIET_S
+        while not (done.is_set() and time.time() - last > quiet):
             try:
                 frame = await asyncio.wait_for(client.ws.recv(), 0.1)
             except TimeoutError:
@@ -119,6 +125,9 @@ async def _drag_and_listen(client: Any, pose: dict, j: int, tabs: int, seconds: 
             received += len(frame)
             revs = {int(r) for r in _PANEL_REV.findall(frame_payload(frame))}
             if revs:
+                since = panels[-1][1] if panels else sends[0][1] if sends else None
+                if since is not None:
+                    quiet = max(quiet, min(2.0 * (now - since), MAX_QUIET_S))
                 panels.append((max(revs), now))
 
     async def drag() -> None:
