@@ -96,3 +96,24 @@ def test_scene3d_draws_gizmos_axes_and_marks_at_the_glyph_size():
         assert all(n["gizmo"].scale == pytest.approx(g) for n in s3._cams.values())
     finally:
         server.stop()
+
+
+def test_a_tab_draws_glyphs_at_the_scene_size_and_frames_again_when_a_camera_is_added():
+    from egtviz.viewer.headless import start_headless
+
+    server, app, fakes, views = start_headless(panoramic_scene())
+    try:
+        view = views[0]
+        extent = scene_extent(view.model.scene, view.model.derived)
+        assert view.scene3d.glyph == pytest.approx(extent.glyph) and extent.glyph < 0.5
+        framed = []
+        original = view.dock.frame_camera
+        view.dock.frame_camera = lambda: (framed.append(len(view.model.scene.cameras)), original())
+        view.model.select_point(1)  # not a change of what the scene holds: the view stays
+        assert framed == []
+        view.model.add_camera("pinhole")
+        assert framed == [3]
+    finally:
+        for f in fakes:
+            f.close()
+        server.stop()
