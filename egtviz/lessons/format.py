@@ -39,7 +39,8 @@ from .changes import apply as apply_change
 from .errors import EntryError, LessonError
 from .images import LessonImages
 from .locate import Locator, scene_entry_path, toml_locator
-from .markup import MarkupError, render_markdown
+from .markup import (PANEL_WIDTH_PX, MarkupError, displayed_formulas, formula_to_mathml, formula_width_px,
+                     render_markdown)
 from .tasks import (
     InliersRecallTask,
     SampsonBelowTask,
@@ -266,9 +267,19 @@ class _Reader:
             html = render_markdown(text, self.images.data_url)
         except MarkupError as exc:
             raise LessonError(self.source, self.text_line(at, text, exc.offset), f"steps[{i}].text: {exc}") from None
+        self.formulas_fit(at, text)
         changes = self.changes(at, data.get("changes", []), model)
         tasks, counter = self.tasks(at, data.get("tasks", []), model)
         return Step(title, text, html, changes, tasks, counter)
+
+    def formulas_fit(self, at: tuple, text: str) -> None:
+        """Refuses a displayed formula wider than the control panel (it would be cut at the panel's edge)."""
+        for offset, latex in displayed_formulas(text):
+            wide = formula_width_px(formula_to_mathml(latex, display=True))
+            if wide > PANEL_WIDTH_PX:
+                raise LessonError(self.source, self.text_line(at, text, offset),
+                                  f"formula is {wide:.0f} px wide, the panel shows {PANEL_WIDTH_PX:.0f} px "
+                                  f"(break it into two displayed lines, or shorten it)")
 
     def text_line(self, at: tuple, text: str, offset: int) -> int:
         """The line of character ``offset`` of a step's ``text``: counted from its key in a multi-line string."""

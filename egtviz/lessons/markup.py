@@ -32,7 +32,8 @@ from latex2mathml.converter import convert
 
 from ..files import printable
 
-__all__ = ["ImageSource", "MarkupError", "formula_to_mathml", "render_markdown"]
+__all__ = ["FORMULA_FONT_PX", "PANEL_WIDTH_PX", "ImageSource", "MarkupError", "displayed_formulas",
+           "formula_to_mathml", "formula_width_px", "render_markdown"]
 
 ImageSource = Callable[[str], str]
 """An image's file name to the ``data:`` URL the text shows (:meth:`~egtviz.lessons.images.LessonImages.data_url`);
@@ -253,3 +254,82 @@ def _plain(segment: str, offset: int) -> str:
             "(write \\! for an exclamation mark before '[')",
         )
     return _text(segment)
+
+
+#: The control panel's width for a displayed formula, CSS pixels, and the formula's type size there: Chromium at
+#: 1366 x 768 in presentation mode, the narrowest the panel is for its type (252 px at 14.89 px, 16.9 em; without
+#: presentation mode 262 px at 11.91 px, 22.0 em). tests/browser/test_formula_width_browser.py measures both.
+PANEL_WIDTH_PX = 252.0
+FORMULA_FONT_PX = 14.8925
+# The estimate is scaled up and padded so that it is never below the width Chromium renders: calibrated on every
+# displayed formula of the course (the estimate is 2.7 % to 24 % above the real width there).
+_WIDTH_SCALE = 1.08
+_WIDTH_PAD_EM = 0.6
+_SCRIPT = 0.71  # a sub- or superscript's size relative to its base
+_RELATIONS = frozenset("=\u2243\u2248\u2208\u2260\u2264\u2265<>\u2192\u21d2\u223c\u2261\u221d")
+_BINARY = frozenset("+\u2212-\u00b1\u00d7\u2297\u00b7\u2218\u2217/")
+_LENGTH = re.compile(r"\s*(-?\d*\.?\d+)\s*(em|ex|px|mu)?\s*")
+_UNIT_EM = {"em": 1.0, "ex": 0.45, "px": 1 / FORMULA_FONT_PX, "mu": 1 / 18}
+
+
+def _glyph_em(c: str) -> float:
+    """A generous advance width of one character, em (italic capitals and the wide letters are wider)."""
+    if c.isspace():
+        return 0.3
+    if c in "MWmw":
+        return 1.05 if c.isupper() else 0.9
+    if c.isupper():
+        return 0.82
+    if c.islower():
+        return 0.6
+    if c.isdigit():
+        return 0.55
+    if c in "()[]{}|":
+        return 0.42
+    if c in ",.;:!'":
+        return 0.3
+    return 0.8  # operators, Greek capitals, symbols
+
+
+def _node_em(node: ET.Element, scale: float) -> float:
+    """The width of a MathML element, em of the formula's type; scripts are smaller by :data:`_SCRIPT`."""
+    tag = node.tag.split("}", 1)[-1]
+    kids = list(node)
+    if tag in ("mi", "mn", "mtext", "ms"):
+        return scale * sum(_glyph_em(c) for c in (node.text or "").strip())
+    if tag == "mo":
+        op = (node.text or "").strip()
+        # MathML's operator spacing: a thick space either side of a relation, a medium one of a binary operator.
+        space = 0.5556 if op in _RELATIONS else 0.4444 if op in _BINARY else 0.1667
+        return scale * (sum(_glyph_em(c) for c in op) + space)
+    if tag == "mspace":
+        m = _LENGTH.fullmatch(node.get("width") or "")
+        return scale * float(m.group(1)) * _UNIT_EM[m.group(2) or "em"] if m else 0.0
+    if tag in ("msub", "msup", "msubsup") and len(kids) >= 2:
+        return _node_em(kids[0], scale) + max(_node_em(k, scale * _SCRIPT) for k in kids[1:]) + 0.05 * scale
+    if tag in ("munder", "mover", "munderover") and kids:
+        return max(_node_em(kids[0], scale), *(_node_em(k, scale * _SCRIPT) for k in kids[1:]))
+    if tag == "mfrac" and kids:
+        return max(_node_em(k, scale) for k in kids) + 0.25 * scale
+    if tag in ("msqrt", "mroot") and kids:
+        index = _node_em(kids[1], scale * 0.5) if tag == "mroot" and len(kids) > 1 else 0.0
+        return (_node_em(kids[0], scale) if tag == "mroot" else sum(_node_em(k, scale) for k in kids)) + index + scale
+    if tag == "mtable":
+        rows = [[_node_em(cell, scale) for cell in row] for row in kids]
+        n = max((len(r) for r in rows), default=0)
+        columns = [max(r[i] for r in rows if i < len(r)) for i in range(n)]
+        return sum(columns) + 0.8 * scale * n  # each cell's 0.4 em padding either side
+    return sum(_node_em(k, scale) for k in kids)
+
+
+def formula_width_px(mathml: str, font_px: float = FORMULA_FONT_PX) -> float:
+    """An estimate, never below the width Chromium renders, of a ``<math>`` element (:func:`formula_to_mathml`)
+    at ``font_px``: a table of generous advance widths per kind of character, MathML's operator spacing, scripts
+    at 71 %, a table's columns side by side; scaled and padded so that it stays above every formula measured."""
+    em = _node_em(ET.fromstring(mathml), 1.0)
+    return (_WIDTH_SCALE * em + _WIDTH_PAD_EM) * font_px
+
+
+def displayed_formulas(text: str) -> list[tuple[int, str]]:
+    """The ``$$...$$`` formulas of a step's text (not those in code): ``(offset, LaTeX)`` each."""
+    return [(m.start(), m.group(0)[2:-2].strip()) for m in _TOKENS.finditer(text) if m.group(0).startswith("$$")]
