@@ -32,19 +32,14 @@ import numpy as np
 
 from .palette import EPIPOLE_COLOUR, RIM_COLOUR
 from .panel_view import ViewBox, place_labels
-from .svg import (
-    NORMAL,
-    PanelStyle,
-    _axes_svg,
-    _f,
-    _finite_runs,
-    _label_text,
-    _points_attr,
-    _svg_open,
-    _text_px,
-    number_fates,
-    panel_layout,
-)
+from .svg import NORMAL, PanelStyle, number_fates, panel_layout
+from .svg import axes_svg as _axes_svg
+from .svg import finite_runs as _finite_runs
+from .svg import label_text as _label_text
+from .svg import points_attr as _points_attr
+from .svg import svg_number as _f
+from .svg import svg_open as _svg_open
+from .svg import text_width_px as _text_px
 
 __all__ = ["ServoImage", "servo_image_svg", "shared_zero_ranges"]
 

@@ -70,8 +70,8 @@ from ..scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
 from .panel_view import ViewBox, image_view, place_labels, tick_values
 
-__all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "empty_svg", "image_plane_svg", "number_fates",
-           "panel_layout"]
+__all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "axes_svg", "empty_svg", "finite_runs", "image_plane_svg",
+           "label_text", "number_fates", "panel_layout", "points_attr", "svg_number", "svg_open", "text_width_px"]
 
 #: Above this many points in an image only the selected and highlighted points are numbered (more are unreadable).
 MAX_NUMBERED_POINTS = 40
@@ -130,15 +130,21 @@ PRESENT = PanelStyle("present", panel_px=620.0, tick_px=17.0, label_px=19.0, sta
                      point_colours=PRESENT_POINT_COLOURS)
 
 
-def _f(x: float) -> str:
+def svg_number(x: float) -> str:
     """Compact coordinate formatting: five significant digits (images may be 2 px or 4000 px wide)."""
     return f"{x:.5g}"
 
 
+_f = svg_number  # the short name the drawing code here uses
+
+
 @lru_cache(maxsize=4096)
-def _text_px(text: str, size_px: float) -> float:
+def text_width_px(text: str, size_px: float) -> float:
     """Upper bound of a one-line text's width in CSS pixels (``CHAR_EM`` per character, less for narrow ones)."""
     return sum(_NARROW_EM.get(ch, _LOWER_EM if ch.islower() else CHAR_EM) for ch in text) * size_px
+
+
+_text_px = text_width_px  # the short name the drawing code here uses
 
 
 @dataclass(frozen=True)
@@ -214,7 +220,7 @@ def panel_layout(view: ViewBox, style: PanelStyle, panel_px: float, n_rows: int)
 
 
 @lru_cache(maxsize=64)
-def _axes_svg(lay: PanelLayout, style: PanelStyle) -> str:
+def axes_svg(lay: PanelLayout, style: PanelStyle) -> str:
     """The view's frame with ticks: u along the top edge, v along the left edge (v grows downwards)."""
     v, k, t = lay.view, lay.k, style.tick_px
     tick, gap, lw = 0.45 * t * k, 0.35 * t * k, style.frame_px * k
@@ -239,8 +245,11 @@ def _axes_svg(lay: PanelLayout, style: PanelStyle) -> str:
     return f'<g data-kind="axes">{"".join(parts)}</g>'
 
 
-def _svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixed_size: bool,
-              max_height: str | None) -> str:
+_axes_svg = axes_svg  # the short name the drawing code here uses
+
+
+def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixed_size: bool,
+             max_height: str | None) -> str:
     """The root ``<svg>`` tag and a background covering the whole view box."""
     x, y, w, h = lay.viewbox
     mh = "" if max_height is None else f";max-height:{escape(max_height)}"
@@ -251,6 +260,9 @@ def _svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fix
         f'style="display:block;font-family:sans-serif;background:{style.background}{mh}">'
         f'<rect x="{_f(x)}" y="{_f(y)}" width="{_f(w)}" height="{_f(h)}" fill="{style.background}"/>'
     )
+
+
+_svg_open = svg_open  # the short name the drawing code here uses
 
 
 def _border_exit(view: ViewBox, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
@@ -291,7 +303,7 @@ def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: fl
     )
     return svg, box
 
-def _points_attr(P: np.ndarray, *, integer: bool) -> str:
+def points_attr(P: np.ndarray, *, integer: bool) -> str:
     """A polyline's ``points`` attribute in one %-format (a 200-conic panel has ~25 000 vertices).
 
     Whole pixels when the image is large (a panel shows it at well under 1 screen pixel per image pixel).
@@ -300,6 +312,9 @@ def _points_attr(P: np.ndarray, *, integer: bool) -> str:
         Q = np.rint(P).astype(np.int64)
         return (("%d,%d " * len(Q)) % tuple(Q.ravel().tolist()))[:-1]
     return (("%.5g,%.5g " * len(P)) % tuple(np.asarray(P, float).ravel().tolist()))[:-1]
+
+
+_points_attr = points_attr  # the short name the drawing code here uses
 
 
 #: Whole numbers in ``[_INT_LO, _INT_HI)`` are written from lookup tables (a panel's pixels nearly always are).
@@ -366,7 +381,7 @@ def warm_up() -> None:
     _fixed_strs(np.zeros(1), 1)
 
 
-def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
+def finite_runs(P: np.ndarray) -> list[np.ndarray]:
     """Split a polyline at NaN rows into runs of at least two points."""
     P = np.asarray(P, float)
     if P.ndim != 2 or len(P) == 0:
@@ -376,6 +391,9 @@ def _finite_runs(P: np.ndarray) -> list[np.ndarray]:
         return [P] if len(P) >= 2 else []
     edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
+
+
+_finite_runs = finite_runs  # the short name the drawing code here uses
 
 
 def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: bool, colours: tuple[str, ...]) -> str:
@@ -461,7 +479,7 @@ def numbered_points(n_in_image: int, show_labels: bool) -> bool:
     return show_labels and n_in_image <= MAX_NUMBERED_POINTS
 
 
-def _label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> str:
+def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> str:
     """A text written in its placed box, on the side towards its mark (``mark_x``), baseline near the bottom.
 
     Left of the mark it ends at the box's right edge, right of it it starts at
@@ -477,6 +495,9 @@ def _label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> 
         x, anchor = (x0 + x1) / 2, "middle"
     return (f'<text x="{_f(x)}" y="{_f(y1 - 0.17 * size)}" text-anchor="{anchor}" '
             f'data-box="{_f(x0)} {_f(y0)} {_f(x1)} {_f(y1)}"{attrs}>{text}</text>')
+
+
+_label_text = label_text  # the short name the drawing code here uses
 
 
 def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
