@@ -202,7 +202,7 @@ __all__ = [
 
 
 def as_array(
-    value: npt.ArrayLike, name: str, *, allow_empty: bool = True, max_abs: float | None = MAX_MAGNITUDE
+    value: object, name: str, *, allow_empty: bool = True, max_abs: float | None = MAX_MAGNITUDE
 ) -> np.ndarray:
     """Convert ``value`` to a finite float64 array of moderate magnitude, or raise naming ``name``.
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import InitVar, dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -185,7 +185,7 @@ class CatadioptricCamera:
 
         ``check=False``: as for :meth:`project`.
         """
-        X = as_points(X_world, "X_world", 3) if check else X_world
+        X = as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world)
         proj = self._project_world(X)
         out = np.empty((len(X), 3, 3))
         out[:, 0] = X
@@ -219,7 +219,7 @@ class CatadioptricCamera:
 
         ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN.
         """
-        n = as_normals(normals_world) if check else unchecked_normals(normals_world)
+        n = as_normals(normals_world) if check else unchecked_normals(cast(np.ndarray, normals_world))
         C = np.full((len(n), 3, 3), np.nan)
         good = finite_nonzero_rows(n)
         if len(good):
@@ -237,7 +237,7 @@ class CatadioptricCamera:
             n_samples = check_sample_count(n_samples, "n_samples", 3)
             n = as_normals(normals_world)
         else:
-            n = unchecked_normals(normals_world)
+            n = unchecked_normals(cast(np.ndarray, normals_world))
         # Each normal's arcs as a tuple (a sequence, as the interface asks): no copy of hundreds of small lists.
         return great_circle_arcs(np.ascontiguousarray((n @ self.pose.R).T), n_samples, self.mirror.rim_cosine,
                                  self._unit_ray_pixels)
@@ -295,7 +295,7 @@ class CatadioptricCamera:
             A :class:`PanoramicProjection`; points in the blind cone, above the
             rim or at the focus itself have NaN pixels and ``visible = False``.
         """
-        return self._project_world(as_points(X_world, "X_world", 3) if check else X_world)
+        return self._project_world(as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world))
 
     def _project_world(self, X: np.ndarray) -> PanoramicProjection:
         """:meth:`project` of checked (N, 3) float64 world points (internal: no conversion, no check)."""
@@ -530,7 +530,7 @@ class CatadioptricKind:
             mirror = ParabolicMirror(p["h"])
         f, u0, v0 = p["focal_pixels"], p["u0"], p["v0"]
         K = np.array([[f, 0.0, u0], [0.0, f, v0], [0.0, 0.0, 1.0]])
-        return CatadioptricCamera(check_pose(pose), mirror, K, p["width"], p["height"])
+        return CatadioptricCamera(check_pose(pose), mirror, K, int(p["width"]), int(p["height"]))
 
 
 HYPERBOLIC = CatadioptricKind("hyperbolic", (

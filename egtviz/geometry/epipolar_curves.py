@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -117,7 +118,7 @@ def epipolar_curves(
         normals = epipolar_plane_normals(cam1, cam2, X_world)
     else:
         # Coordinate-major normals of the checked points (one product for all of them), back to rows.
-        normals = epipolar_normals_columns(cam1.centre, cam2.centre, X_world.T).T
+        normals = epipolar_normals_columns(cam1.centre, cam2.centre, cast(np.ndarray, X_world).T).T
     baseline = cam2.centre - cam1.centre
     return EpipolarCurvePair(
         normals, _curves(cam1, normals, baseline, n_samples, conics, arcs, check),

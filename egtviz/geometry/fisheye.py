@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import InitVar, dataclass, field
 from functools import cached_property
-from typing import ClassVar
+from typing import ClassVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -106,7 +106,7 @@ class FisheyeCamera:
     def from_parameters(cls, pose: Pose, **values: float) -> FisheyeCamera:
         """The camera at ``pose`` with ``field_of_view``, ``focal_pixels``, ``u0``, ``v0``, ``width``, ``height``."""
         p = parameters_from_specs(cls.PARAMETERS, values)
-        return cls(pose, p["field_of_view"], p["focal_pixels"], (p["u0"], p["v0"]), p["width"], p["height"])
+        return cls(pose, p["field_of_view"], p["focal_pixels"], (p["u0"], p["v0"]), int(p["width"]), int(p["height"]))
 
     def parameters(self) -> dict[str, float | int]:
         u0, v0 = self.principal_point
@@ -144,7 +144,7 @@ class FisheyeCamera:
         Returns:
             NaN pixels and ``visible`` False where :math:`\theta > \Theta/2` or at the centre itself.
         """
-        X = as_points(X_world, "X_world", 3) if check else X_world
+        X = as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world)
         return self._project_local((X - self.pose.t) @ self.pose.R)
 
     def _project_local(self, d: np.ndarray) -> CameraProjection:
@@ -176,7 +176,7 @@ class FisheyeCamera:
 
     def light_paths(self, X_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         """(N, 2, 3) segments point -> centre; NaN rows for points outside the field of view."""
-        X = as_points(X_world, "X_world", 3) if check else X_world
+        X = as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world)
         out = np.empty((len(X), 2, 3))
         out[:, 0] = X
         out[:, 1] = self.pose.t
@@ -228,7 +228,7 @@ class FisheyeCamera:
             n_samples = check_sample_count(n_samples, "n_samples", 3)
             n = as_normals(normals_world)
         else:
-            n = unchecked_normals(normals_world)
+            n = unchecked_normals(cast(np.ndarray, normals_world))
         out: list[list[np.ndarray]] = [[] for _ in range(len(n))]
         good = finite_nonzero_rows(n)
         if len(good) == 0:

@@ -61,7 +61,7 @@ def image_of_plucker_line(camera: PinholeCamera, L: npt.ArrayLike) -> np.ndarray
     cam = _check_camera(camera)
     p = as_vector(L, "L", 6)
     d, m = p[:3], p[3:]
-    if abs(d @ m) > 1e-9 * max(np.linalg.norm(d) * np.linalg.norm(m), 1e-300):
+    if abs(d @ m) > 1e-9 * max(float(np.linalg.norm(d) * np.linalg.norm(m)), 1e-300):
         raise GeometryError("L: expected Plücker coordinates (d, m) with d . m = 0")
     if not np.linalg.norm(m) > 0.0:
         raise DegenerateConfigurationError("L: the moment is zero; the line passes through the camera centre")

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -47,7 +48,7 @@ def nearest_rank2(M: npt.ArrayLike, *, check: bool = True) -> np.ndarray:
         check: validate ``M``. ``False`` is the estimators' inner-loop path: ``M`` must then be a
             finite float64 (3, 3) array already checked by the caller.
     """
-    A = as_matrix(M, "M", (3, 3), max_abs=None) if check else M
+    A = as_matrix(M, "M", (3, 3), max_abs=None) if check else cast(np.ndarray, M)
     # LAPACK directly: numpy.linalg's wrapper costs more than a 3x3 SVD.
     U, s, Vt, info = _lapack.dgesvd(A)
     if info != 0:  # pragma: no cover - LAPACK failure
@@ -124,7 +125,7 @@ def hartley_normalization(
         GeometryError: a bad ``U``, or points spread over less than 1e-100 (rescale the coordinates).
     """
     single = isinstance(name, str)
-    names = [name] if single else list(name)
+    names = [name] if isinstance(name, str) else list(name)
     images = _images(U, names, single, check)
     k, n = len(images), images[0].shape[0]
     # Each row (x, y) read as one complex number x + iy: the centroid, the distances |u_i - c| (a hypot)
@@ -157,11 +158,11 @@ def hartley_normalization(
     return (Un[0], T[0]) if single else (Un, T)
 
 
-def _images(U: object, names: list[str], single: bool, check: bool) -> list[np.ndarray]:
+def _images(U: npt.ArrayLike | Sequence[np.ndarray], names: list[str], single: bool, check: bool) -> list[np.ndarray]:
     """The images of :func:`hartley_normalization` as a list of (N, 2) arrays, validated if ``check``."""
     if single:
-        return [as_points(U, names[0], 2) if check else U]
-    images = list(U) if isinstance(U, (list, tuple)) or not check else None
+        return [as_points(U, names[0], 2) if check else cast(np.ndarray, U)]
+    images = list(cast(Sequence[np.ndarray], U)) if isinstance(U, (list, tuple)) or not check else None
     if images is None:
         stack = as_array(U, ", ".join(names))
         if stack.ndim != 3 or stack.shape[2] != 2:

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import ClassVar, Literal, NamedTuple
+from typing import TYPE_CHECKING, ClassVar, Literal, NamedTuple, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -141,8 +141,12 @@ class HyperbolicMirror:
     """Semi-axis along the mirror axis."""
     b: float = 1.0
     """Transverse semi-axis."""
-    rim_radius: float | None = None
+    # The constructor takes None for the default rim (typed below); the field always holds the checked radius.
+    rim_radius: float = cast(float, None)
     """Radius of the rim (distance from the axis); ``2 b`` by default."""
+
+    if TYPE_CHECKING:
+        def __init__(self, a: float = 3.0, b: float = 1.0, rim_radius: float | None = None) -> None: ...
 
     kind: ClassVar[Literal["hyperbolic"]] = "hyperbolic"
 
@@ -331,8 +335,12 @@ class ParabolicMirror:
 
     h: float = 1.0
     """Mirror parameter (twice the focal distance)."""
-    rim_radius: float | None = None
+    # The constructor takes None for the default rim (typed below); the field always holds the checked radius.
+    rim_radius: float = cast(float, None)
     """Radius of the rim (distance from the axis); ``2 h`` by default."""
+
+    if TYPE_CHECKING:
+        def __init__(self, h: float = 1.0, rim_radius: float | None = None) -> None: ...
 
     kind: ClassVar[Literal["parabolic"]] = "parabolic"
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import InitVar, dataclass
 from functools import cached_property
-from typing import ClassVar
+from typing import ClassVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -127,6 +127,7 @@ class Intrinsics:
             K = as_calibration(K, "K")
             f = as_positive(focal_length, "focal_length")
         else:
+            K = cast(np.ndarray, K)
             f = float(focal_length)
         if K[0, 0] <= 0 or K[1, 1] <= 0:
             raise GeometryError("K: expected positive focal lengths K[0,0], K[1,1]")
@@ -246,8 +247,8 @@ class PinholeCamera:
         ratio = p["skew"] / (p["focal_length"] * p["ku"])
         if not SKEW_OVER_FOCAL_RANGE[0] <= ratio <= SKEW_OVER_FOCAL_RANGE[1]:
             raise GeometryError(f"skew / (focal_length * ku): expected -1..1, got {ratio:g}")
-        intr = Intrinsics(p["focal_length"], (p["ku"], p["kv"]), (p["u0"], p["v0"]), p["skew"], p["width"],
-                          p["height"])
+        intr = Intrinsics(p["focal_length"], (p["ku"], p["kv"]), (p["u0"], p["v0"]), p["skew"], int(p["width"]),
+                          int(p["height"]))
         return cls(check_pose(pose), intr)
 
     def parameters(self) -> dict[str, float | int]:
@@ -279,7 +280,7 @@ class PinholeCamera:
 
         ``check=False``: as for :meth:`project`.
         """
-        X = as_points(X_world, "X_world", 3) if check else X_world
+        X = as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world)
         out = np.empty((len(X), 2, 3))
         out[:, 0] = X
         out[:, 1] = self.pose.t
@@ -309,7 +310,7 @@ class PinholeCamera:
         divided by its largest entry, as in the checked call); anything else gives an undefined result.
         """
         if not check:
-            return unchecked_normals(normals_world) @ self.plane_to_line.T
+            return unchecked_normals(cast(np.ndarray, normals_world)) @ self.plane_to_line.T
         n, good = normals_with_planes(normals_world)
         if len(good) == len(n):
             return n @ self.plane_to_line.T
@@ -406,7 +407,7 @@ class PinholeCamera:
                 finite values within ``MAX_MAGNITUDE``; nothing is converted or checked, and anything else gives an
                 undefined result (wrong values or a numpy error, never a ``GeometryError``).
         """
-        return self._project(as_points(X_world, "X_world", 3) if check else X_world)
+        return self._project(as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world))
 
     def _project(self, X: np.ndarray) -> PinholeProjection:
         """:meth:`project` of checked (N, 3) float64 points (internal: no conversion, no check)."""
@@ -471,6 +472,6 @@ class PinholeCamera:
         if check:
             m, depth = as_points(pixels, "pixels", 2), as_positive(depth, "depth")
         else:
-            m = pixels
+            m = cast(np.ndarray, pixels)
         d_cam = np.column_stack([m, np.ones(len(m))]) @ self.K_inv.T
         return (d_cam * depth) @ self.pose.R.T + self.pose.t

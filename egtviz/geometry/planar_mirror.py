@@ -28,6 +28,7 @@ a *skew-symmetric* fundamental matrix (two degrees of freedom). Conventions:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -58,6 +59,10 @@ class PlaneMirror:
     """(3,) unit normal (the constructor normalises any non-zero vector)."""
     distance: float = 0.0
     """Signed distance of the plane from the world origin, along ``normal``."""
+
+    if TYPE_CHECKING:
+        # The constructor takes any array-like normal; the field holds the checked array.
+        def __init__(self, normal: npt.ArrayLike, distance: float = 0.0) -> None: ...
 
     def __post_init__(self) -> None:
         n = as_vector(self.normal, "normal", 3)

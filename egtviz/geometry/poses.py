@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import InitVar, dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -91,6 +92,10 @@ class Pose:
     already, e.g. a rotation the caller built from angles; they are only copied, not checked and not
     re-orthonormalised (the per-drag fast path)."""
 
+    if TYPE_CHECKING:
+        # The constructor takes any array-like R and t; the fields hold the checked, read-only arrays.
+        def __init__(self, R: npt.ArrayLike = ..., t: npt.ArrayLike = ..., check: bool = True) -> None: ...
+
     def __post_init__(self, check: bool) -> None:
         if check:
             R = as_rotation(self.R, "R")
@@ -140,7 +145,7 @@ class Pose:
 
         ``check=False``: the caller promises a float64 (N, 3) (or (3,)) array of finite values; nothing is checked.
         """
-        X = as_points(X_world, "X_world", 3) if check else X_world.reshape(-1, 3)
+        X = as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world).reshape(-1, 3)
         return (X - self.t) @ self.R
 
     def to_world(self, X_local: npt.ArrayLike) -> np.ndarray:

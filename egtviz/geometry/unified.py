@@ -57,7 +57,7 @@ from __future__ import annotations
 import math
 from dataclasses import InitVar, dataclass, field
 from functools import cached_property
-from typing import ClassVar
+from typing import ClassVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -143,7 +143,7 @@ class UnifiedCamera:
     def from_parameters(cls, pose: Pose, **values: float) -> UnifiedCamera:
         """The camera at ``pose`` with parameters ``xi``, ``focal_pixels``, ``u0``, ``v0``, ``width``, ``height``."""
         p = parameters_from_specs(cls.PARAMETERS, values)
-        return cls(pose, p["xi"], p["focal_pixels"], (p["u0"], p["v0"]), p["width"], p["height"])
+        return cls(pose, p["xi"], p["focal_pixels"], (p["u0"], p["v0"]), int(p["width"]), int(p["height"]))
 
     def parameters(self) -> dict[str, float | int]:
         u0, v0 = self.principal_point
@@ -176,7 +176,7 @@ class UnifiedCamera:
         if check:
             X, radius = as_points(X_world, "X_world", 3), as_positive(radius, "radius")
         else:
-            X = X_world
+            X = cast(np.ndarray, X_world)
         v = X - self.pose.t
         out = np.empty((len(X), 3, 3))
         out[:, 0] = X
@@ -219,7 +219,7 @@ class UnifiedCamera:
         if check:
             radius, X = as_positive(radius, "radius"), as_points(X_world, "X_world", 3)
         else:
-            X = X_world.reshape(-1, 3)
+            X = cast(np.ndarray, X_world).reshape(-1, 3)
         return self._sphere_points(X - self.pose.t, radius)
 
     def _sphere_points(self, v: np.ndarray, radius: float) -> np.ndarray:
@@ -242,7 +242,7 @@ class UnifiedCamera:
             radius = as_positive(radius, "radius")
             normal = as_vector(normal_world, "normal_world", 3)
         else:
-            normal = normal_world
+            normal = cast(np.ndarray, normal_world)
         norm = np.linalg.norm(normal)
         if not norm > 0:
             raise GeometryError("normal_world: a zero normal defines no plane")
@@ -267,7 +267,7 @@ class UnifiedCamera:
             A :class:`~egtviz.geometry.camera_model.CameraProjection`: NaN pixels and ``visible`` False where
             :math:`s_z + \xi \le 0` (for :math:`\xi = 0`, behind the camera) or at the centre itself.
         """
-        X = as_points(X_world, "X_world", 3) if check else X_world
+        X = as_points(X_world, "X_world", 3) if check else cast(np.ndarray, X_world)
         return self._project_local((X - self.pose.t) @ self.pose.R)
 
     def _project_local(self, d: np.ndarray) -> CameraProjection:
@@ -326,7 +326,7 @@ class UnifiedCamera:
 
         ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN.
         """
-        n = as_normals(normals_world) if check else unchecked_normals(normals_world)
+        n = as_normals(normals_world) if check else unchecked_normals(cast(np.ndarray, normals_world))
         return great_circle_conics(n @ self.pose.R, self.xi, self._K_inv)
 
     def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:
@@ -337,7 +337,7 @@ class UnifiedCamera:
         """
         if self.xi != 0.0:
             return None
-        n = as_normals(normals_world) if check else unchecked_normals(normals_world)
+        n = as_normals(normals_world) if check else unchecked_normals(cast(np.ndarray, normals_world))
         lines = np.full((len(n), 3), np.nan)
         good = finite_nonzero_rows(n)
         lines[good] = (n[good] @ self.pose.R) @ self._K_inv
@@ -365,7 +365,7 @@ class UnifiedCamera:
             n_samples = check_sample_count(n_samples, "n_samples", 3)
             n = as_normals(normals_world)
         else:
-            n = unchecked_normals(normals_world)
+            n = unchecked_normals(cast(np.ndarray, normals_world))
         out: list[list[np.ndarray]] = [[] for _ in range(len(n))]
         good = finite_nonzero_rows(n)
         if len(good) == 0:

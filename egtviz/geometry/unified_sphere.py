@@ -249,7 +249,7 @@ def great_circle_arcs(normals_T: np.ndarray, n: int, c_rim: float,
     buf = np.empty((m, n + 1, 2))  # pixels, with room for the closing point of the full circles
     unit_ray_pixels(d[0], d[1], d[2], buf[:, :n, 0], buf[:, :n, 1])
     buf[:, n] = buf[:, 0]
-    arcs = list(zip(buf))  # 1-tuples (closed polyline,), built in C
+    arcs: list[tuple[np.ndarray, ...]] = list(zip(buf))  # 1-tuples (closed polyline,), built in C
     if not all_full:
         for j in part.tolist():
             arcs[j] = (buf[j, :n],)
