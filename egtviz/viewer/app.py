@@ -7,6 +7,13 @@ Data flow (one direction)::
             scene, every image-plane panel, the F/E read-out and the fields.
 
 Each browser tab has its own model: edits in one tab never reach another.
+A tab's :class:`ClientView` is a small coordinator (the lock, the model
+subscription, the render) over parts with one job each: the control panel and
+scene actions (:mod:`~egtviz.viewer.workbench_controls`), one settings folder per
+camera (:mod:`~egtviz.viewer.camera_settings`), gizmo input
+(:mod:`~egtviz.viewer.drag_input`), the panels (:mod:`~egtviz.viewer.panel_dock`),
+the F/E read-out (:mod:`~egtviz.viewer.readout`), and what a lesson allows
+(:mod:`~egtviz.viewer.lesson_policy`).
 Every event handler and every render runs under the view's lock, and a render
 always draws the model's *current* scene, so an event that arrives late (viser
 runs callbacks in a thread pool) cannot overwrite a newer state. GUI fields are
@@ -185,6 +192,15 @@ class ClientView:
     def present_checkbox(self) -> Any:
         """The "presentation mode" checkbox."""
         return self.dock.present_checkbox
+
+    @property
+    def png(self) -> Any:
+        """The panels' PNG downloads (:class:`~egtviz.viewer.png_worker.PngDownloads`)."""
+        return self.dock.png
+
+    @png.setter
+    def png(self, downloads: Any) -> None:
+        self.dock.png = downloads
 
     @property
     def readout(self) -> str:

@@ -153,7 +153,8 @@ class CameraSettings:
         fields = _model_fields(spec.model_kind)[0]
         for key, handle in self.fields.items():
             if key in choices:
-                view._on(handle.on_update, lambda e, k=key: view._user_event(lambda: self.set_choice(k, e.target.value)))
+                view._on(handle.on_update,
+                         lambda e, k=key: view._user_event(lambda: self.set_choice(k, e.target.value)))
             elif key in fields and fields[key].slider:
                 # A slider acts at once (the image morphs as it moves); one slide is one undo step.
                 view._on(handle.on_update,

@@ -7,7 +7,7 @@ The numbers come from :func:`egtviz.scene.lab.run_lab`; this module only shows t
 * a table of the six fits (mean Sampson error against the measured and the true pixels, px²; the
   epipole errors, px; for the robust fits the recall of the true inliers and the threshold used);
 * a uPlot chart of the errors per method (their base-10 logarithms: they span many decades);
-* in the image-plane panels (:meth:`LabPanel.panel_filter`, installed as the tab's ``panel_filter``): the
+* in the image-plane panels (:meth:`LabPanel.panel_filter`, the panel filter of the tab's lesson policy): the
   measured pixels, and the epipolar lines and epipoles of the fit chosen in "fit in the panels"; a ring marks
   each correspondence a robust fit rejected (when there are at most :data:`MAX_RINGS` of them: a ring is
   numbered, and more numbers would hide the image);

@@ -2,7 +2,7 @@ r"""The convention lens in a tab: its five toggles, the live residuals, and the 
 
 The numbers come from :func:`egtviz.scene.lens.lens_view`; this module only shows them. With a toggle on,
 the image-plane panels draw the epipoles and the epipolar lines the mistaken code would compute
-(:meth:`LensPanel.panel_filter`, installed as the tab's ``panel_filter``), and the lens's folder lists, per
+(:meth:`LensPanel.panel_filter`, the panel filter of the tab's lesson policy), and the lens's folder lists, per
 point seen in both images, the residual
 
 .. math:: r_i = m_{2i}^T F m_{1i}

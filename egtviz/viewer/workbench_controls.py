@@ -81,7 +81,8 @@ class WorkbenchControls:
         # HTML, not markdown: the title comes from a file and is escaped as text.
         self.title = gui.add_html(self.title_html())
         with gui.add_folder("Epipolar geometry", expand_by_default=True):
-            self.pair_dropdown = gui.add_dropdown("drawn pair", ["-"], hint="Which two cameras' epipolar geometry is drawn.")
+            self.pair_dropdown = gui.add_dropdown("drawn pair", ["-"],
+                                                  hint="Which two cameras' epipolar geometry is drawn.")
             view._on(self.pair_dropdown.on_update, lambda _: view._user_event(self._set_pair))
             self.readout_md = gui.add_html("")
         with gui.add_folder("Points", expand_by_default=True):
