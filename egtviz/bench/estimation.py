@@ -10,6 +10,8 @@ is too noisy a comparison: the estimators trade places from scene to scene).
 
 from __future__ import annotations
 
+import importlib
+from types import ModuleType
 
 import numpy as np
 
@@ -81,10 +83,10 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
     from ..geometry.robust import fundamental_lmeds, fundamental_ransac
     from ..geometry.triangulation import triangulate_linear
 
+    cv2: ModuleType | None = None
     try:
-        import cv2
+        cv2 = importlib.import_module("cv2")
     except ImportError:  # OpenCV is a test-only dependency
-        cv2 = None
         print(_NO_OPENCV, flush=True)
 
     n = 1000
@@ -107,6 +109,7 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
     # Normalised 8-point.
     # A call takes ~0.1 ms: many repetitions, timed alternately with OpenCV's (same allocator and cache state).
     fast_repeats = max(200, 10 * repeats)
+    theirs: float | None
     ours_fn = lambda: fundamental_normalized_8point(clean["U1"], clean["U2"])  # noqa: E731
     if cv2 is not None:
         ours, theirs = paired_median_ms(
@@ -118,12 +121,12 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
 
     # RANSAC vs MAGSAC, and LMedS vs FM_LMEDS, with accuracy on the true inliers.
     robust_repeats = max(3, repeats // 2)
-    for name, ours_fn, flag in (
+    for name, robust_fn, flag in (
         ("RANSAC", lambda s: fundamental_ransac(s["U1"], s["U2"], threshold=1.0), "USAC_MAGSAC"),
         ("LMedS", lambda s: fundamental_lmeds(s["U1"], s["U2"]), "FM_LMEDS"),
     ):
-        acc = np.mean([_accuracy(ours_fn(s).F, s) for s in scenes])
-        note = f"acc ours {acc:.3f} px ({ours_fn(dirty).iterations} samples)"
+        acc = np.mean([_accuracy(robust_fn(s).F, s) for s in scenes])
+        note = f"acc ours {acc:.3f} px ({robust_fn(dirty).iterations} samples)"
         theirs = None
         if cv2 is not None:
             method = getattr(cv2, flag)
@@ -132,10 +135,10 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
                 return cv2.findFundamentalMat(s["U1"], s["U2"], method, 1.0, 0.999, 2000)
 
             # Alternating, as the 8-point: both under the same allocator and cache state.
-            ours, theirs = paired_median_ms(lambda: ours_fn(dirty), lambda: cv_fn(dirty), robust_repeats)
+            ours, theirs = paired_median_ms(lambda: robust_fn(dirty), lambda: cv_fn(dirty), robust_repeats)
             note += f", OpenCV {np.mean([_accuracy(cv_fn(s)[0], s) for s in scenes]):.3f} px"
         else:
-            ours = median_ms(lambda: ours_fn(dirty), robust_repeats)
+            ours = median_ms(lambda: robust_fn(dirty), robust_repeats)
         if name == "RANSAC":
             note += "; target ratio <= 1.5, accuracy no worse"
         row(f"{name}, N={n}, 30% outliers (vs {flag})", ours, theirs, note + f" (mean of {len(scenes)} scenes)" + _missing(cv2))

@@ -55,4 +55,4 @@ def run(suite: str = "all", repeats: int = 20, *, json_path: str | None = None, 
 
 
 if __name__ == "__main__":
-    sys.exit(run(*(sys.argv[1:2] or ["all"])))
+    sys.exit(run(sys.argv[1] if len(sys.argv) > 1 else "all"))

@@ -76,7 +76,10 @@ def viser_floor(rate: float = 20.0, seconds: float = 5.0) -> FloorRun:
         nonlocal callbacks
         callbacks += 1
 
-    server.on_client_connect(lambda client: client.scene.add_transform_controls(_GIZMO).on_update(counted))
+    def connected(client: viser.ClientHandle) -> None:
+        client.scene.add_transform_controls(_GIZMO).on_update(counted)
+
+    server.on_client_connect(connected)
     proc = subprocess.Popen(
         [sys.executable, "-m", "egtviz.bench.viser_floor", "--tab-of", str(server.get_port()), str(rate),
          str(seconds)],

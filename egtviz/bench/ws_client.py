@@ -20,6 +20,7 @@ import msgspec.msgpack
 import viser
 import websockets.asyncio.client
 import zstandard
+from websockets.typing import Origin, Subprotocol
 
 __all__ = ["CAMERA", "RawClient", "decode_frame", "frame_payload"]
 
@@ -70,7 +71,8 @@ class RawClient:
     async def connect(cls, port: int, *, origin: str | None = None) -> AsyncIterator[RawClient]:
         """Open a loopback connection to a viser server on ``port`` (``origin``: the Origin header, if any)."""
         async with websockets.asyncio.client.connect(
-            f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], origin=origin,
+            f"ws://127.0.0.1:{port}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")],
+            origin=None if origin is None else Origin(origin),
             max_size=None, open_timeout=5,
         ) as ws:
             yield cls(ws)
@@ -84,7 +86,7 @@ class RawClient:
         deadline = time.perf_counter() + limit
         while time.perf_counter() < deadline:
             try:
-                frame = await asyncio.wait_for(self.ws.recv(), quiet)
+                frame = await asyncio.wait_for(self.ws.recv(decode=False), quiet)  # viser sends binary frames
             except TimeoutError:
                 return
             self.messages.extend(decode_frame(frame))

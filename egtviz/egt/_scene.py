@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
 
 from ..geometry._validate import GeometryError, as_count
 from ..geometry.planes import plane_normals, point_plane_distance
-from ..geometry.shapes import SURFACE_KINDS, random_points_in_ball, sample_surface_grid
+from ..geometry.shapes import SURFACE_KINDS, SurfaceKind, random_points_in_ball, sample_surface_grid
 from ._convert import draw as _draw
 from ._convert import flag, world_columns
 
@@ -82,12 +82,12 @@ def f_3Dsurface(
     if kind not in SURFACE_KINDS:
         raise GeometryError(f"ogg: expected one of {sorted(SURFACE_KINDS)} or {sorted(SURFACE_NUMBERS)}, got {ogg!r}")
     if param is None:
-        values = np.ones(len(SURFACE_KINDS[kind]))
+        values: npt.ArrayLike = np.ones(len(SURFACE_KINDS[kind]))
         if kind == "torus":
             values = np.array([1.0, 0.3])
     else:
         values = param
-    s = sample_surface_grid(kind, values, n, R, t)
+    s = sample_surface_grid(cast(SurfaceKind, kind), values, n, R, t)  # a member of SURFACE_KINDS, checked above
     out = (*np.moveaxis(s.points, -1, 0), *np.moveaxis(s.normals, -1, 0))
     if plot and flag(plot[0]):
         _draw("surface", **dict(zip(("x", "y", "z", "nx", "ny", "nz"), out)))

@@ -121,6 +121,11 @@ def _pose_matrix(H: Any, name: str = "H") -> np.ndarray:
     return M
 
 
+def _float3(v: np.ndarray) -> tuple[float, float, float]:
+    """The three entries of a 3-vector as plain floats."""
+    return float(v[0]), float(v[1]), float(v[2])
+
+
 def _homogeneous(v: Any) -> tuple[float, float, float]:
     """A homogeneous 3-vector scaled as ``docs/conventions.md`` says (last coordinate 1, or unit norm at infinity)."""
     e = np.asarray(v, dtype=float).reshape(3)
@@ -129,7 +134,7 @@ def _homogeneous(v: Any) -> tuple[float, float, float]:
         e = e / e[2]
     elif norm > 0:
         e = e / norm
-    return tuple(float(x) for x in e)
+    return _float3(e)
 
 
 def _tex_free(text: Any) -> str:
@@ -318,7 +323,7 @@ class Figure:
         pose, flipped = split_virtual_pose(M, "H")
         name = self._name(title, "cam")
         K = self._calibration(M)
-        spec = PinholeSpec(name, tuple(float(v) for v in pose.t), PinholeSpec.ypr_from_world_rotation(pose.R))
+        spec = PinholeSpec(name, _float3(pose.t), PinholeSpec.ypr_from_world_rotation(pose.R))
         if K is not None:
             spec = self._with_K(spec, K)
         self.cameras.append(spec)
@@ -387,7 +392,7 @@ class Figure:
         plot.add_points(seen)
         _refuse_over(len(plot.lines) + int(drawn.sum()), MAX_PLOT_ITEMS, "plot lines")
         for line, p in zip(L[drawn], P[drawn]):
-            plot.lines.append(tuple(float(v) for v in line / math.hypot(line[0], line[1])))
+            plot.lines.append(_float3(line / math.hypot(line[0], line[1])))
             plot.line_points.append((float(p[0]), float(p[1])))
         e = np.asarray(epipole, dtype=float).reshape(3)
         if np.all(np.isfinite(e)) and np.any(e):
@@ -491,7 +496,7 @@ class Figure:
             raise ValueError(f"quadric: expected 1 (hyperbolic) or 2 (parabolic), got {quadric!r}")
         name = self._name(title, "pano")
         ypr = PanoramicSpec.ypr_from_world_rotation(M[:3, :3])
-        spec = PanoramicSpec(name, tuple(float(v) for v in M[:3, 3]), ypr,
+        spec = PanoramicSpec(name, _float3(M[:3, 3]), ypr,
                              mirror="hyperbolic" if int(quadric) == 1 else "parabolic", a=float(a), b=float(b),
                              **TUTORIAL_CCD)
         self.cameras.append(spec)

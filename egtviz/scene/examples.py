@@ -3,6 +3,8 @@ planar mirror with a camera and its reflection."""
 
 from __future__ import annotations
 
+from typing import TypedDict
+
 import numpy as np
 
 from .annotations import Annotations, PlanarMirror
@@ -21,8 +23,34 @@ PANORAMIC_ROOM = (
     (-2.26, -0.32, 0.8), (-1.01, -1.33, 1.9), (0.82, -1.39, 1.3), (2.18, -0.46, 2.5),
 )
 
+class CCDOptions(TypedDict, total=False):
+    """A panoramic camera's CCD as keyword arguments of :class:`PanoramicSpec`."""
+
+    focal_pixels: float
+    principal_point: tuple[float, float]
+    width: int
+    height: int
+
+
+class PanoramicOptions(CCDOptions, total=False):
+    """Keyword arguments shared by the panoramic cameras of an example (:class:`PanoramicSpec`)."""
+
+    a: float
+    b: float
+
+
+class PinholeOptions(TypedDict, total=False):
+    """Keyword arguments shared by the pin-hole cameras of an example (:class:`PinholeSpec`)."""
+
+    focal_length: float
+    pixels_per_metre: tuple[float, float]
+    principal_point: tuple[float, float]
+    width: int
+    height: int
+
+
 #: The tutorial's panoramic CCD: ``K = [[1e3, 0, 320], [0, 1e3, 240], [0, 0, 1]]`` on a 640 x 480 image.
-TUTORIAL_CCD = dict(focal_pixels=1000.0, principal_point=(320.0, 240.0), width=640, height=480)
+TUTORIAL_CCD = CCDOptions(focal_pixels=1000.0, principal_point=(320.0, 240.0), width=640, height=480)
 
 
 def _looking_at_origin(name: str, position: tuple[float, float, float], target_z: float = 1.0) -> PinholeSpec:
@@ -52,7 +80,7 @@ def panoramic_scene() -> Scene:
     image packs the horizon into a small circle round the centre; higher points fill the rest).
     The image does not change with the mirror's scale; the CCD focal length fills the image.
     """
-    mirror = dict(a=0.3, b=0.1, focal_pixels=1100.0)
+    mirror = PanoramicOptions(a=0.3, b=0.1, focal_pixels=1100.0)
     return Scene(
         cameras=(
             PanoramicSpec("pano1", (-0.7, -0.2, 0.2), (45.0, 0.0, 0.0), **mirror),
@@ -75,7 +103,7 @@ def tutorial_example_1() -> Scene:
 
 def tutorial_example_3() -> Scene:
     """Example 3: ``R1 = rotoz(pi/4)``, ``t1 = [-10, -10, 0]``; ``R2 = I``, ``t2 = 0``; ``K = I``; two points."""
-    unit = dict(focal_length=1.0, pixels_per_metre=(1.0, 1.0), principal_point=(0.0, 0.0), width=2, height=2)
+    unit = PinholeOptions(focal_length=1.0, pixels_per_metre=(1.0, 1.0), principal_point=(0.0, 0.0), width=2, height=2)
     return Scene(
         cameras=(
             PinholeSpec("cam1", (-10.0, -10.0, 0.0), (0.0, 0.0, 45.0), **unit),
@@ -96,7 +124,7 @@ def tutorial_example_2() -> Scene:
 def tutorial_example_4() -> Scene:
     """Example 4: two panoramic cameras placed as in Example 3 (``rotoz(pi/4)`` at ``[-10, -10, 0]``; upright at
     the origin), EGT's mirror ``a = 3``, ``b = 1`` and CCD, and eight points that both mirrors see."""
-    mirror = dict(a=3.0, b=1.0, **TUTORIAL_CCD)
+    mirror = PanoramicOptions(a=3.0, b=1.0, **TUTORIAL_CCD)
     return Scene(
         cameras=(
             PanoramicSpec("pano1", (-10.0, -10.0, 0.0), (45.0, 0.0, 0.0), **mirror),

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 import time as _time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -105,7 +105,7 @@ def default_scene(n_points: int = 10) -> np.ndarray:
     return np.column_stack([r * np.cos(ang), r * np.sin(ang), z])
 
 
-def mirror_pose(state: npt.ArrayLike) -> Pose:
+def mirror_pose(state: Iterable[float]) -> Pose:
     r"""Mirror frame of the robot at ``(x, y, theta)``: :math:`R_z(\theta)`, focus at ``(x, y, CAMERA_HEIGHT)``."""
     x, y, th = (float(v) for v in state)
     c, s = math.cos(th), math.sin(th)
@@ -114,7 +114,7 @@ def mirror_pose(state: npt.ArrayLike) -> Pose:
 
 def draw_start_state(
     rng: np.random.Generator,
-    target: npt.ArrayLike = (0.0, 0.0, 0.0),
+    target: Iterable[float] = (0.0, 0.0, 0.0),
     heading_range: tuple[float, float] = (np.radians(30.0), np.radians(120.0)),
     distance_range: tuple[float, float] = (1.0, 3.0),
 ) -> np.ndarray:

@@ -584,6 +584,8 @@ def _estimated_epipole(
     rays exceeds ``law.parallax_min``.
     """
     K, K_inv, q_rays = scene.K, scene.K_inv, scene.desired_rays
+    # Only called for a law with an estimator, which make_law always pairs with pose_from_essential.
+    assert law.estimator is not None and law.pose_from_essential is not None
     R_cd = step = None
     try:
         F = np.asarray(law.estimator(m, scene.desired), dtype=float)
@@ -747,6 +749,7 @@ def _start_q(
     """Start joint angles: ``q0``, else by inverse kinematics of ``start_pose``, else drawn (:func:`_draw_start_q`)."""
     robot, ets = puma()
     qlim = np.asarray(robot.qlim, dtype=float)
+    q: np.ndarray | None
     if q0 is not None:
         q = np.asarray(q0, dtype=float).reshape(6)
         if np.any(q < qlim[0]) or np.any(q > qlim[1]):
@@ -814,11 +817,14 @@ def _pinhole_params(s: PinholeSettings, intr: Intrinsics) -> dict[str, Any]:
 
 def _pinhole_not_run(exc: _NotRun, s: PinholeSettings, params: dict[str, Any], wall0: float) -> ServoResult:
     pose0, goal = exc.start, exc.target
-    known = pose0 is not None and goal is not None
+    rotation_error = translation_error = float("nan")
+    if pose0 is not None and goal is not None:
+        rotation_error = rotation_angle(goal.R.T @ pose0.R)
+        translation_error = float(np.linalg.norm(pose0.t - goal.t))
     return ServoResult.not_run(
         "pinhole", exc.reason,
-        rotation_error=rotation_angle(goal.R.T @ pose0.R) if known else float("nan"),
-        translation_error=float(np.linalg.norm(pose0.t - goal.t)) if known else float("nan"),
+        rotation_error=rotation_error,
+        translation_error=translation_error,
         camera_poses=pose0.matrix[None] if pose0 is not None else np.zeros((0, 4, 4)),
         n_features=0, controls={"camera_twist": 6, "joint_velocities": 6},
         wall_time_s=_time.perf_counter() - wall0, translation_servoed=s.beta > 0, params=params,
