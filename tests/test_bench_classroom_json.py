@@ -86,26 +86,28 @@ def _frame(rev: int) -> bytes:
 
 
 class _SlowServer:
-    """A tab's socket on a saturated server: a panel every ``gap`` seconds (on a fixed schedule, as the listener
-    cancels a receive after 0.1 s), the last one after the drag ended."""
+    """A tab's socket on a saturated server: panels at ``times`` seconds after the drag's start (a fixed schedule:
+    the listener cancels a receive after 0.1 s), the last one after the drag ended."""
 
-    def __init__(self, gap: float, panels: int) -> None:
-        import time
-
+    def __init__(self, times: list[float]) -> None:
         self.ws = self
         self.sent: list[dict] = []
-        t = time.monotonic()
-        self._due = [t + gap * (k + 1) for k in range(panels)]
+        self._times = times
+        self._due: list[float] = []
         self._rev = 0
 
     async def send(self, message: dict) -> None:
+        import time
+
+        if not self.sent:
+            self._due = [time.monotonic() + t for t in self._times]
         self.sent.append(message)
 
     async def recv(self) -> bytes:
         import asyncio
         import time
 
-        if self._rev == len(self._due):
+        if not self._due or self._rev == len(self._due):
             await asyncio.sleep(3600)
         await asyncio.sleep(max(0.0, self._due[self._rev] - time.monotonic()))
         self._rev += 1
@@ -116,10 +118,10 @@ def test_a_tab_waits_for_its_turn_before_counting_updates_unanswered():
     import asyncio
     import time
 
-    # Two updates sent at once; panels every 0.8 s (longer than QUIET_S), the third after the drag ended.
-    client = _SlowServer(gap=0.8, panels=3)
+    # Two updates in 0.1 s; the panels 0.6 s apart (longer than QUIET_S), the last two after the drag ended.
+    client = _SlowServer([0.45, 1.05, 1.65])
     pose = {"position": [0.0, 0.0, 0.0], "wxyz": [1.0, 0.0, 0.0, 0.0], "owner": 1}
     out = asyncio.run(classroom._drag_and_listen(client, pose, 0, 1, seconds=0.2, rate=10.0, t0=time.time()))
-    assert classroom.QUIET_S < 0.8
+    assert classroom.QUIET_S < 0.6
     assert [rev for rev, _ in out["panels"]] == [1, 2, 3]  # the listener stayed for the last one
     assert [m["type"] for m in client.sent][-1] == "TransformControlsDragEndMessage"

@@ -112,10 +112,11 @@ async def _drag_and_listen(client: Any, pose: dict, j: int, tabs: int, seconds: 
 
         last = time.time()
         # Quiet: no frame for QUIET_S, nor for twice the longest wait for a panel so far (from the first send, then
-        # between two panels). A saturated server serves the tabs in turn: a tab may wait longer than QUIET_S for
-        # its next panel, and stopping then would count its last updates unanswered while they wait their turn.
+        # between two panels; MAX_QUIET_S while none came). A saturated server serves the tabs in turn: a tab may
+        # wait longer than QUIET_S for its next panel, and stopping then would count its last updates unanswered
+        # while they wait their turn.
         quiet = QUIET_S
-        while not (done.is_set() and time.time() - last > quiet):
+        while not (done.is_set() and time.time() - last > (quiet if panels else MAX_QUIET_S)):
             try:
                 frame = await asyncio.wait_for(client.ws.recv(), 0.1)
             except TimeoutError:
