@@ -462,7 +462,9 @@ def _randomise_camera(table: dict, do: str) -> RandomiseCamera:
               (("position", 3, COORDINATE), ("ypr_deg", 3, ANGLE_DEG), ("principal_point", 2, PRINCIPAL_POINT))}
     if focal is None and all(v is None for v in ranges.values()):
         raise EntryError("position", "expected at least one of position, ypr_deg, focal_length, principal_point")
-    return RandomiseCamera(fields.text(table, "camera"), focal_length=None if focal is None else focal[0], **ranges)
+    return RandomiseCamera(fields.text(table, "camera"), focal_length=None if focal is None else focal[0],
+                           position=ranges["position"], ypr_deg=ranges["ypr_deg"],
+                           principal_point=ranges["principal_point"])
 
 
 def _highlight(table: dict, do: str) -> Highlight:

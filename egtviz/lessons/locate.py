@@ -12,9 +12,12 @@ from __future__ import annotations
 import bisect
 import json.decoder
 import re
+from collections.abc import Callable
 
 __all__ = ["Locator", "json_locator", "scene_entry_path", "toml_locator"]
 
+# The stdlib's JSON string scanner: json.decoder exports it, typeshed's stub leaves it out.
+_scanstring: Callable[[str, int], tuple[str, int]] = json.decoder.scanstring  # type: ignore[attr-defined]
 _KEY = re.compile(r"""\s*((?:[A-Za-z0-9_-]+|"[^"]*"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_-]+|"[^"]*"|'[^']*'))*)\s*=""")
 _ENTRY = re.compile(r"([A-Za-z_]+)(?:\[(\d+)\])?(?:\.([A-Za-z_]+))?(?::\s*camera '[^']*':\s*([A-Za-z_]+))?")
 
@@ -98,7 +101,7 @@ def json_locator(text: str) -> Locator:
             if text[i : i + 1] == "}":
                 return i + 1
             while True:
-                key, i = json.decoder.scanstring(text, skip(i) + 1)
+                key, i = _scanstring(text, skip(i) + 1)
                 i = skip(i) + 1  # the colon
                 i = skip(value(i, path + (key,)))
                 if text[i] == "}":
@@ -116,7 +119,7 @@ def json_locator(text: str) -> Locator:
                     return i + 1
                 i += 1
         if c == '"':
-            return json.decoder.scanstring(text, i + 1)[1]
+            return _scanstring(text, i + 1)[1]
         m = scalar.match(text, i)
         return m.end() if m else i + 1
 

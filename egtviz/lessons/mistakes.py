@@ -30,6 +30,20 @@ class Where:
     other: str | None = None
     point: int | None = None
 
+    @property
+    def other_camera(self) -> str:
+        """``other``, which every quantity with ``needs_other`` is given."""
+        if self.other is None:
+            raise SceneError(f"a quantity of {self.camera} needs the other camera of the pair")
+        return self.other
+
+    @property
+    def point_index(self) -> int:
+        """``point``, which every quantity with ``needs_point`` is given."""
+        if self.point is None:
+            raise SceneError(f"a quantity of {self.camera} needs a point")
+        return self.point
+
 
 Compute = Callable[[Scene, Where], np.ndarray]
 
@@ -77,7 +91,7 @@ def _pinhole(scene: Scene, name: str) -> PinholeCamera:
 
 
 def _point(scene: Scene, where: Where) -> np.ndarray:
-    return np.asarray(scene.points[where.point], dtype=float)
+    return np.asarray(scene.points[where.point_index], dtype=float)
 
 
 def _local(scene: Scene, where: Where) -> np.ndarray:
@@ -94,7 +108,7 @@ def _pixel_of(K: np.ndarray, local: np.ndarray) -> np.ndarray:
 def _pixel(scene: Scene, where: Where) -> np.ndarray:
     projection = _camera(scene, where.camera).project(_point(scene, where)[None, :])
     if not bool(projection.visible[0]):
-        raise SceneError(f"point {where.point + 1} has no image in {where.camera}")
+        raise SceneError(f"point {where.point_index + 1} has no image in {where.camera}")
     return np.asarray(projection.pixels[0], dtype=float)
 
 
@@ -107,7 +121,7 @@ def _depth(scene: Scene, where: Where) -> np.ndarray:
 
 
 def _pair(scene: Scene, where: Where):
-    return epipolar_pair(_pinhole(scene, where.camera), _pinhole(scene, where.other))
+    return epipolar_pair(_pinhole(scene, where.camera), _pinhole(scene, where.other_camera))
 
 
 def _epipole(scene: Scene, where: Where) -> np.ndarray:
@@ -117,7 +131,7 @@ def _epipole(scene: Scene, where: Where) -> np.ndarray:
         if e[2] == 0.0:
             raise SceneError(f"the epipole of {where.camera} is at infinity: it has no pixel")
         return np.asarray(e[:2], dtype=float)
-    projection = cam.project(_camera(scene, where.other).centre[None, :])
+    projection = cam.project(_camera(scene, where.other_camera).centre[None, :])
     if not bool(projection.visible[0]):
         raise SceneError(f"{where.camera} does not see {where.other}'s centre")
     return np.asarray(projection.pixels[0], dtype=float)
@@ -133,7 +147,7 @@ def _essential(scene: Scene, where: Where) -> np.ndarray:
 
 def _seen_by_other(scene: Scene, where: Where) -> np.ndarray:
     """The point's pixel in the other camera."""
-    return _pixel(scene, Where(where.other, None, where.point))
+    return _pixel(scene, Where(where.other_camera, None, where.point))
 
 
 def _line(scene: Scene, where: Where) -> np.ndarray:
@@ -146,7 +160,7 @@ def _axis(scene: Scene, name: str) -> np.ndarray:
 
 
 def _angle_rad(scene: Scene, where: Where) -> float:
-    c = float(np.clip(_axis(scene, where.camera) @ _axis(scene, where.other), -1.0, 1.0))
+    c = float(np.clip(_axis(scene, where.camera) @ _axis(scene, where.other_camera), -1.0, 1.0))
     return math.acos(c)
 
 
@@ -225,7 +239,7 @@ def _epipole_normalised(scene: Scene, where: Where) -> np.ndarray:
 
 def _antipodal_epipole(scene: Scene, where: Where) -> np.ndarray:
     cam = _camera(scene, where.camera)
-    away = 2.0 * cam.centre - _camera(scene, where.other).centre
+    away = 2.0 * cam.centre - _camera(scene, where.other_camera).centre
     return np.asarray(cam.project(away[None, :]).pixels[0], dtype=float)
 
 

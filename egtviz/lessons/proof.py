@@ -13,10 +13,13 @@ a proof. A mistake the lesson already forbids is written as the route that would
 
 from __future__ import annotations
 
+from typing import cast
+
 from ..scene import SceneError
 from .errors import EntryError, LessonError
 from .format import CounterExample, Lesson
 from .runner import LessonRun
+from .tasks.computed import ComputedTask
 
 __all__ = ["PROOF_LEARNERS", "prove_counter_examples"]
 
@@ -66,7 +69,8 @@ def _prove_one(lesson: Lesson, run: LessonRun, index: int, task_id: str, number:
             raise LessonError(lesson.source, example.line, f"{where} cannot be applied: {exc}") from None
     answer = example.answer
     if example.mistake is not None:  # a computed task: the mistake's value in this learner's scene
-        task = next(t for t in run.step.tasks if t.id == task_id)
+        # A counter-example names a mistake only for a computed task.
+        task = cast(ComputedTask, next(t for t in run.step.tasks if t.id == task_id))
         try:
             answer = task.mistake_text(example.mistake, run.model.scene)
         except SceneError as exc:

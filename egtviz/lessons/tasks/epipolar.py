@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 
 from ...geometry.epipolar import epipolar_planes, lines_of_planes
+from ...geometry.pinhole import PinholeCamera
 from ...scene import Scene
 from ...scene.limits import PRINCIPAL_POINT
 from .. import fields
@@ -70,14 +71,14 @@ class EpipoleNearTask(Task):
         plane = ctx.drawn().image_planes.get(self.camera)
         if plane is None or not plane.in_pair:
             return TaskResult(False, f"Camera {self.camera!r} is not in the drawn pair.")
-        finite = [e for e in plane.epipoles if e.xy is not None]
+        finite = [(e, e.xy) for e in plane.epipoles if e.xy is not None]
         if not finite:
             return TaskResult(
                 False, f"The epipole of {self.camera} is at infinity: turn the camera towards the other one."
             )
-        best = min(finite, key=lambda e: math.hypot(e.xy[0] - u, e.xy[1] - v))
-        d = math.hypot(best.xy[0] - u, best.xy[1] - v)
-        where = f"{best.label} is at ({best.xy[0]:.1f}, {best.xy[1]:.1f}), {d:.1f} px from ({u:g}, {v:g})"
+        best, xy = min(finite, key=lambda exy: math.hypot(exy[1][0] - u, exy[1][1] - v))
+        d = math.hypot(xy[0] - u, xy[1] - v)
+        where = f"{best.label} is at ({xy[0]:.1f}, {xy[1]:.1f}), {d:.1f} px from ({u:g}, {v:g})"
         if d <= within:
             return TaskResult(True, f"Done: {where}.")
         return TaskResult(False, f"Not yet: {where}; it must be within {within:g} px.")
@@ -126,11 +127,12 @@ class LinesParallelTask(Task):
         scene = ctx.scene
         n1, n2 = scene.drawn_pair  # type: ignore[misc]
         c1, c2 = scene.camera(n1).camera(), scene.camera(n2).camera()
-        planes = epipolar_planes(c1.center, c2.center, scene.points_array())
+        planes = epipolar_planes(c1.centre, c2.centre, scene.points_array())
         normals = planes[~np.isnan(planes).any(axis=1), :3]  # points on the baseline have no plane
         if len(normals) < 2:
             return TaskResult(False, "Fewer than two points off the baseline: no lines to compare.")
-        lines = lines_of_planes(scene.camera(self.camera).camera(), normals)
+        # missing() stops the task unless the drawn pair is two pin-hole cameras.
+        lines = lines_of_planes(cast(PinholeCamera, scene.camera(self.camera).camera()), normals)
         spread = direction_spread_deg(lines)
         msg = f"the epipolar lines of {self.camera} spread over {spread:.2f} degrees"
         if spread <= params["within_deg"]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypedDict, cast
 
 import numpy as np
 
@@ -38,9 +38,14 @@ DEFAULT_MIN_PRECISION = 0.9
 _LAB_KEYS = ("min_noise_px", "min_outlier_percent")
 
 
-def _lab_minimums(table: dict) -> dict[str, float]:
+class _LabMinimums(TypedDict):
+    min_noise_px: float
+    min_outlier_percent: float
+
+
+def _lab_minimums(table: dict) -> _LabMinimums:
     """The lab settings the learner must keep at least (``min_noise_px``, ``min_outlier_percent``; 0 if absent)."""
-    return dict(
+    return _LabMinimums(
         min_noise_px=fields.number(table, "min_noise_px", LAB_NOISE_PX, required=False, default=0.0),
         min_outlier_percent=fields.number(table, "min_outlier_percent", LAB_OUTLIER_PERCENT, required=False,
                                           default=0.0),
@@ -164,8 +169,9 @@ class InliersRecallTask(Task):
         msg = f"{fit.title} marks {100 * fit.inlier_recall:.0f} % of the true inliers as inliers"
         if fit.inlier_recall < params["at_least"]:
             return TaskResult(False, f"Not yet: {msg}; at least {100 * params['at_least']:g} % needed.")
-        marked = int(np.count_nonzero(fit.inliers))
-        wrong = int(np.count_nonzero(fit.inliers & lab.data.outlier))
+        inliers = cast(np.ndarray, fit.inliers)  # the task's method is robust: its fit has an inlier mask
+        marked = int(np.count_nonzero(inliers))
+        wrong = int(np.count_nonzero(inliers & lab.data.outlier))
         precision = 1.0 - wrong / marked if marked else 0.0
         if precision < self.min_precision:
             return TaskResult(False, f"Not yet: {msg}, but {wrong} of the {marked} it marks are outliers "
