@@ -137,26 +137,36 @@ def canonical_fundamental(F: np.ndarray) -> np.ndarray:
     return G / math.sqrt(g.dot(g))
 
 
-def _denormalize_canonical(Fn: np.ndarray, T1: np.ndarray, T2: np.ndarray) -> np.ndarray:
-    r""":func:`canonical_fundamental` of :math:`F = T_2^T \hat F T_1` (H&Z Algorithm 11.1, step (iii)).
+def _rank2_denormalize_canonical(f: np.ndarray, T1: np.ndarray, T2: np.ndarray) -> np.ndarray:
+    r""":func:`canonical_fundamental` of :math:`F = T_2^T \hat F T_1`, :math:`\hat F` the nearest rank-2 matrix to ``f``.
 
-    For the similarities :math:`T = [s, 0, p;\ 0, s, q;\ 0, 0, 1]` of Hartley's normalisation the
-    product is written out on Python floats: numpy's per-call cost dominates on nine numbers.
+    H&Z Algorithm 11.1, steps (ii) and (iii): ``f`` (9,) is the linear solution in normalised
+    coordinates, :math:`\hat F = U \operatorname{diag}(\sigma_1, \sigma_2, 0) V^T` (as
+    :func:`~egtviz.geometry.matrices.nearest_rank2`). For the similarities
+    :math:`T = [s, 0, p;\ 0, s, q;\ 0, 0, 1]` of Hartley's normalisation the products are written out
+    on Python floats: numpy's per-call cost dominates on nine numbers.
     """
-    s1, _, p1 = T1[0].tolist()
-    q1 = float(T1[1, 2])
-    s2, _, p2 = T2[0].tolist()
-    q2 = float(T2[1, 2])
-    rows = []
-    for r0, r1, r2 in Fn.tolist():  # F_hat T1, row by row
-        rows.append((s1 * r0, s1 * r1, p1 * r0 + q1 * r1 + r2))
-    (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = rows
-    f = [s2 * a0, s2 * a1, s2 * a2, s2 * b0, s2 * b1, s2 * b2,
-         p2 * a0 + q2 * b0 + c0, p2 * a1 + q2 * b1 + c1, p2 * a2 + q2 * b2 + c2]  # T2^T (F_hat T1)
-    top = max(f, key=abs)
-    g = [v / top for v in f]
-    norm = math.sqrt(sum(v * v for v in g))
-    return np.array([v / norm for v in g]).reshape(3, 3)
+    # LAPACK directly: numpy.linalg's wrapper costs more than a 3x3 SVD.
+    U, sv, Vt, info = _lapack.dgesvd(f.reshape(3, 3))
+    if info != 0:  # pragma: no cover - LAPACK failure
+        U, sv, Vt = np.linalg.svd(f.reshape(3, 3))
+    # F = (T2^T U_2 S_2)(V_2^T T1): the two rank-1 terms, each side denormalised before the product.
+    (u00, u01, _), (u10, u11, _), (u20, u21, _) = U.tolist()
+    d0, d1, _ = sv.tolist()
+    (v00, v01, v02), (v10, v11, v12), _ = Vt.tolist()
+    (s1, _, p1), (_, _, q1), _ = T1.tolist()
+    (s2, _, p2), (_, _, q2), _ = T2.tolist()
+    a0, a1, a2 = u00 * d0, u10 * d0, u20 * d0
+    b0, b1, b2 = u01 * d1, u11 * d1, u21 * d1
+    left = ((s2 * a0, s2 * b0), (s2 * a1, s2 * b1), (p2 * a0 + q2 * a1 + a2, p2 * b0 + q2 * b1 + b2))
+    w0 = (s1 * v00, s1 * v01, p1 * v00 + q1 * v01 + v02)
+    w1 = (s1 * v10, s1 * v11, p1 * v10 + q1 * v11 + v12)
+    f9 = [a * x + b * y for a, b in left for x, y in zip(w0, w1)]
+    top = max(f9, key=abs)
+    g = [v / top for v in f9]
+    F = np.array(g)
+    F /= math.hypot(*g)
+    return F.reshape(3, 3)
 
 
 def _det3(M: np.ndarray) -> np.ndarray:
@@ -321,8 +331,7 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
     """
     u1, u2 = _float_pairs(U1, U2, 8)
     At, T1, T2 = normalized_design(u1, u2)
-    Fn = nearest_rank2(null_vector(At).reshape(3, 3), check=False)
-    return _denormalize_canonical(Fn, T1, T2)
+    return _rank2_denormalize_canonical(null_vector(At), T1, T2)
 
 
 def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]:

@@ -128,32 +128,30 @@ def hartley_normalization(
     names = [name] if isinstance(name, str) else list(name)
     images = _images(U, names, single, check)
     k, n = len(images), images[0].shape[0]
-    # Each row (x, y) read as one complex number x + iy: the centroid, the distances |u_i - c| (a hypot)
-    # and the scaling are then one numpy call each, on contiguous memory; numpy's per-call cost, not the
-    # arithmetic, dominates at the sizes of an estimation.
+    # Each row (x, y) read as one complex number x + iy, all images stacked: the centroids, the distances
+    # |u_i - c| (a hypot) and the scaling are then one numpy call each for all images, on contiguous
+    # memory; numpy's per-call cost, not the arithmetic, dominates at the sizes of an estimation.
     Un = np.empty((k, n, 2))
-    zs, centres = [], []
-    for image, nm in zip(images, names):
-        z = np.ascontiguousarray(image).view(np.complex128)[:, 0]
-        c = complex(np.add.reduce(z)) / n
+    for out, image in zip(Un, images):
+        out[...] = image
+    Z = Un.view(np.complex128)[..., 0]
+    centres = [c / n for c in np.add.reduce(Z, axis=1).tolist()]
+    for image, c, nm in zip(images, centres, names):
         if not (math.isfinite(c.real) and math.isfinite(c.imag)):
             as_points(image, nm, 2)  # names the NaN or inf (or the magnitude that overflowed the sum)
-        zs.append(z)
-        centres.append(c)
-    outs = [Un[i].view(np.complex128)[:, 0] for i in range(k)]
-    means = []
-    for image, z, out, c, nm in zip(images, zs, outs, centres, names):
-        np.subtract(z, c, out=out)
-        mean = float(np.add.reduce(np.abs(out))) / n
+    Z -= np.array(centres)[:, None]
+    means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
+    for image, c, mean, nm in zip(images, centres, means, names):
         if not max(abs(c.real), abs(c.imag)) + n * mean <= MAX_MAGNITUDE:
             as_points(image, nm, 2)  # a coordinate may exceed MAX_MAGNITUDE: the full check decides
-        means.append(mean)
     flat: list[float] = []
-    for out, c, mean, nm in zip(outs, centres, means, names):
+    scales: list[float] = []
+    for c, mean, nm in zip(centres, means, names):
         _check_spread(mean, c, nm)
         s = math.sqrt(2.0) / mean
-        out *= s
+        scales.append(s)
         flat += [s, 0.0, -s * c.real, 0.0, s, -s * c.imag, 0.0, 0.0, 1.0]
+    Z *= np.array(scales)[:, None]
     T = np.array(flat).reshape(k, 3, 3)
     return (Un[0], T[0]) if single else (Un, T)
 
