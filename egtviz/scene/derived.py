@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 
@@ -217,10 +217,10 @@ def _rim_and_horizon(kind: str, values: tuple[tuple[str, float], ...]) -> tuple[
     camera's axis, fixed in the camera's frame), so they are computed once per set of parameters, at the origin."""
     cam = CAMERA_MODELS[kind].build(Pose(), **dict(values))
     rim = cam.rim(RIM_SAMPLES)
-    if rim.shape == (5, 2) and np.array_equal(rim, rectangle_rim(cam.width, cam.height)):
-        rim = None
     horizon = tuple(_frozen(a) for a in cam.plane_image_arcs([0.0, 0.0, 1.0], RIM_SAMPLES)[0])
-    return (None if rim is None else _frozen(rim)), horizon
+    if rim.shape == (5, 2) and np.array_equal(rim, rectangle_rim(cam.width, cam.height)):
+        return None, horizon
+    return _frozen(rim), horizon
 
 
 def compute_derived(scene: Scene, *, check: bool = False) -> Derived:
@@ -307,7 +307,9 @@ def _clipped_lines(sides: list[tuple[EpipolarCurves, ImagePlane]]) -> list[np.nd
     for k in drawn:
         groups.setdefault((sides[k][1].width, sides[k][1].height), []).append(k)
     for (w, h), members in groups.items():
-        lines = np.concatenate([sides[k][0].lines for k in members]) if len(members) > 1 else sides[members[0]][0].lines
+        # Every member has lines (``drawn``).
+        parts = [cast(np.ndarray, sides[k][0].lines) for k in members]
+        lines = np.concatenate(parts) if len(parts) > 1 else parts[0]
         # The core computed these lines from validated cameras: its unchecked path, which also gives NaN rows for
         # a point with no line (NaN or zero), as for a line that misses the image.
         seg = clip_lines_to_rect(lines, w, h, check=False)[0]
@@ -336,7 +338,7 @@ def _pair_content(cam: CameraModel, curves: EpipolarCurves, lines: np.ndarray | 
     )
     if lines is not None:
         # The core's fresh array of this update (the clipped segments were made from a copy): frozen, not copied.
-        return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(curves.lines)}
+        return {"epipoles": epipoles, "lines": lines, "line_coefficients": _frozen(cast(np.ndarray, curves.lines))}
     arcs = cam.plane_image_arcs(normals, n_samples, check=check)
     # tuple() of a tuple is that tuple: the models' tuples are kept, any other sequence becomes one.
     return {"epipoles": epipoles, "conics": tuple(map(tuple, arcs))}
@@ -351,7 +353,7 @@ def _readout(names: tuple[str, str], c1: CameraModel, c2: CameraModel, first: Ep
     F = rank = None
     if K1 is not None and K2 is not None:
         F = fundamental_from_essential(E, K1, K2, check=check)
-        tol = 1e-9 * np.linalg.norm(F)
+        tol = 1e-9 * float(np.linalg.norm(F))
         # The SVD's rank, decided from F's invariants when they are conclusive (every drag of a pin-hole pair).
         rank = int(np.linalg.matrix_rank(F, tol=tol)) if check else matrix_rank3(F, tol)
     return PairReadout(names, F, E, rank, first.epipoles[0], second.epipoles[0])
