@@ -1,13 +1,28 @@
 """Lessons readable where they are used: a displayed formula that cannot fit the control panel is refused by
-``egtviz check`` with its line and width, every shipped formula fits."""
+``egtviz check`` with its line and width, every shipped formula fits; a step limits the epipolar lines drawn, the
+point numbers written and the view of a panel (lessons 5, 9 and 10, in headless tabs)."""
 
 from __future__ import annotations
 
+import re
+import types
+from contextlib import contextmanager
+from unittest.mock import patch
+
+import numpy as np
 import pytest
+import viser
 
 from egtviz.lessons import LessonError, parse_lesson
 from egtviz.lessons.catalog import lessons_folder
 from egtviz.lessons.cli import check_file
+from egtviz.lessons.changes import RandomPoints, SetField
+from egtviz.lessons.display import thin_lines
+from egtviz.lessons.progress import ProgressStore
+from egtviz.viewer.app import EgtvizApp
+from egtviz.viewer.headless import FakeTab
+from egtviz.viewer.lesson_view import LessonPanel
+from egtviz.viewer.start_page import StartPage
 from egtviz.lessons.markup import PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, formula_width_px
 
 LESSON = """\
@@ -66,3 +81,96 @@ def test_every_lesson_of_the_course_passes_the_width_check():
     paths = sorted(lessons_folder().glob("*.toml"))
     assert len(paths) == 13
     assert [check_file(str(p)) for p in paths] == [None] * 13
+
+
+# -- what a step lets the panels show --------------------------------------------------------------------------
+
+NUMBER = re.compile(r"<text[^>]*stroke=\"#fff\"[^>]*>(\d+)</text>")  # a point number (haloed; ticks are not)
+
+
+@contextmanager
+def lesson_at(tmp_path, name: str, step: int):
+    """A headless tab of lesson ``name`` at its 1-based ``step``."""
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = EgtvizApp(server, field_delay=0.0, course=True, progress=ProgressStore(tmp_path / "p.sqlite3"))
+    tab = FakeTab(server.get_port())
+    try:
+        (page,) = app.course.wait_for_tab(StartPage)
+        page.buttons[name].value = True
+        (panel,) = app.course.wait_for_tab(LessonPanel)
+        for _ in range(step - 1):
+            panel.nav.buttons.value = "next"
+        yield panel
+    finally:
+        tab.close()
+        server.stop()
+
+
+def _svg(panel: LessonPanel, camera: str) -> str:
+    panel.view.redraw_now()
+    return panel.view.dock.html[camera].content
+
+
+def _view(svg: str) -> tuple[float, ...]:
+    return tuple(float(x) for x in re.search(r'data-view="([^"]+)"', svg).group(1).split())
+
+
+def test_lesson_10_keeps_cam2_on_the_image_and_numbers_only_the_selected_point(tmp_path):
+    """Before, the ruined fit's epipole zoomed cam2 out to u from -2000 and the lab's rejected points were numbered."""
+    with lesson_at(tmp_path, "10-robust-estimation", 2) as panel:
+        for threshold in (None, 1.5):  # the step's start (30 px), then the setting that passes
+            if threshold is not None:
+                panel.lab.threshold.value = threshold
+            for camera in ("cam1", "cam2"):
+                svg = _svg(panel, camera)
+                assert _view(svg) == pytest.approx((-80.0, -60.0, 800.0, 600.0))
+                numbers = NUMBER.findall(svg)
+                selected = panel.run.model.scene.selected_point
+                assert numbers in ([], [] if selected is None else [str(selected + 1)])
+
+
+def test_lesson_9_draws_at_most_the_steps_lines_with_300_points(tmp_path):
+    with lesson_at(tmp_path, "09-estimating-f", 3) as panel:
+        panel.run.apply(RandomPoints(n=300, seed=3, center=(0.0, 0.0, 1.0), extent=2.0))
+        assert len(panel.run.model.scene.points) == 300
+        for camera in ("cam1", "cam2"):
+            svg = _svg(panel, camera)
+            assert svg.count('data-kind="point"') > 250
+            assert 10 <= svg.count('data-kind="epipolar-line"') <= 20
+
+
+def test_lesson_5_shows_the_mirror_points_after_the_settings_that_pass(tmp_path):
+    """Before, a b = 0.6 mirror imaged the ten points outside the 1100 px camera's image: "0 of 10 points"."""
+    with lesson_at(tmp_path, "05-unified-sphere", 4) as panel:
+        for field, value in (("b", 0.6), ("mirror", "parabolic")):
+            panel.run.apply(SetField(camera="pano", field=field, value=value))
+            svg = _svg(panel, "pano")
+            assert "10 of 10 points in the image" in svg
+            assert svg.count('data-kind="point"') == 10
+
+
+def test_thin_lines_keeps_an_even_share_and_the_selected_points_line():
+    rng = np.random.default_rng(7)
+    L = rng.uniform(0, 600, (300, 2, 2))
+    L[5] = np.nan  # a point without a line
+    plane = types.SimpleNamespace(lines=L, line_coefficients=rng.normal(size=(300, 3)))
+    with patch("dataclasses.replace", lambda p, **kw: types.SimpleNamespace(**(vars(p) | kw))):
+        thin = thin_lines(plane, 20, selected=123)
+    kept = np.flatnonzero(np.all(np.isfinite(thin.lines.reshape(300, -1)), axis=1))
+    assert len(kept) == 20 and 123 in kept and 5 not in kept
+    assert np.array_equal(thin.lines[kept], L[kept])  # a kept line is unchanged and keeps its point's index
+    assert np.array_equal(np.flatnonzero(np.isfinite(thin.line_coefficients[:, 0])), kept)
+    assert thin_lines(plane, 400, selected=None) is plane
+
+
+@pytest.mark.parametrize(("keys", "reason"), [
+    ("max_lines = 0", "steps[0]: max_lines: expected a whole number from 1 to 10000, got 0"),
+    ('labels = "some"', "labels: expected one of none, selected, all, got 'some'"),
+    ("view = { cam9 = \"fit\" }", "view: no camera 'cam9' in the scene"),
+    ("view = { cam1 = { u = [5, 1], v = [0, 480] } }", "view.cam1.u: expected low < high"),
+])
+def test_a_bad_panel_key_is_refused_with_its_line(keys, reason):
+    text = LESSON.replace("FORMULA", "x") + keys + "\n"  # a key of the step, after its text
+    with pytest.raises(LessonError, match=re.escape(reason)) as info:
+        parse_lesson(text.encode(), source="t.toml", name="01-test")
+    assert info.value.line == 14  # the key's own line

@@ -39,6 +39,8 @@ from .changes import apply as apply_change
 from .errors import EntryError, LessonError
 from .images import LessonImages
 from .locate import Locator, scene_entry_path, toml_locator
+from .display import KEYS as DISPLAY_KEYS
+from .display import PanelDisplay, parse_display
 from .markup import (PANEL_WIDTH_PX, MarkupError, displayed_formulas, formula_to_mathml, formula_width_px,
                      render_markdown)
 from .tasks import (
@@ -52,7 +54,7 @@ from .tasks import (
 __all__ = ["MAX_COUNTER_EXAMPLES", "CounterExample", "Lesson", "Step", "load_lesson", "parse_lesson"]
 
 _TOP = ("title", "summary", "prerequisites", "scene", "steps")
-_STEP = ("title", "text", "changes", "tasks")
+_STEP = ("title", "text", "changes", "tasks", *DISPLAY_KEYS)
 _LESSON_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,79}")
 _COUNTER = ("why", "changes", "answer", "mistake")
 MAX_COUNTER_EXAMPLES = 5
@@ -91,6 +93,8 @@ class Step:
     tasks: tuple[Task, ...] = ()
     counter_examples: tuple[tuple[CounterExample, ...], ...] = ()
     """Per task (in the order of :attr:`tasks`), the wrong answers ``egtviz check`` proves it refuses."""
+    display: PanelDisplay = PanelDisplay()
+    """What the panels show in this step (``max_lines``, ``labels``, ``view``)."""
 
     def counter_examples_of(self, task_id: str) -> tuple[CounterExample, ...]:
         """The counter-examples of the task ``task_id`` (none if it has none)."""
@@ -270,7 +274,11 @@ class _Reader:
         self.formulas_fit(at, text)
         changes = self.changes(at, data.get("changes", []), model)
         tasks, counter = self.tasks(at, data.get("tasks", []), model)
-        return Step(title, text, html, changes, tasks, counter)
+        try:
+            display = parse_display(data, frozenset(c.name for c in model.scene.cameras))
+        except EntryError as exc:
+            raise self.entry(at, exc, f"steps[{i}]") from None
+        return Step(title, text, html, changes, tasks, counter, display)
 
     def formulas_fit(self, at: tuple, text: str) -> None:
         """Refuses a displayed formula wider than the control panel (it would be cut at the panel's edge)."""

@@ -7,13 +7,17 @@ and allows every edit the scene model accepts.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ..lessons.display import PanelDisplay, thin_lines
 from ..scene import Scene
+from .panel_view import ViewBox
+from .panels import PanelView
 
 __all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter", "PoseGuard"]
 
@@ -36,17 +40,45 @@ class LessonPolicy:
             that message.
         pose_guard: turns the pose a gizmo sent into the pose to apply (one inside the lesson's ranges); the
             gizmo shows the applied pose when the drag ends.
+        display: the current step's :class:`~egtviz.lessons.display.PanelDisplay` (how many epipolar lines,
+            which point numbers, which view per camera).
     """
 
     panel_filter: PanelFilter | None = None
     field_guard: FieldGuard | None = None
     pose_guard: PoseGuard | None = None
+    #: ``display() -> PanelDisplay``: what the current step lets the panels show (lines, numbers, views).
+    display: Callable[[], PanelDisplay] | None = None
 
     def panels(self, scene: Scene, derived: Any) -> tuple[Any, frozenset[int]]:
-        """What the panels draw, and the points they ring (the model's geometry and none without a filter)."""
-        if self.panel_filter is None:
-            return derived, frozenset()
-        return self.panel_filter(scene, derived)
+        """What the panels draw, and the points they ring (the model's geometry and none without a filter); the
+        step's ``max_lines`` thins each panel's epipolar lines, and its ``labels`` other than ``all`` drop the
+        filter's rings (each would be numbered)."""
+        drawn, ringed = (derived, frozenset()) if self.panel_filter is None else self.panel_filter(scene, derived)
+        shown = self.shown()
+        if shown.labels != "all":
+            ringed = frozenset()
+        if shown.max_lines is not None:
+            planes = {name: thin_lines(plane, shown.max_lines, scene.selected_point)
+                      for name, plane in drawn.image_planes.items()}
+            drawn = dataclasses.replace(drawn, image_planes=planes)
+        return drawn, ringed
+
+    def shown(self) -> PanelDisplay:
+        """What the current step lets the panels show (everything without a lesson)."""
+        return PanelDisplay() if self.display is None else self.display()
+
+    def step_view(self, camera: str) -> tuple[int, PanelView] | None:
+        """The view the current step gives ``camera``'s panel, keyed by the step's display (the panel applies it
+        once per step), or None when the step leaves the panel's view alone."""
+        shown = self.shown()
+        view = shown.view_of(camera)
+        if view is None:
+            return None
+        if view in ("fit", "image"):
+            return id(shown), PanelView(view)
+        u0, u1, v0, v1 = view
+        return id(shown), PanelView("custom", ViewBox(u0, v0, u1 - u0, v1 - v0))
 
     def refusal(self, camera: str, fields: dict[str, Any]) -> str | None:
         """Why ``camera`` may not take ``fields`` now, or None when it may."""

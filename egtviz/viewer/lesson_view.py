@@ -335,7 +335,8 @@ class LessonPanel:
             view.policy = LessonPolicy(
                 panel_filter=panel_filter,
                 field_guard=lambda camera, fields: field_range_refusal(self.run, camera, fields),
-                pose_guard=lambda camera, position, R: pose_within_ranges(self.run, camera, position, R))
+                pose_guard=lambda camera, position, R: pose_within_ranges(self.run, camera, position, R),
+                display=lambda: self.run.step.display)
             # The model holds the ranges too, for every route into it (a raw client message, a script).
             view.model.set_constraints(CameraRanges(lambda: self.run.ranges,
                                                     lambda camera, fields: field_range_refusal(self.run, camera, fields)))

@@ -81,6 +81,8 @@ class PanelDock:
         self.html: dict[str, Any] = {}
         #: What each panel shows, with the image size it was chosen for: ``name -> ((width, height), PanelView)``.
         self._views: dict[str, tuple[tuple[int, int], PanelView]] = {}
+        #: Per panel, the lesson step's view last applied (a step applies its view once: the buttons then move it).
+        self._step_views: dict[str, Any] = {}
         #: Each panel's view as last drawn (a fitted panel's steady view during a drag).
         self._shown_views: dict[str, Any] = {}
         #: Per panel, the image plane and the other inputs its SVG was last drawn from, and that SVG.
@@ -298,6 +300,13 @@ class PanelDock:
         """What panel ``name`` shows; a new panel, or a new image size, starts from :func:`initial_view`."""
         size = (int(plane.width), int(plane.height))
         kept = self._views.get(name)
+        step_view = self.view.policy.step_view(name)
+        if step_view is None:
+            self._step_views.pop(name, None)  # the next step that sets a view applies it again
+        elif self._step_views.get(name) != step_view:
+            self._step_views[name] = step_view
+            kept = (size, step_view[1])
+            self._views[name] = kept
         if kept is None or kept[0] != size:
             kept = (size, PanelView(initial_view(plane)))
             self._views[name] = kept
@@ -322,8 +331,8 @@ class PanelDock:
         kept = self._shown_views.get(name) if drag_step else None
         view = self.panel_view(name, plane).resolve(plane, kept=kept)
         self._shown_views[name] = view
-        inputs = (scene.selected_point, frozenset(highlighted), scene.options.show_labels, view, self.style, panel_px,
-                  max_height)
+        inputs = (scene.selected_point, frozenset(highlighted), scene.options.show_labels,
+                  self.view.policy.shown().labels, view, self.style, panel_px, max_height)
         drawn = self._drawn.get(name)
         if drawn is not None and drawn[0] is plane and drawn[1] == inputs:
             return drawn[2]
@@ -331,7 +340,7 @@ class PanelDock:
             plane,
             selected_point=scene.selected_point,
             highlighted=highlighted,
-            show_labels=scene.options.show_labels,
+            show_labels=scene.options.show_labels and self.view.policy.shown().labels != "none",
             revision=revision,
             view=view,
             style=self.style,

@@ -8,8 +8,13 @@ import pytest
 
 from egtviz.lessons.catalog import lessons_folder
 from egtviz.lessons.format import load_lesson
-from egtviz.lessons.markup import FORMULA_FONT_PX, PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, \
-    formula_width_px
+from egtviz.lessons.markup import (
+    FORMULA_FONT_PX,
+    PANEL_WIDTH_PX,
+    displayed_formulas,
+    formula_to_mathml,
+    formula_width_px,
+)
 from egtviz.viewer.browser import chromium
 from egtviz.viewer.lesson_view import MATH_CSS
 from egtviz.viewer.palette import PRESENT_GUI_CSS
