@@ -30,7 +30,7 @@ import numpy.typing as npt
 from scipy.linalg import lapack as _lapack
 
 from ._validate import DegenerateConfigurationError, GeometryError
-from .matrices import hartley_normalization, nearest_rank2, point_pairs
+from .matrices import hartley_scales, nearest_rank2, point_pairs
 
 __all__ = [
     "canonical_fundamental",
@@ -101,10 +101,40 @@ def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.nd
     """``(At, T1, T2)``: :func:`design_matrix` of the Hartley-normalised points of two checked ``(N, 2)`` arrays.
 
     ``T1``, ``T2`` are the similarities of :func:`~egtviz.geometry.matrices.hartley_normalization`
-    (H&Z Algorithm 11.1, step (i)); their scales are ``T[0, 0]``.
+    (H&Z Algorithm 11.1, step (i)); their scales are ``T[0, 0]``. The values are checked as there.
     """
-    Un, T = hartley_normalization((u1, u2), ("U1", "U2"), check=False)
-    return design_matrix(Un[0], Un[1]), T[0], T[1]
+    At, (s1, p1, q1, s2, p2, q2) = _normalized_design_floats(u1, u2)
+    return At, np.array([[s1, 0.0, p1], [0.0, s1, q1], [0.0, 0.0, 1.0]]), np.array(
+        [[s2, 0.0, p2], [0.0, s2, q2], [0.0, 0.0, 1.0]]
+    )
+
+
+def _normalized_design_floats(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, tuple[float, ...]]:
+    """:func:`normalized_design` with the similarities as floats ``(s1, p1, q1, s2, p2, q2)``, ``T = [s, 0, p; 0, s, q]``.
+
+    The normalisation of :func:`~egtviz.geometry.matrices.hartley_normalization` (the same centroids,
+    distances and scales, bit for bit, and the same checks), with the scaling done as the points are
+    written into the design matrix: numpy's per-call cost, not the arithmetic, dominates here.
+    """
+    n = u1.shape[0]
+    images, names = (u1, u2), ("U1", "U2")
+    # Each row (x, y) read as one complex number x + iy, both images stacked: one call per pass.
+    Z = np.empty((2, n), np.complex128)
+    np.concatenate(images, out=Z.view(np.float64).reshape(2 * n, 2))
+    centres = [c / n for c in np.add.reduce(Z, axis=1).tolist()]
+    hartley_scales(centres, None, n, images, names)
+    Z -= np.array(centres)[:, None]
+    means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
+    s1, s2 = hartley_scales(centres, means, n, images, names)
+    X = Z.view(np.float64).reshape(2, n, 2)
+    At = np.empty((9, n))
+    h1 = At[6:9]
+    np.multiply(X[0].T, s1, out=h1[:2])
+    h1[2] = 1.0
+    x2 = np.multiply(X[1].T, s2)
+    np.multiply(x2[:, None, :], h1[None, :, :], out=At[0:6].reshape(2, 3, n))  # rows 3a + b, a < 2 (eq. 11.3)
+    c1, c2 = centres
+    return At, (s1, -s1 * c1.real, -s1 * c1.imag, s2, -s2 * c2.real, -s2 * c2.imag)
 
 
 def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
@@ -121,7 +151,8 @@ def null_vector(At: np.ndarray, names: str = "U1, U2") -> np.ndarray:
     w, v, info = _lapack.dsyevd(M)
     if info != 0:  # pragma: no cover - LAPACK failure
         w, v = np.linalg.eigh(M)
-    if w[1] <= _RANK_TOL_EIG * w[-1]:
+    w1, w9 = w[1:9:7].tolist()
+    if w1 <= _RANK_TOL_EIG * w9:
         raise DegenerateConfigurationError(
             f"{names}: degenerate configuration, the design matrix has rank < 8 "
             "(repeated, collinear or coplanar points?)"
@@ -137,14 +168,14 @@ def canonical_fundamental(F: np.ndarray) -> np.ndarray:
     return G / math.sqrt(g.dot(g))
 
 
-def _rank2_denormalize_canonical(f: np.ndarray, T1: np.ndarray, T2: np.ndarray) -> np.ndarray:
+def _rank2_denormalize_canonical(f: np.ndarray, t: tuple[float, ...]) -> np.ndarray:
     r""":func:`canonical_fundamental` of :math:`F = T_2^T \hat F T_1`, :math:`\hat F` the nearest rank-2 matrix to ``f``.
 
     H&Z Algorithm 11.1, steps (ii) and (iii): ``f`` (9,) is the linear solution in normalised
     coordinates, :math:`\hat F = U \operatorname{diag}(\sigma_1, \sigma_2, 0) V^T` (as
     :func:`~egtviz.geometry.matrices.nearest_rank2`). For the similarities
     :math:`T = [s, 0, p;\ 0, s, q;\ 0, 0, 1]` of Hartley's normalisation the products are written out
-    on Python floats: numpy's per-call cost dominates on nine numbers.
+    on Python floats: numpy's per-call cost dominates on nine numbers. ``t`` is ``(s1, p1, q1, s2, p2, q2)``.
     """
     # LAPACK directly: numpy.linalg's wrapper costs more than a 3x3 SVD.
     U, sv, Vt, info = _lapack.dgesvd(f.reshape(3, 3))
@@ -154,8 +185,7 @@ def _rank2_denormalize_canonical(f: np.ndarray, T1: np.ndarray, T2: np.ndarray) 
     (u00, u01, _), (u10, u11, _), (u20, u21, _) = U.tolist()
     d0, d1, _ = sv.tolist()
     (v00, v01, v02), (v10, v11, v12), _ = Vt.tolist()
-    (s1, _, p1), (_, _, q1), _ = T1.tolist()
-    (s2, _, p2), (_, _, q2), _ = T2.tolist()
+    s1, p1, q1, s2, p2, q2 = t
     a0, a1, a2 = u00 * d0, u10 * d0, u20 * d0
     b0, b1, b2 = u01 * d1, u11 * d1, u21 * d1
     left = ((s2 * a0, s2 * b0), (s2 * a1, s2 * b1), (p2 * a0 + q2 * a1 + a2, p2 * b0 + q2 * b1 + b2))
@@ -330,8 +360,8 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
         DegenerateConfigurationError: coincident points or rank-deficient data.
     """
     u1, u2 = _float_pairs(U1, U2, 8)
-    At, T1, T2 = normalized_design(u1, u2)
-    return _rank2_denormalize_canonical(null_vector(At), T1, T2)
+    At, t = _normalized_design_floats(u1, u2)
+    return _rank2_denormalize_canonical(null_vector(At), t)
 
 
 def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]:

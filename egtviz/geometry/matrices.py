@@ -26,6 +26,7 @@ from ._validate import (
 __all__ = [
     "full_angle",
     "hartley_normalization",
+    "hartley_scales",
     "nearest_rank2",
     "point_pairs",
     "stack_columns",
@@ -132,28 +133,52 @@ def hartley_normalization(
     # |u_i - c| (a hypot) and the scaling are then one numpy call each for all images, on contiguous
     # memory; numpy's per-call cost, not the arithmetic, dominates at the sizes of an estimation.
     Un = np.empty((k, n, 2))
-    for out, image in zip(Un, images):
-        out[...] = image
+    np.concatenate(images, out=Un.reshape(k * n, 2))
     Z = Un.view(np.complex128)[..., 0]
     centres = [c / n for c in np.add.reduce(Z, axis=1).tolist()]
+    hartley_scales(centres, None, n, images, names)
+    Z -= np.array(centres)[:, None]
+    means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
+    scales = hartley_scales(centres, means, n, images, names)
+    Z *= np.array(scales)[:, None]
+    flat: list[float] = []
+    for c, s in zip(centres, scales):
+        flat += [s, 0.0, -s * c.real, 0.0, s, -s * c.imag, 0.0, 0.0, 1.0]
+    T = np.array(flat).reshape(k, 3, 3)
+    return (Un[0], T[0]) if single else (Un, T)
+
+
+def hartley_scales(
+    centres: Sequence[complex],
+    means: Sequence[float] | None,
+    n: int,
+    images: Sequence[np.ndarray],
+    names: Sequence[str],
+) -> list[float]:
+    r"""The scales :math:`s = \sqrt 2 / \bar d` of :func:`hartley_normalization`, checking the images' values.
+
+    For a caller that has computed, for each image of ``n`` points, the centroid :math:`c` (as
+    ``x + iy``) and the mean distance :math:`\bar d` from it itself, from float64 arrays whose type and
+    shape it has checked (``check=False`` of :func:`hartley_normalization`). Every centroid must be
+    finite (else the NaN or inf is named); every coordinate, within :math:`|c| + n \bar d` of the
+    origin, must be in range (else the full check decides); the points must spread. ``means=None``
+    checks the centroids only and returns ``[]``.
+
+    Raises:
+        GeometryError: a NaN, inf or huge value (the image named), or a spread below 1e-100.
+        DegenerateConfigurationError: all points of an image coincide.
+    """
     for image, c, nm in zip(images, centres, names):
         if not (math.isfinite(c.real) and math.isfinite(c.imag)):
             as_points(image, nm, 2)  # names the NaN or inf (or the magnitude that overflowed the sum)
-    Z -= np.array(centres)[:, None]
-    means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
+    if means is None:
+        return []
     for image, c, mean, nm in zip(images, centres, means, names):
         if not max(abs(c.real), abs(c.imag)) + n * mean <= MAX_MAGNITUDE:
             as_points(image, nm, 2)  # a coordinate may exceed MAX_MAGNITUDE: the full check decides
-    flat: list[float] = []
-    scales: list[float] = []
     for c, mean, nm in zip(centres, means, names):
         _check_spread(mean, c, nm)
-        s = math.sqrt(2.0) / mean
-        scales.append(s)
-        flat += [s, 0.0, -s * c.real, 0.0, s, -s * c.imag, 0.0, 0.0, 1.0]
-    Z *= np.array(scales)[:, None]
-    T = np.array(flat).reshape(k, 3, 3)
-    return (Un[0], T[0]) if single else (Un, T)
+    return [math.sqrt(2.0) / mean for mean in means]
 
 
 def _images(U: npt.ArrayLike | Sequence[np.ndarray], names: list[str], single: bool, check: bool) -> list[np.ndarray]:
