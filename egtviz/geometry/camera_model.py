@@ -164,11 +164,22 @@ class DirectionImages:
 
 @runtime_checkable
 class Projection(Protocol):
-    """What ``CameraModel.project`` returns: pixels and the two masks."""
+    """What ``CameraModel.project`` returns: pixels and the two masks (read-only: results are frozen)."""
 
-    pixels: np.ndarray
-    visible: np.ndarray
-    in_image: np.ndarray
+    @property
+    def pixels(self) -> np.ndarray:
+        """(N, 2) pixels; NaN where not ``visible``."""
+        ...
+
+    @property
+    def visible(self) -> np.ndarray:
+        """(N,) bool: the point has an image."""
+        ...
+
+    @property
+    def in_image(self) -> np.ndarray:
+        """(N,) bool: ``visible`` and inside the image."""
+        ...
 
 
 @runtime_checkable
@@ -179,15 +190,37 @@ class CameraModel(Protocol):
     properties of the instance for one with several (the catadioptric camera: its mirror decides).
     """
 
-    kind: str
-    """The registry key of the model."""
-    PARAMETERS: tuple[ParameterSpec, ...]
-    """The model's scalar parameters and their accepted ranges."""
-    no_image: str
-    """Where the points lie that have no image, in a few words (``"behind the camera"``)."""
-    pose: Pose
-    width: int
-    height: int
+    # Read-only members (properties here): a model is a frozen dataclass, and a class attribute or a property of the
+    # instance satisfies each of them alike.
+    @property
+    def kind(self) -> str:
+        """The registry key of the model."""
+        ...
+
+    @property
+    def PARAMETERS(self) -> tuple[ParameterSpec, ...]:  # noqa: N802 - the models' class attribute
+        """The model's scalar parameters and their accepted ranges."""
+        ...
+
+    @property
+    def no_image(self) -> str:
+        """Where the points lie that have no image, in a few words (``"behind the camera"``)."""
+        ...
+
+    @property
+    def pose(self) -> Pose:
+        """The camera's pose in the world."""
+        ...
+
+    @property
+    def width(self) -> int:
+        """Image width in pixels."""
+        ...
+
+    @property
+    def height(self) -> int:
+        """Image height in pixels."""
+        ...
 
     @property
     def centre(self) -> np.ndarray:
@@ -240,7 +273,7 @@ class CameraModel(Protocol):
         ...
 
     def plane_image_arcs(self, normals_world: npt.ArrayLike, n_samples: int = 96, *,
-                         check: bool = True) -> list[Sequence[np.ndarray]]:
+                         check: bool = True) -> Sequence[Sequence[np.ndarray]]:
         """Per normal, a sequence (list or tuple) of the visible arcs (k, 2) of the plane's image inside the drawn
         region (empty: none)."""
         ...

@@ -41,7 +41,7 @@ class EpipolarCurves:
     NaN rows for points on the baseline; None if not asked for or the model has none (the fisheye)."""
     lines: np.ndarray | None
     """(N, 3) exact lines :math:`l \\cdot m = 0` where the model images planes to lines (pin-hole), else None."""
-    arcs: list[Sequence[np.ndarray]]
+    arcs: Sequence[Sequence[np.ndarray]]
     """Per point, the visible arcs (k, 2) of its curve inside the camera's drawn region (empty: none); an empty
     list when not asked for."""
     epipoles: np.ndarray
