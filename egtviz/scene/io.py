@@ -260,7 +260,7 @@ def scene_from_dict(data: Any, source: str = "scene") -> Scene:
     try:
         scene = Scene(
             cameras=tuple(cameras),
-            points=points,
+            points=tuple(points),
             surfaces=tuple(surfaces),
             pair=tuple(pair) if isinstance(pair, list) else pair,
             selected_point=data.get("selected_point"),

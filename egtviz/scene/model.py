@@ -83,6 +83,7 @@ def _lock_refusal(old: Scene, new: Scene, change: Change) -> str | None:
 
 def _new_camera(scene: Scene, kind: Any, name: str | None, fields: dict[str, Any]) -> Any:
     """The spec of a new camera of ``kind`` in ``scene`` (:meth:`SceneModel.add_camera`)."""
+    spec_cls: Any  # a concrete spec class (the base declares no fields)
     if type(kind) is str and kind in CAMERA_MODELS:
         spec_cls, selection = spec_for_model(kind)
     elif type(kind) is str and kind in CAMERA_KINDS:

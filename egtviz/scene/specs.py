@@ -154,6 +154,10 @@ class _CameraSpecBase:
     position: tuple[float, float, float]
     ypr_deg: tuple[float, float, float]
 
+    kind: ClassVar[str]
+    """The entry's ``kind`` in a scene file."""
+    NAME_PREFIX: ClassVar[str]
+    """A new camera's name: this and a number."""
     POSE_FIELDS: ClassVar[frozenset[str]] = frozenset({"position", "ypr_deg"})
     """The fields that place the camera (what a gizmo moves and a lock holds); every other field is its model's."""
 
@@ -225,6 +229,16 @@ class _CameraSpecBase:
         return pose
 
     def _pose_from_fields(self) -> Pose:
+        raise NotImplementedError
+
+    @staticmethod
+    def ypr_from_world_rotation(R_world: Any) -> tuple[float, float, float]:
+        """Yaw, pitch, roll (degrees, the spec's convention) of a camera whose pose rotation is ``R_world``."""
+        raise NotImplementedError
+
+    @staticmethod
+    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
+        """Fields of a new camera at ``xy`` that sees ``target_xy``."""
         raise NotImplementedError
 
     def with_world_pose(self, position: Any, R_world: Any) -> Any:
@@ -632,13 +646,13 @@ class FisheyeSpec(_CameraSpecBase):
 CameraSpec = PinholeSpec | PanoramicSpec | UnifiedSpec | FisheyeSpec
 #: The scene file's camera entries: ``kind`` -> spec class. Every spec builds a registered camera model
 #: (``spec.model_kind``); a ``panoramic`` entry is a hyperbolic or parabolic one as its ``mirror`` says.
-SPEC_CLASSES: tuple[type, ...] = (PinholeSpec, PanoramicSpec, UnifiedSpec, FisheyeSpec)
+SPEC_CLASSES: tuple[type[_CameraSpecBase], ...] = (PinholeSpec, PanoramicSpec, UnifiedSpec, FisheyeSpec)
 """Every camera spec, one entry per spec class: the scene's registry of camera models (each class names the models
 it builds, their parameters' fields and their drawings)."""
-CAMERA_KINDS: dict[str, type] = {cls.kind: cls for cls in SPEC_CLASSES}
+CAMERA_KINDS: dict[str, type[_CameraSpecBase]] = {cls.kind: cls for cls in SPEC_CLASSES}
 
 
-def spec_for_model(model_kind: str) -> tuple[type, dict[str, Any]]:
+def spec_for_model(model_kind: str) -> tuple[type[_CameraSpecBase], dict[str, Any]]:
     """The spec class that builds the registered model ``model_kind``, and the fields that select it.
 
     Raises:
@@ -662,7 +676,7 @@ def model_choices(spec_cls: type) -> dict[str, tuple[str, ...]]:
     return {field: tuple(values) for field, values in out.items()}
 
 
-_SPEC_FOR_MODEL: dict[str, tuple[type, dict[str, Any]]] = {
+_SPEC_FOR_MODEL: dict[str, tuple[type[_CameraSpecBase], dict[str, Any]]] = {
     model: (cls, selection) for cls in SPEC_CLASSES for model, selection in cls.MODELS.items()
 }
 
