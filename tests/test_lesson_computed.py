@@ -73,6 +73,15 @@ def test_a_matrix_is_read_row_by_row_in_either_layout():
             read_matrix(text, 3, 3)
 
 
+def test_hostile_matrix_text_is_refused_at_once_and_no_stray_mark_is_taken_for_a_row():
+    # A nested pattern with repeated optional whitespace backtracks exponentially on text like this; the
+    # reader scans the rows without one, so these return (refused) instead of hanging the server.
+    for text in ("[" + "[1]      " * 25 + "x", "[" + "[1]," * 60 + "]x", "[[" + " ," * 90 + "]]",
+                 "[#, [1, 2, 3], [4, 5, 6], [7, 8, 9]]"):
+        with pytest.raises(AnswerError):
+            read_matrix(text, 3, 3)
+
+
 def test_a_computed_answer_that_is_not_the_quantitys_shape_is_refused_with_what_to_type():
     name, i, task = next(c for c in COMPUTED if c[2].quantity == "fundamental")
     run = _run(name, i, "Ada")

@@ -126,14 +126,18 @@ def read_matrix(text: str | None, rows: int, cols: int) -> tuple[tuple[float, ..
                 f"or [[{'], ['.join(row for _ in range(rows))}]]")
     if text is None or not text.strip():
         raise AnswerError(f"{expected}.")
-    nested = re.fullmatch(r"\s*\[((?:\s*\[[^\[\]]*\]\s*,?)+)\]\s*", text)
-    flat = re.fullmatch(r"\s*\[([^\[\]]*)\]\s*", text)
-    if nested is not None:
-        bodies = re.findall(r"\[([^\[\]]*)\]", nested.group(1))
-        if re.fullmatch(r"\s*\[[^\[\]]*\](?:\s*,\s*\[[^\[\]]*\])*\s*", nested.group(1)) is None:
+    inner = text.strip()
+    if not (inner.startswith("[") and inner.endswith("]")):
+        raise AnswerError(f"{expected}; got {_shown(text)}.")
+    inner = inner[1:-1]
+    if "#" in inner:  # the mark the row scan below uses
+        raise AnswerError(f"{expected}; got {_shown(text)}.")
+    if "[" in inner or "]" in inner:  # [[...], [...]]: scanned without nested quantifiers (no backtracking)
+        bodies = re.findall(r"\[([^\[\]]*)\]", inner)
+        if re.fullmatch(r"\s*#(?:\s*,\s*#)*\s*", re.sub(r"\[[^\[\]]*\]", "#", inner)) is None:
             raise AnswerError(f"{expected}; separate the rows by commas.")
-    elif flat is not None and ";" in flat.group(1):
-        bodies = flat.group(1).split(";")
+    elif ";" in inner:
+        bodies = inner.split(";")
     else:
         raise AnswerError(f"{expected}; got {_shown(text)}.")
     if len(bodies) != rows:
