@@ -52,6 +52,8 @@ _RANK_TOL_SV = 1e-10
 # its inverse the smallest largest one): its design matrix mixes u^2, u and 1, and beyond these
 # the rounding of one kind of term swamps the others.
 _MAX_RAW_PIXEL = 1e6
+# numpy's float64 dtype is a singleton: an identity test is the cheapest dtype check.
+_F64 = np.dtype(np.float64)
 
 
 def design_matrix(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
@@ -85,12 +87,10 @@ def _float_pairs(U1: npt.ArrayLike, U2: npt.ArrayLike, min_count: int) -> tuple[
     if (
         type(U1) is np.ndarray
         and type(U2) is np.ndarray
-        and U1.dtype == np.float64
-        and U2.dtype == np.float64
-        and U1.ndim == 2
-        and U2.ndim == 2
-        and U1.shape[1] == 2
-        and U2.shape[1] == 2
+        and U1.dtype is _F64
+        and U2.dtype is _F64
+        and U1.ndim == 2 == U2.ndim
+        and U1.shape[1] == 2 == U2.shape[1]
         and U1.shape[0] == U2.shape[0] >= min_count
     ):
         return U1, U2
@@ -122,7 +122,9 @@ def _normalized_design_floats(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarra
     Z = np.empty((2, n), np.complex128)
     np.concatenate(images, out=Z.view(np.float64).reshape(2 * n, 2))
     centres = [c / n for c in np.add.reduce(Z, axis=1).tolist()]
-    hartley_scales(centres, None, n, images, names)
+    c1, c2 = centres
+    if not math.isfinite(abs(c1) + abs(c2)):
+        hartley_scales(centres, None, n, images, names)  # names a NaN or inf
     Z -= np.array(centres)[:, None]
     means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
     s1, s2 = hartley_scales(centres, means, n, images, names)
@@ -133,7 +135,6 @@ def _normalized_design_floats(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarra
     h1[2] = 1.0
     x2 = np.multiply(X[1].T, s2)
     np.multiply(x2[:, None, :], h1[None, :, :], out=At[0:6].reshape(2, 3, n))  # rows 3a + b, a < 2 (eq. 11.3)
-    c1, c2 = centres
     return At, (s1, -s1 * c1.real, -s1 * c1.imag, s2, -s2 * c2.real, -s2 * c2.imag)
 
 
