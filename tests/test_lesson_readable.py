@@ -4,6 +4,7 @@ point numbers written and the view of a panel (lessons 5, 9 and 10, in headless 
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import types
 from contextlib import contextmanager
@@ -17,10 +18,12 @@ from egtviz.lessons import LessonError, parse_lesson
 from egtviz.lessons.catalog import lessons_folder
 from egtviz.lessons.cli import check_file
 from egtviz.lessons.changes import RandomPoints, SetField
-from egtviz.lessons.display import thin_lines
+from egtviz.lessons.display import PanelDisplay, thin_lines
 from egtviz.lessons.progress import ProgressStore
 from egtviz.viewer.app import EgtvizApp
-from egtviz.viewer.headless import FakeTab
+from egtviz.scene.examples import SCENES
+from egtviz.viewer.headless import FakeTab, start_headless
+from egtviz.viewer.lesson_policy import LessonPolicy
 from egtviz.viewer.lesson_view import LessonPanel
 from egtviz.viewer.start_page import StartPage
 from egtviz.lessons.markup import PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, formula_width_px
@@ -174,3 +177,22 @@ def test_a_bad_panel_key_is_refused_with_its_line(keys, reason):
     with pytest.raises(LessonError, match=re.escape(reason)) as info:
         parse_lesson(text.encode(), source="t.toml", name="01-test")
     assert info.value.line == 14  # the key's own line
+
+
+@pytest.mark.parametrize(("labels", "numbered"), [("all", 8), ("selected", 1), ("none", 0)])
+def test_a_steps_labels_decide_the_numbers_a_workbench_panel_writes(labels, numbered):
+    """With eight points, all are numbered by default; ``selected`` keeps the selected point's, ``none`` none."""
+    scene = SCENES["default"]()
+    assert len(scene.points) == 8
+    server, _app, fakes, (view,) = start_headless(dataclasses.replace(scene, selected_point=2))
+    try:
+        view.policy = LessonPolicy(display=lambda: PanelDisplay(labels=labels))
+        view.redraw_now()
+        svg = view.dock.html["cam1"].content
+        assert svg.count('data-kind="point"') == 8
+        assert sorted(NUMBER.findall(svg)) == (["3"] if labels == "selected" else sorted(
+            str(i + 1) for i in range(8))[:numbered])
+    finally:
+        for f in fakes:
+            f.close()
+        server.stop()

@@ -340,7 +340,7 @@ class PanelDock:
             plane,
             selected_point=scene.selected_point,
             highlighted=highlighted,
-            show_labels=scene.options.show_labels and self.view.policy.shown().labels != "none",
+            show_labels=self._labels(scene),
             revision=revision,
             view=view,
             style=self.style,
@@ -350,6 +350,13 @@ class PanelDock:
         )
         self._drawn[name] = (plane, inputs, svg)
         return svg
+
+    def _labels(self, scene: Scene) -> bool | str:
+        """The panels' ``show_labels``: the scene's option, narrowed by the lesson step's ``labels``."""
+        labels = self.view.policy.shown().labels
+        if not scene.options.show_labels or labels == "none":
+            return False
+        return "marked" if labels == "selected" else True
 
     def plot_panel_svg(self, key: str, plot: Any, *, revision: int) -> str:
         """A figure's plot panel (:func:`egtviz.viewer.plot_svg.plot_svg`), drawn again only when the plot, the

@@ -475,8 +475,9 @@ def _line_tags(idx_bytes: bytes, selected_point: int | None, thick: str, colours
 
 
 def numbered_points(n_in_image: int, show_labels: bool) -> bool:
-    """Whether every point in the image gets its number (else only the selected and highlighted ones)."""
-    return show_labels and n_in_image <= MAX_NUMBERED_POINTS
+    """Whether every point in the image gets its number (else only the selected and highlighted ones, as always
+    when ``show_labels`` is ``"marked"``: a lesson step's ``labels = "selected"``)."""
+    return bool(show_labels) and show_labels != "marked" and n_in_image <= MAX_NUMBERED_POINTS
 
 
 def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> str:
