@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
@@ -112,7 +112,7 @@ class ParameterSpec:
         if not self.min <= self.default <= self.max:
             raise GeometryError(f"{self.name}: default {self.default:g} outside [{self.min:g}, {self.max:g}]")
 
-    def check(self, value: Any) -> float | int:
+    def check(self, value: object) -> float | int:
         """``value`` as a float (an int for integer parameters) inside ``[min, max]``, or a GeometryError naming it."""
         unit = f" {self.unit}" if self.unit else ""
         expected = f"{'a whole number' if self.integer else 'a number'} in [{self.min:g}, {self.max:g}]{unit}"
@@ -125,7 +125,7 @@ class ParameterSpec:
         return int(x) if self.integer else x
 
 
-def parameters_from_specs(specs: tuple[ParameterSpec, ...], values: dict[str, Any]) -> dict[str, float | int]:
+def parameters_from_specs(specs: tuple[ParameterSpec, ...], values: Mapping[str, object]) -> dict[str, float | int]:
     """Every parameter of ``specs``, checked: the given ``values`` and the defaults for the rest.
 
     Raises:
@@ -318,7 +318,7 @@ def finite_nonzero_rows(normals: np.ndarray) -> np.ndarray:
     return np.flatnonzero(np.all(np.isfinite(normals), axis=1) & np.any(normals != 0.0, axis=1))
 
 
-def check_pose(pose: Any) -> Pose:
+def check_pose(pose: object) -> Pose:
     """``pose`` if it is a :class:`Pose`, else a GeometryError naming ``pose``."""
     if not isinstance(pose, Pose):
         raise GeometryError(f"pose: expected a Pose, got {type(pose).__name__}")
