@@ -110,7 +110,7 @@ def normalized_design(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def _normalized_design_floats(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, tuple[float, ...]]:
-    """:func:`normalized_design` with the similarities as floats ``(s1, p1, q1, s2, p2, q2)``, ``T = [s, 0, p; 0, s, q]``.
+    """:func:`normalized_design`, the similarities ``T = [s, 0, p; 0, s, q]`` as floats ``(s1, p1, q1, s2, p2, q2)``.
 
     The normalisation of :func:`~egtviz.geometry.matrices.hartley_normalization` (the same centroids,
     distances and scales, bit for bit, and the same checks), with the scaling done as the points are
@@ -170,7 +170,7 @@ def canonical_fundamental(F: np.ndarray) -> np.ndarray:
 
 
 def _rank2_denormalize_canonical(f: np.ndarray, t: tuple[float, ...]) -> np.ndarray:
-    r""":func:`canonical_fundamental` of :math:`F = T_2^T \hat F T_1`, :math:`\hat F` the nearest rank-2 matrix to ``f``.
+    r""":func:`canonical_fundamental` of :math:`F = T_2^T \hat F T_1`, :math:`\hat F` the rank-2 matrix nearest ``f``.
 
     H&Z Algorithm 11.1, steps (ii) and (iii): ``f`` (9,) is the linear solution in normalised
     coordinates, :math:`\hat F = U \operatorname{diag}(\sigma_1, \sigma_2, 0) V^T` (as
