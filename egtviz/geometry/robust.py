@@ -49,6 +49,8 @@ _MIN_REFIT = 8
 _BATCH_FIRST = 100
 _BATCH_MIN = 16
 _BATCH_MAX = 256
+# Relative tolerance (cost and step) of the final Sampson refinement of the robust estimators.
+_REFINE_TOL = 1e-3
 # LMedS's smallest scale estimate, relative to the spread of the points.
 _SIGMA_FLOOR = 1e-9
 # Pre-emptive scoring: subset size, and hypotheses per batch scored on all points.
@@ -249,8 +251,10 @@ def _final_fit(
         c2 = 4.0 * threshold**2
     for _ in range(1 if mode == "ransac" else 2):
         weights = None if mode == "mapsac" else 1.0 / (1.0 + d[sel] / max(c2, 1e-300))
-        # A relative cost change of 1e-6 is far below the noise a robust fit works with.
-        Fn = refine_sampson(Fn, At[:, sel], s1, s2, weights, tol=1e-6)
+        # The Sampson cost of n inliers is a sum of n noisy squares whose own spread is about sqrt(2 / n) of
+        # it (5 % at n = 700): a relative change of _REFINE_TOL is far below that noise. Tighter (1e-6) moved F
+        # by 1e-7 on the bench scenes, with the same inliers and accuracy, for 12-16 % more time.
+        Fn = refine_sampson(Fn, At[:, sel], s1, s2, weights, tol=_REFINE_TOL)
         new, d = support(Fn, widen)
         if new.sum() < _MIN_REFIT:
             break
