@@ -1,4 +1,4 @@
-"""The robust estimators' final Sampson refinement stops at a tolerance far below the noise: the answer is a tight one's."""
+"""The robust estimators' final Sampson refinement stops far below the noise: the answer is a tight refinement's."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from egtviz.bench.estimation import _accuracy, _scene
 
 @pytest.mark.parametrize("estimator", ["fundamental_ransac", "fundamental_lmeds", "fundamental_mapsac"])
 @pytest.mark.parametrize("seed", [0, 1, 3])
-def test_the_final_refinement_tolerance_gives_a_tight_refinements_answer(monkeypatch, estimator: str, seed: int) -> None:
+def test_the_final_refinement_gives_a_tight_refinements_answer(monkeypatch, estimator: str, seed: int) -> None:
     s = _scene(600, 0.5, 0.3, seed)
     fit = getattr(robust, estimator)
     loose = fit(s["U1"], s["U2"])
