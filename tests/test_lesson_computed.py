@@ -99,7 +99,8 @@ def test_randomise_camera_is_read_strictly():
                                      focal_length=(0.006, 0.012))
     for table, key in (({"position": [[2, 1], 0, 0]}, "position"), ({"position": [0, 0]}, "position"),
                        ({"ypr_deg": [[0, 1, 2], 0, 0]}, "ypr_deg"), ({}, "position"),
-                       ({"focal_length": [0.012, 0.006]}, "focal_length"), ({"focal_length": [-1, 0.01]}, "focal_length")):
+                       ({"focal_length": [0.012, 0.006]}, "focal_length"),
+                       ({"focal_length": [-1, 0.01]}, "focal_length")):
         with pytest.raises(EntryError) as err:
             parse_change({"do": "randomise_camera", "camera": "cam2", **table})
         assert err.value.key == key

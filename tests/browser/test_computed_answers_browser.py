@@ -78,8 +78,8 @@ def _enter_as(browser, app, url: str, learner: str):
     last = len(panel.run.lesson.steps) - 1
     for step in range(1, last + 1):
         page.get_by_role("button", name="next", exact=True).click()
-        page.wait_for_function(
-            f"() => !!document.querySelector('[data-egtviz=\"lesson-head\"][data-step=\"{step}\"]')", timeout=TIMEOUT_MS)
+        head = f"[data-egtviz=\"lesson-head\"][data-step=\"{step}\"]"
+        page.wait_for_function(f"() => !!document.querySelector('{head}')", timeout=TIMEOUT_MS)
     return context, page, panel
 
 
