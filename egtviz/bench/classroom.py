@@ -228,7 +228,8 @@ class _Drawn:
         def timed(timing: Any) -> None:
             # The event's CPU, from its start to the end of its update, is the stage "callback".
             clock.add({"callback" if stage == "event" else stage: dt for stage, dt in timing.cpu.items()})
-            log.append((timing.revision, tuple(float(v) for v in view.model.scene.cameras[0].position)))
+            x, y, z = view.model.scene.cameras[0].position
+            log.append((timing.revision, (float(x), float(y), float(z))))
 
         return timed
 
@@ -387,12 +388,22 @@ class _PoolProfiler:
 
         self._pool.submit = lambda fn, *a, **k: self._submit(profiled(fn), *a, **k)
         ready = threading.Event()
-        self._loop.call_soon_threadsafe(lambda: (self._loop_profile.enable(), ready.set()))
+
+        def start() -> None:
+            self._loop_profile.enable()
+            ready.set()
+
+        self._loop.call_soon_threadsafe(start)
         ready.wait(5)
 
     def stop(self) -> pstats.Stats:
         done = threading.Event()
-        self._loop.call_soon_threadsafe(lambda: (self._loop_profile.disable(), done.set()))
+
+        def finish() -> None:
+            self._loop_profile.disable()
+            done.set()
+
+        self._loop.call_soon_threadsafe(finish)
         done.wait(5)
         self._pool.submit = self._submit
         stats = pstats.Stats(self.profiles[0])
@@ -436,6 +447,8 @@ def run_classroom(tabs: int, *, seconds: float = DRAG_SECONDS, rate: float = RAT
         profiler = _PoolProfiler(srv.server) if profile else None
         t0 = time.time() + 0.2
         cpu0 = time.process_time()
+        if proc.stdin is None:  # _spawn_tabs opens it as a pipe
+            raise RuntimeError("the tabs' process has no input pipe")
         proc.stdin.write(f"{t0!r}\n")
         proc.stdin.flush()
         result = _read_json(proc, "the drag ended")
