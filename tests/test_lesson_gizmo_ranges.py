@@ -202,9 +202,12 @@ def _screen(camera, box: dict, X: np.ndarray) -> tuple[float, float]:
     return box["x"] + box["width"] / 2 + f * x[0] / x[2], box["y"] + box["height"] / 2 + f * x[1] / x[2]
 
 
-def _drag_arrow(page, camera, box: dict, centre: np.ndarray, axis: np.ndarray, distance: float) -> None:
-    """Press the gizmo's arrow along ``axis`` (near its tip) and drag it ``distance`` metres along that axis."""
-    grip = 0.85  # the arrow is 1 m long (scale 1): its cone, clear of the plane squares and rotation arcs
+def _drag_arrow(page, camera, box: dict, centre: np.ndarray, axis: np.ndarray, distance: float, length: float) -> None:
+    """Press the gizmo's arrow along ``axis`` (near its tip) and drag it ``distance`` metres along that axis.
+
+    ``length`` is the arrow's length in metres (the gizmo's scale: the scene's glyph size).
+    """
+    grip = 0.85 * length  # the arrow's cone, clear of the plane squares and rotation arcs
     page.mouse.move(*_screen(camera, box, centre + grip * axis))
     page.mouse.down()
     for d in np.linspace(grip, grip + distance, 12)[1:]:
@@ -229,7 +232,7 @@ def test_in_the_browser_a_dragged_camera_stops_at_the_range_and_its_gizmo_is_put
             (view,) = app.wait_for_view()
             LessonPanel(view, LessonRun(parse_lesson(LESSON, source="ranges.toml", name="ranges"), model=view.model))
             camera = view.client.camera
-            camera.position, camera.look_at = (-1.0, -14.0, 4.0), (0.0, -8.0, 1.5)  # close to cam1: a 1 m arrow
+            camera.position, camera.look_at = (-1.0, -14.0, 4.0), (0.0, -8.0, 1.5)  # close to cam1, so its arrow is large on screen
             assert wait_until(lambda: np.allclose(camera.look_at, (0.0, -8.0, 1.5)))
             time.sleep(0.5)  # the page draws the new view
             box = page.evaluate("(() => { const r = [...document.querySelectorAll('canvas')].pop()"
@@ -239,12 +242,12 @@ def test_in_the_browser_a_dragged_camera_stops_at_the_range_and_its_gizmo_is_put
             axis = R[:, 0]  # cam1's x axis (image right): mostly world +x, a little -y (yaw 20.6 degrees)
             assert axis[0] > 0.9 and axis[1] < 0
             # 8 m along it would reach x = 4.5 and y = -10.8: the range -8..2 stops cam1 at x = 2, y = -8.
-            _drag_arrow(page, camera, box, np.array(gizmo.position), axis, 8.0)
+            _drag_arrow(page, camera, box, np.array(gizmo.position), axis, 8.0, gizmo.scale)
             assert wait_until(lambda: view.model.scene.camera("cam1").position[0] == 2.0)
             edge = np.array(view.model.scene.camera("cam1").position)
             assert edge == pytest.approx((2.0, -8.0, 1.5), abs=1e-9)
             # The page's gizmo was put at the edge: its arrow is grabbed there and drags cam1 back 1 m.
-            _drag_arrow(page, camera, box, edge, axis, -1.0)
+            _drag_arrow(page, camera, box, edge, axis, -1.0, gizmo.scale)
             assert wait_until(lambda: view.model.scene.camera("cam1").position[0] < 1.5)
             back = np.array(view.model.scene.camera("cam1").position)
             assert back == pytest.approx(edge - axis, abs=0.05)
