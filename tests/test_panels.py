@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
+from egtviz.scene.extent import scene_extent
 from egtviz.viewer.app import PRESENT_LABEL_SCALE
 from egtviz.viewer.headless import FakeTab, start_headless
 from egtviz.viewer.panel_view import fit_view, image_view
@@ -418,9 +419,10 @@ def test_tiny_tutorial_images_start_fitted():
 
 def test_the_first_3d_view_frames_the_scene_in_the_free_canvas(four_camera_tab):
     view, _ = four_camera_tab
-    scene = view.model.scene
-    pts = np.vstack([[c.position for c in scene.cameras], scene.points_array()])
-    expected = framed_camera(pts, view.grid.canvas_px / view.grid.window.height)
+    # What the scene holds, with a glyph's room around it (gizmos are drawn at the scene's size).
+    extent = scene_extent(view.model.scene, view.model.derived)
+    expected = framed_camera(extent.points, view.grid.canvas_px / view.grid.window.height, pad=extent.glyph,
+                             min_radius=3.0 * extent.glyph)
     assert view.client.camera.look_at == pytest.approx(expected.look_at)
     assert view.client.camera.position == pytest.approx(expected.position)
 
