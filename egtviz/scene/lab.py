@@ -249,7 +249,7 @@ def _fit(method: Method, data: Correspondences, settings: LabSettings, e_true: t
     sym = float(np.mean(symmetric_epipolar_distance(F, data.true1, data.true2)))
     recall = threshold = nan
     if inliers is not None:
-        recall = float(np.count_nonzero(inliers & good) / max(np.count_nonzero(good), 1))
+        recall = float(np.count_nonzero(inliers & good) / max(int(np.count_nonzero(good)), 1))
         if method == "ransac":
             threshold = settings.threshold_px
         else:

@@ -6,6 +6,7 @@ import io
 import os
 from functools import lru_cache
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -68,7 +69,8 @@ def _load_mesh(name: str):
     except FileSafetyError as exc:
         raise SceneError(f"surface path: cannot read mesh {name!r}: {str(exc).split(': ', 1)[-1]}") from None
     try:
-        mesh = trimesh.load(io.BytesIO(data), file_type=path.suffix[1:].lower(), force="mesh")
+        # force="mesh": one Trimesh
+        mesh = cast(trimesh.Trimesh, trimesh.load(io.BytesIO(data), file_type=path.suffix[1:].lower(), force="mesh"))
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
         ok = len(mesh.faces) > 0 and np.isfinite(vertices).all() and float(mesh.area) > 0
     except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds for unreadable files

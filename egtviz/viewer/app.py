@@ -39,7 +39,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import viser
 
@@ -61,6 +61,9 @@ from .readout import PairReadout, pair_html
 from .svg import NORMAL, PRESENT, empty_svg
 from .svg import warm_up as svg_warm_up
 from .workbench_controls import WorkbenchControls
+
+if TYPE_CHECKING:
+    from ..scene.derived import Derived, ImagePlane
 
 __all__ = ["EgtvizApp", "ClientView", "PRESENT_LABEL_SCALE", "UpdateTiming", "pair_html"]
 
@@ -228,7 +231,7 @@ class ClientView:
     def _gui_style(self) -> Any:
         return self.dock.gui_style
 
-    def _panel_view(self, name: str, plane: Any) -> Any:
+    def _panel_view(self, name: str, plane: ImagePlane) -> Any:
         return self.dock.panel_view(name, plane)
 
     def _view_action(self, name: str, action: Any) -> None:
@@ -350,18 +353,22 @@ class ClientView:
         with self.client.atomic():
             # Panels first: within the atomic batch the browser then updates the SVGs before the 3D view.
             self._draw_panels(scene, derived)
-            wall.append(time.perf_counter()), cpu.append(time.thread_time())
+            wall.append(time.perf_counter())
+            cpu.append(time.thread_time())
             self.pair_readout.show(derived)
             self._sync_fields(scene, force=force_fields)
-            wall.append(time.perf_counter()), cpu.append(time.thread_time())
+            wall.append(time.perf_counter())
+            cpu.append(time.thread_time())
             self.scene3d.draw(scene, derived, moving=self.drag.moving, force=force_fields)
-            wall.append(time.perf_counter()), cpu.append(time.thread_time())
+            wall.append(time.perf_counter())
+            cpu.append(time.thread_time())
         # Send now: viser otherwise holds a finished atomic batch for up to one 1/60 s window.
         self.client.flush()
-        wall.append(time.perf_counter()), cpu.append(time.thread_time())
+        wall.append(time.perf_counter())
+        cpu.append(time.thread_time())
         self._record(wall, cpu)
 
-    def _draw_panels(self, scene: Scene, derived: Any) -> None:
+    def _draw_panels(self, scene: Scene, derived: Derived) -> None:
         """Every camera's image-plane panel and every figure plot, as the lesson policy filters them."""
         self._sync_panels(scene)
         highlighted = {int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")}
@@ -396,7 +403,7 @@ class ClientView:
             parts["event"] = cpu[-1] - c_event if c_event is not None else 0.0
             self.on_update_timed(UpdateTiming(self.revision, dict(self.breakdown), parts))
 
-    def _filtered(self, scene: Scene, derived: Any) -> tuple[Any, frozenset[int]]:
+    def _filtered(self, scene: Scene, derived: Derived) -> tuple[Any, frozenset[int]]:
         """What the panels draw: ``derived``, or what the lesson policy makes of it (its failure is reported)."""
         try:
             return self.policy.panels(scene, derived)

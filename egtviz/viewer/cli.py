@@ -179,7 +179,7 @@ def reachable_urls(host: str, port: int) -> list[str]:
     want = socket.AF_INET6 if ":" in host else socket.AF_INET
     found: list[str] = []
     try:
-        found += [ai[4][0] for ai in socket.getaddrinfo(socket.gethostname(), None, type=socket.SOCK_STREAM)]
+        found += [str(ai[4][0]) for ai in socket.getaddrinfo(socket.gethostname(), None, type=socket.SOCK_STREAM)]
     except OSError:
         pass
     for family, probe in ((socket.AF_INET, "192.0.2.1"), (socket.AF_INET6, "2001:db8::1")):

@@ -241,7 +241,7 @@ def _short(message: str, limit: int = 500) -> str:
     return clean if len(clean) <= limit else clean[:limit] + " ..."
 
 
-def safe_callback(callback: Callable[[Any], None], report: Callable[[BaseException], None]) -> Callable[[Any], None]:
+def safe_callback(callback: Callable[[Any], object], report: Callable[[BaseException], None]) -> Callable[[Any], None]:
     """``callback`` wrapped so that any exception it raises goes to ``report`` instead of viser's thread pool."""
 
     def run(event: Any) -> None:
@@ -258,7 +258,7 @@ def safe_callback(callback: Callable[[Any], None], report: Callable[[BaseExcepti
     return run
 
 
-def on_event(register: Callable[[Callable[[Any], None]], Any], callback: Callable[[Any], None],
+def on_event(register: Callable[[Callable[[Any], None]], Any], callback: Callable[[Any], object],
              report: Callable[[BaseException], None]) -> None:
     """Register ``callback`` through ``register`` (``handle.on_update``, ``on_click``, ``on_upload``) safely.
 

@@ -26,10 +26,13 @@ import os
 import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .panel_view import ViewBox, fit_view
 from .svg import NORMAL, PRESENT, image_plane_svg
+
+if TYPE_CHECKING:
+    from ..scene.derived import ImagePlane
 
 __all__ = ["FIGURE_FORMATS", "add_arguments", "panel_svg", "panel_svg_of", "png_pixels", "png_refusal", "run",
            "svg_to_png"]
@@ -41,7 +44,7 @@ FIGURE_FORMATS = (".svg", ".png")
 FIGURE_BACKGROUND = "#ffffff"
 
 
-def panel_svg_of(plane: Any, *, present: bool = False, view: ViewBox | None = None,
+def panel_svg_of(plane: ImagePlane, *, present: bool = False, view: ViewBox | None = None,
                  selected_point: int | None = None, show_labels: bool = True) -> str:
     """The SVG figure of one ``ImagePlane``: the panel's drawing with a fixed size in pixels.
 

@@ -11,12 +11,14 @@ import threading
 import msgspec
 import viser
 from websockets.sync.client import connect
+from websockets.typing import Subprotocol
 
 
 class FakeTab:
     def __init__(self, port: int) -> None:
         self.ws = connect(
-            f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None, open_timeout=10
+            f"ws://127.0.0.1:{port}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")], max_size=None,
+            open_timeout=10,
         )
         self.received = 0
         self.ws.send(

@@ -213,7 +213,7 @@ class LabPanel:
 
     def _mask_3d(self, scene: Scene, result: LabResult | None) -> None:
         fit = result.fit(self.drawn) if result is not None else None
-        if fit is None or fit.inliers is None:
+        if result is None or fit is None or fit.inliers is None:
             self.client.scene.add_point_cloud("/lab/inliers", points=np.zeros((0, 3)), colors=(0, 0, 0),
                                               point_size=0.12, visible=False)
             return

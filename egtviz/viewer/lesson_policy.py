@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +18,9 @@ from ..lessons.display import PanelDisplay, thin_lines
 from ..scene import Scene
 from .panel_view import ViewBox
 from .panels import PanelView
+
+if TYPE_CHECKING:
+    from ..scene.derived import Derived
 
 __all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter", "PoseGuard"]
 
@@ -50,7 +53,7 @@ class LessonPolicy:
     #: ``display() -> PanelDisplay``: what the current step lets the panels show (lines, numbers, views).
     display: Callable[[], PanelDisplay] | None = None
 
-    def panels(self, scene: Scene, derived: Any) -> tuple[Any, frozenset[int]]:
+    def panels(self, scene: Scene, derived: Derived) -> tuple[Any, frozenset[int]]:
         """What the panels draw, and the points they ring (the model's geometry and none without a filter); the
         step's ``max_lines`` thins each panel's epipolar lines, and its ``labels`` other than ``all`` drop the
         filter's rings (each would be numbered)."""

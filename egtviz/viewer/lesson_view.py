@@ -129,6 +129,7 @@ def _range_terms(run: LessonRun, camera: str, field: str) -> tuple[str, NumberRu
     """A ranged spec field in the words and unit of its GUI field: ``(label, rule, stored -> shown)``."""
     scene = run.model.scene
     limit = run.ranges[(camera, field)]
+    convert: Callable[[float], float]
     if camera in scene.camera_names:
         shown = field_of_spec(scene.camera(camera), field)
         label, unit, convert = shown.label, shown.unit, shown.shown_number
@@ -280,7 +281,7 @@ class LessonPanel:
     """
 
     def __init__(self, view: Any, run: LessonRun, *, progress: ProgressStore | None = None,
-                 on_back: Callable[[], None] | None = None, on_learner: Callable[[str], None] | None = None,
+                 on_back: Callable[[], object] | None = None, on_learner: Callable[[str], None] | None = None,
                  field_delay: float = 0.0) -> None:
         if view.model is not run.model:
             raise SceneError("the lesson's scene could not be drawn in this tab")
@@ -344,10 +345,10 @@ class LessonPanel:
             view.redraw()
         self._on(self.nav.buttons.on_click, lambda e: self._navigate(e.target.value))
         self._on(self.learner.on_update, lambda e: self._name_typed(e.target.value))
-        if self.btn_back is not None:
+        if self.btn_back is not None and on_back is not None:
             self._on(self.btn_back.on_click, lambda _: on_back())
 
-    def _on(self, register: Any, callback: Callable[[Any], None]) -> None:
+    def _on(self, register: Any, callback: Callable[[Any], object]) -> None:
         """Attach ``callback`` safely; it runs under the tab's lock, and not after the tab closed."""
 
         def locked(event: Any) -> None:

@@ -32,6 +32,7 @@ from .png_worker import PngDownloads
 from .svg import NORMAL, PRESENT, empty_svg, image_plane_svg
 
 if TYPE_CHECKING:
+    from ..scene.derived import ImagePlane
     from .app import ClientView
 
 __all__ = ["DOWNLOAD_FORMATS", "PLOT_KEY", "PanelDock", "VIEW_BUTTONS", "plot_key"]
@@ -296,7 +297,7 @@ class PanelDock:
 
     # -- what each panel shows --------------------------------------------------------------------------
 
-    def panel_view(self, name: str, plane: Any) -> PanelView:
+    def panel_view(self, name: str, plane: ImagePlane) -> PanelView:
         """What panel ``name`` shows; a new panel, or a new image size, starts from :func:`initial_view`."""
         size = (int(plane.width), int(plane.height))
         kept = self._views.get(name)
@@ -318,7 +319,7 @@ class PanelDock:
         max_height = f"{grid.svg_max_height_px(name):.0f}px" if grid is not None and panel_px is not None else None
         return panel_px, max_height
 
-    def panel_svg(self, name: str, plane: Any, scene: Scene, highlighted: set[int], *, revision: int,
+    def panel_svg(self, name: str, plane: ImagePlane, scene: Scene, highlighted: set[int], *, revision: int,
                   drag_step: bool) -> str:
         """Panel ``name``'s SVG: its view, the tab's style, drawn for the width its column has on screen.
 

@@ -21,9 +21,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..scene.derived import ImagePlane
 
 __all__ = [
     "FIT_MARGIN",
@@ -96,12 +99,12 @@ class ViewBox:
             return ((P[:, 0] >= self.u0) & (P[:, 0] <= self.u1) & (P[:, 1] >= self.v0) & (P[:, 1] <= self.v1))
 
 
-def image_view(plane: Any) -> ViewBox:
+def image_view(plane: ImagePlane) -> ViewBox:
     """The image rectangle ``[0, width] x [0, height]`` of an ``ImagePlane``."""
     return ViewBox(0.0, 0.0, float(plane.width), float(plane.height))
 
 
-def _content(plane: Any) -> np.ndarray:
+def _content(plane: ImagePlane) -> np.ndarray:
     """Every finite pixel a panel draws: image corners, points, finite epipoles, rim, horizon and conic samples."""
     w, h = float(plane.width), float(plane.height)
     parts = [np.array([[0.0, 0.0], [w, h]])]
@@ -122,7 +125,7 @@ def _content(plane: Any) -> np.ndarray:
     return P[near]
 
 
-def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
+def fit_view(plane: ImagePlane, *, margin: float = FIT_MARGIN) -> ViewBox:
     """The smallest view with the image's aspect ratio that shows all the panel's content, plus a margin.
 
     Content: the image rectangle, every visible point (also outside the
@@ -144,7 +147,7 @@ def fit_view(plane: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
     return _fit_box(_content(plane), float(plane.width) / float(plane.height), margin)
 
 
-def fit_with_content(plane: Any) -> tuple[ViewBox, ViewBox]:
+def fit_with_content(plane: ImagePlane) -> tuple[ViewBox, ViewBox]:
     """``(fit_view(plane), fit_view(plane, margin=0))``: the fitted view and the content's own box, in one pass."""
     P = _content(plane)
     aspect = float(plane.width) / float(plane.height)

@@ -25,12 +25,15 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from .panel_view import ViewBox, fit_view, fit_with_content, image_view, pan, steady_fit, zoom
 from .svg import NORMAL, PanelStyle, panel_layout
+
+if TYPE_CHECKING:
+    from ..scene.derived import ImagePlane
 
 __all__ = [
     "CONTROL_PX",
@@ -308,7 +311,7 @@ def plan_grid(cameras: Sequence[tuple[str, float, float]], window: WindowSize, *
     return PanelGrid(window, control, float(math.floor(w)), columns, chrome)
 
 
-def initial_view(plane: Any) -> ViewMode:
+def initial_view(plane: ImagePlane) -> ViewMode:
     """How a new panel starts: ``fit`` for a tiny image (EGT's ``K = I``) or a visible point outside it, else ``image``.
 
     Args:
@@ -336,7 +339,7 @@ class PanelView:
         if (self.mode == "custom") != (self.box is not None):
             raise ValueError("PanelView: a box is given exactly when mode is 'custom'")
 
-    def resolve(self, plane: Any, *, kept: ViewBox | None = None) -> ViewBox | None:
+    def resolve(self, plane: ImagePlane, *, kept: ViewBox | None = None) -> ViewBox | None:
         """The view box to draw ``plane`` with (None: the image rectangle).
 
         ``kept``: during a drag, the view of its previous step; a ``fit`` panel keeps it while it still shows all
@@ -349,7 +352,7 @@ class PanelView:
         fitted, content = fit_with_content(plane)
         return steady_fit(fitted, kept, content=content)
 
-    def after(self, action: str, plane: Any) -> PanelView:
+    def after(self, action: str, plane: ImagePlane) -> PanelView:
         """The view after a button press (one of :data:`VIEW_ACTIONS`), starting from what ``plane`` shows now.
 
         ``+``/``-`` zoom by ``ZOOM_STEP`` about the view's centre; the arrows
@@ -433,4 +436,5 @@ def framed_camera(points: Any, canvas_aspect: float, *, fov: float = math.radian
     need = np.maximum(margin * (x + pad) / tan_h, margin * (y + pad) / tan_v) + s
     distance = max(float(need.max()), margin * min_radius / min(tan_v, tan_h))
     position = centre + VIEW_DIRECTION * distance
-    return FramedCamera(tuple(float(v) for v in position), tuple(float(v) for v in centre), float(fov))
+    return FramedCamera((float(position[0]), float(position[1]), float(position[2])),
+                        (float(centre[0]), float(centre[1]), float(centre[2])), float(fov))

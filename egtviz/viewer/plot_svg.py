@@ -99,6 +99,7 @@ def plot_image_plane(plot: Any, view: ViewBox) -> ImagePlane:
     for (a, b, _c), p in zip(plot.lines, plot.line_points):
         d = np.array([-b, a]) / math.hypot(a, b)
         seg = np.array([np.asarray(p) - reach * d, np.asarray(p) + reach * d])
+        match: np.ndarray | list[int]
         match = np.flatnonzero(np.all(np.abs(P - np.asarray(p)) <= 1e-9 * (1.0 + np.abs(P)), axis=1)) if n else []
         free = [j for j in match if np.isnan(rows[j]).all()]
         if free:

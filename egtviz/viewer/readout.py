@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from html import escape
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..scene.derived import shown_value
 from ..scene.shown_numbers import format_value, format_vector
 from .models import SHORT_LABELS
+
+if TYPE_CHECKING:
+    from ..scene.derived import Derived
 
 __all__ = ["PairReadout", "pair_html"]
 
@@ -32,7 +35,7 @@ def _fmt_vec(v: np.ndarray | None) -> str:
     return f"({format_vector(v[:2] / v[2], '.1f')}) px"
 
 
-def pair_html(derived: Any) -> str:
+def pair_html(derived: Derived) -> str:
     """The epipolar read-out of the drawn pair (HTML: cheaper for the browser than re-parsing markdown per drag step).
 
     Two pin-hole cameras: F (pixels, ``m2^T F m1 = 0``), its rank, E and the epipoles. Any pair with another
@@ -76,7 +79,7 @@ class PairReadout:
         #: The HTML last shown.
         self.text = ""
 
-    def show(self, derived: Any) -> None:
+    def show(self, derived: Derived) -> None:
         """Show the drawn pair's F, E and epipoles (or why there are none)."""
         self._write(pair_html(derived))
 

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import viser
@@ -61,6 +61,9 @@ from .palette import BASELINE_COLOUR, CAMERA_COLOURS, hex_to_rgb, point_rgb
 from .svg import MAX_NUMBERED_POINTS
 from .viser_adapter import assign as _put
 from .viser_adapter import assign_array as _put_array
+
+if TYPE_CHECKING:
+    from ..scene.derived import Derived
 
 #: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
 MAX_POINT_GIZMOS = 16
@@ -336,7 +339,7 @@ class Scene3D:
 
     # -- everything ---------------------------------------------------------------
 
-    def draw(self, scene: Any, derived: Any, moving: str | None = None, *, force: bool = False) -> None:
+    def draw(self, scene: Any, derived: Derived, moving: str | None = None, *, force: bool = False) -> None:
         """Bring every node up to date. ``moving``: the camera whose gizmo the user is dragging (not re-posed).
 
         ``force``: put every gizmo back where the scene has it, even if its live pose cannot be compared (a
@@ -350,7 +353,7 @@ class Scene3D:
         finally:
             self._force = False
 
-    def _draw(self, scene: Any, derived: Any, moving: str | None) -> None:
+    def _draw(self, scene: Any, derived: Derived, moving: str | None) -> None:
         opts = scene.options
         self.annotations.draw(scene.annotations, show_labels=opts.show_labels)  # frames, lines, mirrors (figures)
         self._sync_cameras(scene)
@@ -406,9 +409,9 @@ class Scene3D:
         else:
             _put(self.baseline, "visible", False)
 
-        plane = derived.epipolar_plane
-        if plane is not None and opts.show_planes:
-            V = np.asarray(plane, np.float32)
+        polygon = derived.epipolar_plane
+        if polygon is not None and opts.show_planes:
+            V = np.asarray(polygon, np.float32)
             _put_array(self.epiplane, "vertices", V)
             _put_array(self.epiplane, "faces", _fan(len(V)))
             _put(self.epiplane, "color", point_rgb(sel) if sel is not None else (120, 120, 120))

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 
@@ -72,7 +72,7 @@ class PanoramicServoDemo(ServoPlayer):
         arrow.apply_translation((0.3, 0, 0.16))
         shaft = trimesh.creation.box(extents=(0.22, 0.04, 0.04))
         shaft.apply_translation((0.2, 0, 0.16))
-        heading = trimesh.util.concatenate([arrow, shaft])
+        heading = cast(trimesh.Trimesh, trimesh.util.concatenate([arrow, shaft]))  # of two meshes: one mesh
         mv, mf = self.camera.mirror.surface(n_radial=12, n_angular=48)
         mv = mv * MIRROR_DRAW_SCALE + np.array([0.0, 0.0, CAMERA_HEIGHT])
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import lru_cache
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 import viser
@@ -59,7 +59,7 @@ def puma_meshes() -> list[tuple[np.ndarray, np.ndarray]] | None:
             return None
         out = []
         for p in paths:
-            m = trimesh.load(str(p), force="mesh")
+            m = cast(trimesh.Trimesh, trimesh.load(str(p), force="mesh"))  # force="mesh": one Trimesh
             out.append((np.asarray(m.vertices, np.float32), np.asarray(m.faces, np.uint32)))
         return out
     except Exception:  # noqa: BLE001 - no meshes: the stick figure is drawn instead

@@ -98,6 +98,11 @@ class ServoPlayer(ABC):
     DEFAULT_STEPS: ClassVar[int]
     RULES: ClassVar[dict[str, NumberRule]] = RUN_RULES
     """Every numeric run parameter and what its field accepts."""
+    width: int
+    height: int
+    """The demo camera's image size in pixels (each demo sets it before the shared set-up)."""
+    points: np.ndarray
+    """(N, 3) the demo's world points (each demo sets them before the shared set-up)."""
     CHOICES: ClassVar[dict[str, Choice]] = {"speed": ("speed", SPEEDS)}
     """Every drop-down parameter: its label and options."""
     CONTROL_TITLE: ClassVar[str]
@@ -238,6 +243,7 @@ class ServoPlayer(ABC):
         if self.present:
             gui.add_html(PRESENT_GUI_CSS)
         self.title_md = gui.add_markdown(f"**{self.TITLE}**  \n{self.INTRO}")
+        self.btn_back: viser.GuiButtonHandle | None
         if self._on_back is not None:
             self.btn_back = gui.add_button("Back to the epipolar workbench", icon=viser.Icon.ARROW_LEFT)
             self._on(self.btn_back.on_click, lambda _: self._back())

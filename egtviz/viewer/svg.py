@@ -62,13 +62,16 @@ from dataclasses import dataclass
 from functools import lru_cache
 from html import escape
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
 from .panel_view import ViewBox, image_view, place_labels, tick_values
+
+if TYPE_CHECKING:
+    from ..scene.derived import ImagePlane
 
 __all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "axes_svg", "empty_svg", "finite_runs", "image_plane_svg",
            "label_text", "number_fates", "panel_layout", "points_attr", "svg_number", "svg_open", "text_width_px"]
@@ -642,7 +645,7 @@ def _point_group(i: int, kind: str, xy: np.ndarray, *, ring: bool, selected: boo
 @lru_cache(maxsize=16)
 def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
            highlighted: frozenset, show_labels: bool, style: PanelStyle, k: float, dp: int,
-           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple]:
+           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple, int]:
     """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
 
     Cached: during a drag the panel of the camera that does not move keeps its
@@ -784,7 +787,7 @@ def _extend_segments(L: np.ndarray, view: ViewBox) -> np.ndarray:
 
 
 def image_plane_svg(
-    plane: Any,
+    plane: ImagePlane,
     *,
     selected_point: int | None = None,
     highlighted: frozenset[int] | set[int] = frozenset(),
@@ -864,7 +867,7 @@ def image_plane_svg(
     return "".join(out)
 
 
-def _status_lines(plane: Any, n_points: int, n_in: int, show_labels: bool, style: PanelStyle, panel_px: float
+def _status_lines(plane: ImagePlane, n_points: int, n_in: int, show_labels: bool, style: PanelStyle, panel_px: float
                   ) -> tuple[list[str], bool]:
     """The status rows under the frame (the point counts, wrapped to the panel's width) and whether the numbering
     note takes one more."""
@@ -878,7 +881,7 @@ def _status_lines(plane: Any, n_points: int, n_in: int, show_labels: bool, style
     return _wrap(clauses, 0.8 * panel_px, style.status_px), show_labels and not numbered_points(n_in, True)
 
 
-def _frame_svg(plane: Any, view: ViewBox, lay: PanelLayout, style: PanelStyle) -> list[str]:
+def _frame_svg(plane: ImagePlane, view: ViewBox, lay: PanelLayout, style: PanelStyle) -> list[str]:
     """The image's border and the axes, then the group clipped to the view opened with the rim and the horizon."""
     w, h = float(plane.width), float(plane.height)
     k = lay.k
@@ -908,8 +911,8 @@ def _frame_svg(plane: Any, view: ViewBox, lay: PanelLayout, style: PanelStyle) -
     return out
 
 
-def _lines_svg(plane: Any, view: ViewBox, image: ViewBox, selected_point: int | None, style: PanelStyle, k: float,
-               dp: int) -> str:
+def _lines_svg(plane: ImagePlane, view: ViewBox, image: ViewBox, selected_point: int | None, style: PanelStyle,
+               k: float, dp: int) -> str:
     """The epipolar lines: clipped to the image, or across the whole view when it is not the image rectangle."""
     lw = style.line_px * k
     thick = f' stroke-width="{_f(lw * 2.5)}"'
@@ -964,7 +967,7 @@ def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, 
             svg, box = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
             tail = tip - dd * arrow_len
             ep_labels.append(_EpipoleLabel(f"{label} ({format_vector((x, y))})", (float(tail[0]), float(tail[1])),
-                                           0.2 * size, tuple(float(b) for b in box)))
+                                           0.2 * size, (float(box[0]), float(box[1]), float(box[2]), float(box[3]))))
             ep_marks.append((ep, where, "arrow", f'<g data-kind="epipole-arrow">{svg}</g>'))
     return ep_marks, ep_labels
 
@@ -991,8 +994,8 @@ def _epipole_groups(ep_marks: list[tuple[Any, str, str, str]], ep_labels: list[_
     return out
 
 
-def _notes_svg(plane: Any, view: ViewBox, style: PanelStyle, k: float, row: Iterator[float], status_lines: list[str],
-               numbering_note: bool, n_unnumbered: int, crowded_y: float) -> list[str]:
+def _notes_svg(plane: ImagePlane, view: ViewBox, style: PanelStyle, k: float, row: Iterator[float],
+               status_lines: list[str], numbering_note: bool, n_unnumbered: int, crowded_y: float) -> list[str]:
     """The status rows under the frame (from ``row``): the counts, the numbering note and the crowded note (at
     ``crowded_y``, the row added for it), then the plane's message over its centre."""
     st = style.status_px * k

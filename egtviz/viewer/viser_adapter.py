@@ -38,7 +38,7 @@ _MISSING = object()
 
 def missing_internals(handle: Any) -> list[str]:
     """The names of :data:`PRIVATE_NAMES` that ``handle`` (a viser scene-node handle) lacks; empty when all exist."""
-    missing = []
+    missing: list[str] = []
     if _props_setattr is None:
         missing.append("viser._assignable_props_api.props_setattr")
     impl = getattr(handle, "_impl", _MISSING)

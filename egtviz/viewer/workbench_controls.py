@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import itertools
 from html import escape
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from ..geometry import PinholeCamera
 from ..geometry.camera_model import CAMERA_MODELS
@@ -36,7 +36,7 @@ __all__ = ["POINTS_RULE", "SURFACE_KINDS", "WorkbenchControls"]
 
 #: The "how many points" field: what the page offers is what the server accepts.
 POINTS_RULE = (NumberRule("how many points", "", 0, limits.MAX_POINTS, integer=True),)
-SURFACE_KINDS = ("plane", "sphere")
+SURFACE_KINDS: tuple[Literal["plane", "sphere"], ...] = ("plane", "sphere")
 _TOGGLES = (("show_rays", "projection rays"), ("show_planes", "epipolar plane"), ("show_frames", "camera frames"),
             ("show_labels", "labels"), ("show_surfaces", "surfaces"))
 
@@ -59,7 +59,7 @@ class WorkbenchControls:
         self._pair_options: dict[str, tuple[str, str]] = {}
         self._point_options_n = -1
         self._synced_rest: tuple | None = None
-        self._surface_options: dict[str, tuple[str, str]] = {}
+        self._surface_options: dict[str, tuple[Literal["plane", "sphere", "mesh"], str]] = {}
         self._n_points_text = "8"
 
     def _button(self, label: str, action: Any, **kwargs: Any) -> Any:

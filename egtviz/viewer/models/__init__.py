@@ -15,12 +15,16 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
 
 from ...geometry.camera_model import CAMERA_MODELS
 from ...scene.specs import SPEC_CLASSES
+
+if TYPE_CHECKING:
+    from ...geometry.camera_model import CameraModel
+    from ...scene.derived import ImagePlane
 
 __all__ = ["DRAWINGS", "SHORT_LABELS", "CameraDrawing", "DrawContext", "drawing_class"]
 
@@ -40,7 +44,11 @@ class DrawContext:
     """The camera is one of the drawn pair."""
 
 
-class CameraDrawing:
+#: The camera model a drawing draws (each drawing module draws the models of one core class).
+ModelT = TypeVar("ModelT", bound="CameraModel")
+
+
+class CameraDrawing(Generic[ModelT]):
     """The 3D body of one camera (base class: nothing but the interface).
 
     Args:
@@ -65,7 +73,7 @@ class CameraDrawing:
         """The nodes made when the drawing was built, by name (``frustum``, ``ccd``, ``sphere``, ...)."""
         return {}
 
-    def update(self, camera: Any, plane: Any, ctx: DrawContext) -> None:
+    def update(self, camera: ModelT, plane: ImagePlane, ctx: DrawContext) -> None:
         """Bring the nodes up to date with ``camera`` (its core model) and ``plane`` (its ``ImagePlane``)."""
         raise NotImplementedError
 

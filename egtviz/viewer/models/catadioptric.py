@@ -7,13 +7,17 @@ camera's gizmo: a drag moves the node, and the mesh is sent again only when the 
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import trimesh
 
 from ..viser_adapter import assign
 from . import CameraDrawing, DrawContext
+
+if TYPE_CHECKING:
+    from ...geometry.catadioptric import CatadioptricCamera
+    from ...scene.derived import ImagePlane
 
 #: Samples of the mirror mesh (radial, angular).
 MIRROR_MESH = (16, 48)
@@ -36,7 +40,7 @@ def mirror_glb(mirror: Any) -> trimesh.Trimesh:
     return mesh
 
 
-class CatadioptricDrawing(CameraDrawing):
+class CatadioptricDrawing(CameraDrawing["CatadioptricCamera"]):
     """The mirror (a reflective mesh about the focus, the frame's origin) and the CCD's frustum below it."""
 
     def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
@@ -53,7 +57,7 @@ class CatadioptricDrawing(CameraDrawing):
     def body(self) -> Any:
         return self.ccd
 
-    def update(self, camera: Any, plane: Any, ctx: DrawContext) -> None:
+    def update(self, camera: CatadioptricCamera, plane: ImagePlane, ctx: DrawContext) -> None:
         mirror = camera.mirror
         if self._mirror_src != mirror:
             if self.mirror is not None:

@@ -7,11 +7,15 @@ rays a 180-degree fisheye images. The light paths (point -> centre) are the scen
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import CameraDrawing, DrawContext
+
+if TYPE_CHECKING:
+    from ...geometry.fisheye import FisheyeCamera
+    from ...scene.derived import ImagePlane
 
 #: Radius of the drawn lens, scene units (metres).
 LENS_RADIUS = 0.25
@@ -35,7 +39,7 @@ def cap_mesh(half_angle: float, radius: float = LENS_RADIUS) -> tuple[np.ndarray
     return vertices.astype(np.float32), np.asarray(faces, np.uint32)
 
 
-class FisheyeDrawing(CameraDrawing):
+class FisheyeDrawing(CameraDrawing["FisheyeCamera"]):
     """A translucent dome over the viewpoint, facing the optical axis."""
 
     def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
@@ -51,5 +55,5 @@ class FisheyeDrawing(CameraDrawing):
     def body(self) -> Any:
         return self.lens
 
-    def update(self, camera: Any, plane: Any, ctx: DrawContext) -> None:
+    def update(self, camera: FisheyeCamera, plane: ImagePlane, ctx: DrawContext) -> None:
         """Nothing moves but the gizmo (the lens is a child of it)."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -11,11 +11,15 @@ from ..viser_adapter import assign, assign_array
 from . import CameraDrawing, DrawContext
 from .common import EMPTY_PTS, EMPTY_SEG, colours, pair_colours, segments
 
+if TYPE_CHECKING:
+    from ...geometry.pinhole import PinholeCamera
+    from ...scene.derived import ImagePlane
+
 #: Depth of the drawn image plane in front of the centre, scene units.
 IMAGE_PLANE_DEPTH = 0.6
 
 
-class PinholeDrawing(CameraDrawing):
+class PinholeDrawing(CameraDrawing["PinholeCamera"]):
     """A frustum whose image plane lies ``IMAGE_PLANE_DEPTH`` in front of the centre, with the image drawn on it."""
 
     def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
@@ -37,7 +41,7 @@ class PinholeDrawing(CameraDrawing):
     def body(self) -> Any:
         return self.frustum
 
-    def update(self, camera: Any, plane: Any, ctx: DrawContext) -> None:
+    def update(self, camera: PinholeCamera, plane: ImagePlane, ctx: DrawContext) -> None:
         K = camera.projective_calibration
         shape = (2.0 * math.atan2(camera.height / 2.0, float(K[1, 1])), camera.width / camera.height)
         if shape != self._shape:
@@ -61,7 +65,8 @@ class PinholeDrawing(CameraDrawing):
         old = self._lines_key
         if old is None or old[0] is not plane.lines or old[1] is not camera or old[2] != ctx.line_rows:
             L = plane.lines
-            seg = point = ()
+            seg: np.ndarray | tuple[()] = ()
+            point: np.ndarray | tuple[()] = ()
             if L is not None and len(L):
                 # Only the drawn rows (above MAX_RAY_POINTS points, the selected point's) go to the image plane in 3D.
                 rows = np.arange(len(L)) if ctx.line_rows is None else np.asarray(ctx.line_rows, np.intp)

@@ -7,7 +7,7 @@ centre is then :math:`(0, 0, -\\xi)` times that radius in the model frame (z for
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -15,13 +15,17 @@ from ..viser_adapter import assign, assign_array
 from . import CameraDrawing, DrawContext
 from .common import EMPTY_SEG
 
+if TYPE_CHECKING:
+    from ...geometry.unified import UnifiedCamera
+    from ...scene.derived import ImagePlane
+
 #: Radius of the drawn sphere, scene units (metres).
 SPHERE_RADIUS = 0.5
 #: Samples of the drawn great circle.
 CIRCLE_SAMPLES = 96
 
 
-class UnifiedDrawing(CameraDrawing):
+class UnifiedDrawing(CameraDrawing["UnifiedCamera"]):
     """A translucent sphere about the viewpoint, the projection centre on its axis, the selected point's ray."""
 
     def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
@@ -43,13 +47,13 @@ class UnifiedDrawing(CameraDrawing):
     def body(self) -> Any:
         return self.sphere
 
-    def update(self, camera: Any, plane: Any, ctx: DrawContext) -> None:
+    def update(self, camera: UnifiedCamera, plane: ImagePlane, ctx: DrawContext) -> None:
         # The camera and its derived arrays were checked when the scene was: the core's unchecked calls (every drag).
         centre = camera.pose.to_local(camera.projection_centre(SPHERE_RADIUS, check=False), check=False)
         assign(self.centre, "position", tuple(centre[0]))
         sel, normal = ctx.selected_point, ctx.selected_normal
         show = sel is not None and normal is not None and ctx.in_pair
-        if show:
+        if sel is not None and normal is not None and ctx.in_pair:
             key = (camera, sel, normal.tobytes(), ctx.points[sel].tobytes())
             if key != self._circle_key:
                 p = camera.sphere_points(ctx.points[sel], SPHERE_RADIUS, check=False)[0]
