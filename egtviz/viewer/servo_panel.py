@@ -102,6 +102,7 @@ class ServoPanel:
             if scale == "w" and self.dashed_rates:
                 s["dash"] = [6, 4]
             ser.append(s)
+        axes: tuple[uplot.Axis, ...]
         if dual:
             scales = {"x": uplot.Scale(time=False, auto=False, range=(0.0, t_end)), "v": uplot.Scale(auto=True),
                       "w": uplot.Scale(auto=True)}
