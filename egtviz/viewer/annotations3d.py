@@ -87,15 +87,15 @@ class Annotations3D:
                                       np.asarray(cols, np.uint8), thickness=FRAME_PX, thickness_units="screen"))
             counts["frames"] = len(annotations.frames)
 
-        by_kind: dict[str, tuple[list, list]] = {}
+        by_kind: dict[str, tuple[list[np.ndarray], list[np.ndarray]]] = {}
         for pl in annotations.polylines:
             seg = _segments(pl.points)
-            segs, cols = by_kind.setdefault(pl.kind, ([], []))
-            segs.append(seg)
-            cols.append(np.broadcast_to(np.array(hex_to_rgb(pl.colour), np.uint8), seg.shape).copy())
-        for kind, (segs, cols) in by_kind.items():
-            S = np.concatenate(segs)
-            add(api.add_line_segments(f"/egt/annot/lines_{kind}", S, np.concatenate(cols), thickness=LINE_PX,
+            kind_segs, kind_cols = by_kind.setdefault(pl.kind, ([], []))
+            kind_segs.append(seg)
+            kind_cols.append(np.broadcast_to(np.array(hex_to_rgb(pl.colour), np.uint8), seg.shape).copy())
+        for kind, (kind_segs, kind_cols) in by_kind.items():
+            S = np.concatenate(kind_segs)
+            add(api.add_line_segments(f"/egt/annot/lines_{kind}", S, np.concatenate(kind_cols), thickness=LINE_PX,
                                       thickness_units="screen"))
             counts["segments"] += len(S)
 
