@@ -10,9 +10,10 @@ from typing import Any, ClassVar, TypedDict, cast
 import numpy as np
 
 from ...geometry import PinholeCamera
+from ...geometry.error_metrics import sampson_distance
 from ...geometry.triangulation import triangulate_linear, triangulate_optimal
 from ...scene import Scene
-from ...scene.lab import METHODS
+from ...scene.lab import METHODS, LabResult
 from ...scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT
 from .. import fields
 from ..errors import EntryError
@@ -30,12 +31,16 @@ from .common import (
 )
 
 __all__ = ["DEFAULT_MIN_PRECISION", "InliersRecallTask", "SampsonBelowTask", "TriangulationErrorTask",
-           "default_max_sampson_px2", "triangulation_rms"]
+           "default_max_sampson_px2", "held_out_correspondences", "triangulation_rms"]
 
 _TRIANGULATION_DRAWS = 200
 DEFAULT_MIN_PRECISION = 0.9
 """Share of a recall task's marked inliers that must be true inliers, unless its ``min_precision`` says."""
 _LAB_KEYS = ("min_noise_px", "min_outlier_percent")
+_HELD_OUT_GRID = (7, 5)
+"""Columns and rows of the held-out pixels in image 1, from 10 % to 90 % of its width and height."""
+_HELD_OUT_DEPTHS = (0.5, 1.0, 2.0)
+"""Depths of the held-out points along each pixel's ray, as multiples of the median depth of the lab's points."""
 
 
 class _LabMinimums(TypedDict):
@@ -86,9 +91,11 @@ class SampsonBelowTask(Task):
     against: str = "true"
     min_noise_px: float = 0.0
     min_outlier_percent: float = 0.0
+    held_out_below_px2: float | None = None
+    """Also required: the fit's mean Sampson error on :func:`held_out_correspondences` (None: not judged)."""
 
     kind: ClassVar[str] = "sampson_below"
-    table_keys: ClassVar[tuple[str, ...]] = ("method", "below_px2", "against", *_LAB_KEYS)
+    table_keys: ClassVar[tuple[str, ...]] = ("method", "below_px2", "against", "held_out_below_px2", *_LAB_KEYS)
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> SampsonBelowTask:
@@ -97,10 +104,13 @@ class SampsonBelowTask(Task):
         if against not in ("true", "measured"):
             raise EntryError("against", f"expected 'true' or 'measured', got {fields.short(against)}")
         return cls(**common, **minimums, method=_method(table, robust=False), against=against,
-                   below_px2=fields.number(table, "below_px2", SAMPSON_PX2))
+                   below_px2=fields.number(table, "below_px2", SAMPSON_PX2),
+                   held_out_below_px2=fields.number(table, "held_out_below_px2", SAMPSON_PX2, required=False))
 
     def params(self) -> dict[str, Param]:
-        return {"below_px2": self.below_px2}
+        if self.held_out_below_px2 is None:
+            return {"below_px2": self.below_px2}
+        return {"below_px2": self.below_px2, "held_out_below_px2": self.held_out_below_px2}
 
     def validate(self, scene: Scene) -> None:
         _lab_scene(scene)
@@ -117,9 +127,19 @@ class SampsonBelowTask(Task):
             return TaskResult(False, f"{fit.title} failed: {fit.message}")
         err = fit.sampson_true if self.against == "true" else fit.sampson_noisy
         msg = f"{fit.title}'s mean Sampson error is {err:.3g} px^2"
-        if err < params["below_px2"]:
+        if not err < params["below_px2"]:
+            return TaskResult(False, f"Not yet: {msg}; it must be below {params['below_px2']:g} px^2.")
+        if self.held_out_below_px2 is None:
             return TaskResult(True, f"Done: {msg}.")
-        return TaskResult(False, f"Not yet: {msg}; it must be below {params['below_px2']:g} px^2.")
+        u1, u2 = held_out_correspondences(ctx.scene, ctx.lab_result())
+        held = float(np.mean(sampson_distance(cast(np.ndarray, fit.F), u1, u2))) if len(u1) else math.inf
+        where = f"on {len(u1)} held-out true correspondences spread over both images"
+        if held < params["held_out_below_px2"]:
+            return TaskResult(True, f"Done: {msg} on your points and {held:.3g} px^2 {where}.")
+        return TaskResult(False, f"Not yet: {msg} on your points, but {held:.3g} px^2 {where} (it must be below "
+                                 f"{params['held_out_below_px2']:g} px^2). A fit is only as good as the spread of "
+                                 "its data: points that cover little of the images and of the depths pin F down "
+                                 "only there.")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -183,6 +203,33 @@ class InliersRecallTask(Task):
                                      f"px^2 against the true points (at most {bound:.3g} px^2).")
         return TaskResult(True, f"Done: {msg}, {100 * precision:.0f} % of its inliers are true ones and its mean "
                                 f"Sampson error is {fit.sampson_true:.3g} px^2.")
+
+
+def held_out_correspondences(scene: Scene, lab: LabResult) -> tuple[np.ndarray, np.ndarray]:
+    """True correspondences the lab's fits never see, spread over both images: a grid of pixels of image 1
+    (:data:`_HELD_OUT_GRID`) each at the depths :data:`_HELD_OUT_DEPTHS`, projected into image 2 and kept where
+    in front of both cameras and inside image 2.
+
+    Returns:
+        ``(u1, u2)``, each ``(N, 2)`` pixels (N may be 0).
+    """
+    c1, c2 = (scene.camera(n).camera() for n in lab.names)
+    if not (isinstance(c1, PinholeCamera) and isinstance(c2, PinholeCamera)):  # the lab runs on pin-hole pairs only
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    cols, rows = _HELD_OUT_GRID
+    u, v = np.meshgrid(np.linspace(0.1, 0.9, cols) * c1.width, np.linspace(0.1, 0.9, rows) * c1.height)
+    m = np.column_stack([u.ravel(), v.ravel(), np.ones(u.size)])
+    M = c1.P[:, :3]
+    # Rows of inv(M) m: the ray of each pixel scaled to depth 1 (third row of M is the optical axis).
+    rays = np.linalg.solve(M, m.T).T
+    rays /= (rays @ M[2])[:, None]
+    depth = float(np.median((scene.points_array()[lab.data.point_indices] - c1.centre) @ M[2]))
+    X = np.concatenate([c1.centre + k * depth * rays for k in _HELD_OUT_DEPTHS])
+    p1, p2 = c1.project(X), c2.project(X)
+    inside = (p2.pixels[:, 0] >= 0) & (p2.pixels[:, 0] <= c2.width) & (p2.pixels[:, 1] >= 0) \
+        & (p2.pixels[:, 1] <= c2.height)
+    keep = p1.in_front & p2.in_front & inside
+    return p1.pixels[keep], p2.pixels[keep]
 
 
 def default_max_sampson_px2(noise_px: float) -> float:
