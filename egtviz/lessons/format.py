@@ -24,6 +24,7 @@ from ..files import FileSafetyError, printable, read_limited, too_large
 from ..scene import SCENES, Scene, SceneError, SceneFileError, SceneModel
 from ..scene.io import scene_from_dict
 from ..scene.lab import LabSettings, make_correspondences
+from ..scene.lens import LensToggles
 from ..scene.limits import (
     MAX_CHANGES,
     MAX_LESSON_FILE_BYTES,
@@ -34,7 +35,7 @@ from ..scene.limits import (
 )
 from . import fields
 from .bounds import check_lesson_work, check_toml_text
-from .changes import Change, OpenDemo, SetField, parse_change
+from .changes import Change, OpenDemo, SetField, SetLens, parse_change
 from .changes import apply as apply_change
 from .errors import EntryError, LessonError
 from .images import LessonImages
@@ -44,6 +45,7 @@ from .display import PanelDisplay, parse_display
 from .markup import (PANEL_WIDTH_PX, MarkupError, displayed_formulas, formula_to_mathml, formula_width_px,
                      render_markdown)
 from .tasks import (
+    ChoiceTask,
     InliersRecallTask,
     SampsonBelowTask,
     ServoNumberTask,
@@ -208,6 +210,9 @@ class _Reader:
         self.known = known
         self.demo: OpenDemo | None = None
         """The servo run the steps read so far offer (the last ``open_demo``), for ``servo_number`` tasks."""
+        self.lens = LensToggles()
+        """The convention lens as the steps read so far leave it: a ``choice`` task while it has a mistake on
+        is a diagnosis, and each of its options needs ``feedback``."""
         self.simulated: set[OpenDemo] = set()
         self.servo_steps = 0
         """Steps of the distinct runs in :attr:`simulated`."""
@@ -312,6 +317,8 @@ class _Reader:
             self.apply(model, change, here, what, table)
             if isinstance(change, OpenDemo):
                 self.demo = change
+            elif isinstance(change, SetLens):
+                self.lens = change.applied_to(self.lens)
             out.append(change)
         return tuple(out)
 
@@ -359,6 +366,10 @@ class _Reader:
                     task.validate_run(self.demo)
             except EntryError as exc:
                 raise self.entry(here, exc, what) from None
+            if isinstance(task, ChoiceTask) and self.lens.any and task.options_without_feedback:
+                raise self.error(here + (("feedback",) if task.feedback else ()),
+                                 f"{what}: a diagnosis (a choice while the lens has a mistake on) needs feedback "
+                                 f"for every option; none for {', '.join(map(repr, task.options_without_feedback))}")
             if isinstance(task, (SampsonBelowTask, InliersRecallTask)):
                 try:
                     make_correspondences(model.scene, LabSettings())

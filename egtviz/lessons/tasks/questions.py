@@ -18,6 +18,8 @@ from .common import ANSWER, TOLERANCE, fmt
 __all__ = ["ChoiceTask", "NumberTask", "compare_number"]
 
 _MAX_OPTIONS = 12
+_MAX_FEEDBACK = 600
+"""Characters of one option's feedback."""
 
 
 def compare_number(typed: str | None, answer: float, tolerance: float, unit: str) -> TaskResult:
@@ -57,13 +59,16 @@ class NumberTask(Task):
 
 @dataclass(frozen=True, kw_only=True)
 class ChoiceTask(Task):
-    """One of ``options``; the learner types the option or its number (1, 2, ...)."""
+    """One of ``options``; the learner types the option or its number (1, 2, ...). ``feedback`` pairs an option
+    with what choosing it tells the learner (for a wrong option: what it would have shown, and why the evidence
+    points elsewhere); an option without feedback gets the plain verdict."""
 
     options: tuple[str, ...]
     answer: str
+    feedback: tuple[tuple[str, str], ...] = ()
 
     kind: ClassVar[str] = "choice"
-    table_keys: ClassVar[tuple[str, ...]] = ("options", "answer")
+    table_keys: ClassVar[tuple[str, ...]] = ("options", "answer", "feedback")
     question: ClassVar[bool] = True
 
     @classmethod
@@ -74,7 +79,13 @@ class ChoiceTask(Task):
         answer = fields.text(table, "answer")
         if answer not in options:
             raise EntryError("answer", f"expected one of the options, got {fields.short(answer)}")
-        return cls(**common, options=options, answer=answer)
+        return cls(**common, options=options, answer=answer, feedback=_option_feedback(table, options))
+
+    @property
+    def options_without_feedback(self) -> tuple[str, ...]:
+        """The options that have no ``feedback`` (a diagnosis task must have none)."""
+        given = {option for option, _ in self.feedback}
+        return tuple(o for o in self.options if o not in given)
 
     def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
         given = (ctx.answer or "").strip()
@@ -82,6 +93,25 @@ class ChoiceTask(Task):
             given = self.options[int(given) - 1]
         if given not in self.options:
             return TaskResult(False, "Pick one of the options.")
+        said = dict(self.feedback).get(given)
         if given == self.answer:
-            return TaskResult(True, f"Right: {given}.")
-        return TaskResult(False, f"Not {given!r}.")
+            return TaskResult(True, f"Right: {given}." + (f" {said}" if said else ""))
+        return TaskResult(False, f"Not {given!r}." + (f" {said}" if said else ""))
+
+
+def _option_feedback(table: dict, options: tuple[str, ...]) -> tuple[tuple[str, str], ...]:
+    """A choice task's optional ``feedback`` table: option text = what choosing it tells the learner."""
+    value = table.get("feedback", {})
+    if not isinstance(value, dict):
+        raise EntryError("feedback", f"expected a table of option = text, got {fields.short(value)}")
+    for option in value:
+        if option not in options:
+            raise EntryError("feedback", f"expected options as keys, got {fields.short(option)}")
+    out = []
+    for option in options:
+        if option in value:
+            try:
+                out.append((option, fields.text(value, option, limit=_MAX_FEEDBACK)))
+            except EntryError as exc:
+                raise EntryError("feedback", f"{fields.short(option)}: {exc.reason}") from None
+    return tuple(out)
