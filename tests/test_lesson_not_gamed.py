@@ -163,7 +163,8 @@ def test_a_diagnosis_without_feedback_for_every_option_is_refused_at_its_line():
     assert caught.value.line == 13 and "feedback for every option" in caught.value.reason
     assert "'a', 'b'" in caught.value.reason
     with pytest.raises(LessonError) as caught:
-        parse_lesson(LENS_LESSON.format(on="true") + '\n[steps.tasks.feedback]\na = "Yes."\n', source="l.toml", name="l")
+        parse_lesson(LENS_LESSON.format(on="true") + '\n[steps.tasks.feedback]\na = "Yes."\n', source="l.toml",
+                     name="l")
     assert "none for 'b'" in caught.value.reason
     # Not a diagnosis (no mistake on): feedback stays optional; a diagnosis with all of it loads.
     parse_lesson(LENS_LESSON.format(on="false"), source="l.toml", name="l")
