@@ -79,11 +79,11 @@ def _choose(page, number: int, option: str) -> None:
 
 def _check(page, number: int, verdict: str) -> None:
     """Press "Check task n" and wait for its verdict ("Passed" or "Not yet") in the page."""
-    before = page.get_by_text(verdict).count()
+    # Only shown verdicts count: a step's page may keep the previous step's elements, hidden.
+    shown = "(v) => [...document.querySelectorAll('strong')].filter(e => e.textContent.includes(v) && e.offsetParent !== null)"
+    before = page.evaluate(f"(v) => ({shown})(v).length", verdict)
     page.get_by_role("button", name=f"Check task {number}").click()
-    page.wait_for_function(
-        "([v, n]) => [...document.querySelectorAll('strong')].filter(e => e.textContent.includes(v)).length > n",
-        arg=[verdict, before], timeout=TIMEOUT_MS)
+    page.wait_for_function(f"([v, n]) => ({shown})(v).length > n", arg=[verdict, before], timeout=TIMEOUT_MS)
 
 
 def _next(page, step: int) -> None:
@@ -139,7 +139,7 @@ def test_lesson_6_walked_from_start_to_finish_in_the_browser(browser, course):
         panel = _panel(app)
         assert panel.run.learner == "Ada"
         # The step's formulas are MathML that the browser lays out (not markup shown as text).
-        assert page.locator("math").count() > 0
+        page.locator("math").first.wait_for(timeout=TIMEOUT_MS)
         assert page.evaluate("() => document.querySelector('math').getBoundingClientRect().width") > 5
         assert page.get_by_text("<math").count() == 0 and page.get_by_text("msub").count() == 0
         # Step 1: a choice.
