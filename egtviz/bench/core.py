@@ -77,11 +77,13 @@ def run_facade_projection_bench(n: int = 100_000, repeats: int = 20) -> list[dic
     X = rng.uniform(-5, 5, size=(3, n)) + np.array([[0.0], [20.0], [0.0]])
     H = f_Rt2H(roty(0.1), [0.5, 0.0, 0.2])
     K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
-    R, t = H[:3, :3], H[:3, 3]
-    P = K @ np.hstack([R.T, (-R.T @ t)[:, None]])
 
     def bare() -> np.ndarray:
-        # K [R^T | -R^T t] X in EGT's columns, then the division: no checks, no NaN for points behind.
+        # What EGT computes from the same inputs: P = K [R^T | -R^T t] from H (R = H[:3, :3], t = H[:3, 3]),
+        # P X in EGT's columns (the homogeneous 1 folded into P's last column), then the division; no checks,
+        # no NaN for points behind.
+        R, t = H[:3, :3], H[:3, 3]
+        P = K @ np.hstack([R.T, (-R.T @ t)[:, None]])
         m = P[:, :3] @ X + P[:, 3:]
         return m[:2] / m[2]
 

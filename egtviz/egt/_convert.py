@@ -24,7 +24,11 @@ FIGURE_MODULE = "egtviz.egt_figure"
 
 def columns(X: npt.ArrayLike, name: str, rows: int) -> np.ndarray:
     """EGT columns ``(rows, N)`` (or one flat point) -> core rows ``(N, rows)``."""
-    arr = as_array(X, name, allow_empty=False)
+    return _column_rows(as_array(X, name, allow_empty=False), name, rows)
+
+
+def _column_rows(arr: np.ndarray, name: str, rows: int) -> np.ndarray:
+    """:func:`columns` of an array checked already (one check of a large array is a pass over it)."""
     if arr.ndim == 1 and arr.shape[0] == rows:
         return arr[None, :]
     if arr.ndim != 2 or arr.shape[0] != rows or arr.shape[1] == 0:
@@ -41,8 +45,8 @@ def world_columns(X: npt.ArrayLike, name: str) -> np.ndarray:
         w = arr[3]
         if np.any(np.abs(w) <= 1e-12 * np.abs(arr).max(axis=0)):
             raise GeometryError(f"{name}: a homogeneous point has last coordinate 0 (a point at infinity)")
-        arr = arr[:3] / w
-    return columns(arr, name, 3)
+        arr = as_array(arr[:3] / w, name)  # the division can leave the accepted range
+    return _column_rows(arr, name, 3)
 
 
 def pixels(m: npt.ArrayLike, name: str) -> np.ndarray:

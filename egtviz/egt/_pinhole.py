@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -11,6 +12,7 @@ from ..geometry._validate import GeometryError, as_array, as_up_to_scale, as_vec
 from ..geometry.epipolar import epipolar_lines, epipolar_lines_in_first, epipolar_pair, unit_frobenius
 from ..geometry.homogeneous import normalize_homogeneous
 from ..geometry.lines3d import image_of_line, image_of_plucker_line
+from ..geometry.pinhole import PinholeCamera
 from ..geometry.poses import Pose
 from ._convert import draw as _draw
 from ._convert import columns, flag, pinhole, pixels, style, world_columns
@@ -35,6 +37,22 @@ def project_pixels(Xw: np.ndarray, H: npt.ArrayLike, K: npt.ArrayLike, *, check:
     return px
 
 
+@lru_cache(maxsize=16)
+def _checked_pinhole(h: bytes, k: bytes) -> tuple[PinholeCamera, np.ndarray | None]:
+    """:func:`pinhole` of a float64 ``H`` (4x4) and ``K`` (3x3) given by their bytes: the same bytes pass the
+    same checks and give the same camera, so a script projecting with one camera again and again (EGT's
+    loops, the exercises) checks and builds it once. Refusals are raised, never cached."""
+    return pinhole(np.frombuffer(h).reshape(4, 4), np.frombuffer(k).reshape(3, 3))
+
+
+def _pinhole_of(H: npt.ArrayLike, K: npt.ArrayLike) -> tuple[PinholeCamera, np.ndarray | None]:
+    """:func:`pinhole`, through :func:`_checked_pinhole` for float64 arrays of the right shapes."""
+    if (type(H) is np.ndarray and type(K) is np.ndarray and H.dtype == np.float64 and K.dtype == np.float64
+            and H.shape == (4, 4) and K.shape == (3, 3)):
+        return _checked_pinhole(H.tobytes(), K.tobytes())
+    return pinhole(H, K)
+
+
 def f_perspproj(Xw: npt.ArrayLike, H: npt.ArrayLike, K: npt.ArrayLike, *plot: Any) -> np.ndarray:
     r"""Pin-hole projection :math:`m \sim K [R^T | -R^T t] X_w` of world points ``Xw`` (3, N).
 
@@ -54,7 +72,11 @@ def f_perspproj(Xw: npt.ArrayLike, H: npt.ArrayLike, K: npt.ArrayLike, *plot: An
         ``u, v = f_perspproj(...)``.
     """
     X = world_columns(Xw, "Xw")
-    U = project_pixels(X, H, K, check=False).T  # X checked once, by world_columns
+    camera, flip = _pinhole_of(H, K)
+    px = camera.project(X, check=False).pixels  # X checked once, by world_columns
+    if flip is not None:
+        px = px @ flip[:2, :2].T + flip[:2, 2]
+    U = px.T
     level = flag(plot[0]) if plot else 0
     if level >= 1:
         _draw("image_points", pixels=U, H=np.asarray(H, dtype=float), K=np.asarray(K, dtype=float), figure=None,
