@@ -33,7 +33,7 @@ import math
 import socket
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, Callable
+from typing import Any, Callable, TypeGuard
 from urllib.parse import urlsplit
 
 import msgspec.msgpack
@@ -171,7 +171,9 @@ def check_viser_internals(server: viser.ViserServer | None = None) -> None:
 def _websockets_server(server: viser.ViserServer) -> websockets.asyncio.server.Server:
     """The websockets server viser runs, found in the frame of its ``start_server`` coroutine."""
     ws = server._websock_server
-    loop: asyncio.AbstractEventLoop = ws._background_event_loop
+    loop = ws._background_event_loop
+    if loop is None:  # viser sets it when its server thread starts, before ViserServer() returns
+        raise RuntimeError("egtviz's server guards: viser's event loop is not running")
 
     async def find() -> Any:
         for task in asyncio.all_tasks():
@@ -304,6 +306,11 @@ def _is_value_update(msg: Any) -> bool:
     return isinstance(updates, dict) and list(updates) == ["value"] and not isinstance(updates["value"], bool)
 
 
+def _is_count(value: object) -> TypeGuard[int]:
+    """An int from the browser (msgpack booleans decode to bool, a subclass of int, and are refused)."""
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 @dataclasses.dataclass
 class _Transfer:
     size: int
@@ -354,10 +361,12 @@ class _InboundFilter:
         last: dict[tuple, int] = {}
         drag = 0
         for i, (kind, msg) in enumerate(zip(kinds, decoded)):
+            if msg is None:
+                continue  # kind is None too: nothing to supersede
             if kind in _DRAG_BOUNDARIES:
                 drag += 1  # a pose before a drag's start or end is not superseded by one after it
             elif kind in _STATE_MESSAGES:
-                last[(drag, kind, *(str(msg.get(k)) for k in _STATE_MESSAGES[kind]))] = i  # type: ignore[union-attr]
+                last[(drag, kind, *(str(msg.get(k)) for k in _STATE_MESSAGES[kind]))] = i
             elif kind == "GuiUpdateMessage" and _is_value_update(msg):
                 last[("gui", str(msg.get("uuid")))] = i
         keep_state = set(last.values())
@@ -366,9 +375,10 @@ class _InboundFilter:
             if (kind in _STATE_MESSAGES or kind == "GuiUpdateMessage" and _is_value_update(msg)) and i not in keep_state:
                 self._stats.coalesced_messages += 1
                 continue
-            if kind == "FileTransferStartUpload" and not self._start_upload(msg):
+            # A message with a kind decoded to a dict: msg is None only when kind is None.
+            if msg is not None and kind == "FileTransferStartUpload" and not self._start_upload(msg):
                 continue
-            if kind == "FileTransferPart" and not self._accept_part(msg):
+            if msg is not None and kind == "FileTransferPart" and not self._accept_part(msg):
                 continue
             out.append(raw)
         return out
@@ -376,11 +386,10 @@ class _InboundFilter:
     def _start_upload(self, msg: dict) -> bool:
         lim = self._limits
         size, parts, tid = msg.get("size_bytes"), msg.get("part_count"), msg.get("transfer_uuid")
-        ok_types = all(isinstance(v, int) and not isinstance(v, bool) for v in (size, parts)) and isinstance(tid, str)
+        if not (_is_count(size) and _is_count(parts) and isinstance(tid, str)) or size < 0 or parts < 0:
+            return self._refuse_upload("the upload announced no valid size")
         reason = None
-        if not ok_types or size < 0 or parts < 0:
-            reason = "the upload announced no valid size"
-        elif size > lim.max_upload_bytes:
+        if size > lim.max_upload_bytes:
             reason = f"the file is larger than {lim.max_upload_bytes / 1e6:g} MB"
         elif (parts != 0) if size == 0 else not 1 <= parts <= math.ceil(size / MIN_UPLOAD_PART_BYTES):
             reason = "the upload announced an implausible number of parts"
@@ -389,13 +398,17 @@ class _InboundFilter:
         elif len(self.transfers) >= lim.max_uploads_in_flight:
             reason = f"more than {lim.max_uploads_in_flight} uploads at once"
         if reason is not None:
-            self._stats.refused_uploads += 1
-            _log.warning("refused an upload: %s", reason)
-            self._notify(self._connection, f"Upload refused: {reason}.")
-            return False
+            return self._refuse_upload(reason)
         if parts > 0:
             self.transfers[tid] = _Transfer(size, parts)
         return True
+
+    def _refuse_upload(self, reason: str) -> bool:
+        """Count, log and tell the tab why its upload was refused; False, for ``_start_upload`` to return."""
+        self._stats.refused_uploads += 1
+        _log.warning("refused an upload: %s", reason)
+        self._notify(self._connection, f"Upload refused: {reason}.")
+        return False
 
     def _accept_part(self, msg: dict) -> bool:
         # Every part from a browser belongs to an upload: viser files it by transfer id alone, so a
@@ -403,7 +416,7 @@ class _InboundFilter:
         tid = msg.get("transfer_uuid")
         transfer = self.transfers.get(tid) if isinstance(tid, str) else None
         index, content = msg.get("part_index"), msg.get("content")
-        if (transfer is None or not isinstance(index, int) or isinstance(index, bool)
+        if (transfer is None or not isinstance(tid, str) or not isinstance(index, int) or isinstance(index, bool)
                 or not 0 <= index < transfer.part_count or index in transfer.parts
                 or not isinstance(content, bytes) or transfer.received + len(content) > transfer.size):
             self._stats.dropped_parts += 1
@@ -429,8 +442,8 @@ class _Job:
 
 @dataclasses.dataclass
 class _TabQueue:
-    jobs: collections.deque = dataclasses.field(default_factory=collections.deque)
-    waiting: dict = dataclasses.field(default_factory=dict)  # key -> _Job not yet started
+    jobs: collections.deque[_Job] = dataclasses.field(default_factory=collections.deque)
+    waiting: dict[tuple, _Job] = dataclasses.field(default_factory=dict)  # key -> _Job not yet started
     scheduled: bool = False
 
 
