@@ -40,9 +40,9 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, TypeVar, cast, runtime_checkable
 
 import numpy as np
 import numpy.typing as npt
@@ -57,6 +57,8 @@ from ._validate import (
 )
 from .poses import Pose
 
+CameraT = TypeVar("CameraT")
+
 __all__ = [
     "CAMERA_MODELS",
     "IMAGE_SIZE_PARAMETERS",
@@ -67,14 +69,18 @@ __all__ = [
     "DirectionImages",
     "ParameterSpec",
     "Projection",
+    "arc_normals",
     "as_direction",
     "as_normals",
+    "camera_from_parameters",
     "camera_model_info",
+    "check_parameters",
     "check_pose",
     "check_sample_count",
     "double_line_conics",
     "finite_nonzero_rows",
     "normals_with_planes",
+    "parameter_values",
     "parameters_from_specs",
     "rectangle_rim",
     "unchecked_normals",
@@ -363,6 +369,48 @@ def normals_with_planes(normals_world: npt.ArrayLike) -> tuple[np.ndarray, np.nd
     out = n / top[:, None]
     out[nan_rows] = np.nan
     return out, np.flatnonzero(good)
+
+
+def arc_normals(normals_world: npt.ArrayLike, n_samples: int, check: bool) -> tuple[np.ndarray, int]:
+    """The normals and sample count of a model's ``plane_image_arcs``: checked (:func:`as_normals`,
+    :func:`check_sample_count` in ``3..MAX_SAMPLES``), or with ``check=False`` taken as promised
+    (:func:`unchecked_normals`)."""
+    if check:
+        n_samples = check_sample_count(n_samples, "n_samples", 3)
+        return as_normals(normals_world), n_samples
+    return unchecked_normals(cast(np.ndarray, normals_world)), n_samples
+
+
+def check_parameters(camera: object, names: Sequence[str]) -> None:
+    """Check a frozen camera's fields ``names`` and its ``principal_point`` against its ``PARAMETERS``, setting each
+    to its checked value; a GeometryError names the first field outside its range."""
+    specs = {s.name: s for s in getattr(camera, "PARAMETERS")}
+    for name in names:
+        object.__setattr__(camera, name, specs[name].check(getattr(camera, name)))
+    point = getattr(camera, "principal_point")
+    try:
+        u0, v0 = point
+    except (TypeError, ValueError) as exc:
+        raise GeometryError(f"principal_point: expected (u0, v0), got {point!r}") from exc
+    object.__setattr__(camera, "principal_point", (specs["u0"].check(u0), specs["v0"].check(v0)))
+
+
+def parameter_values(camera: object) -> dict[str, float | int]:
+    """A camera's parameters in the order of its ``PARAMETERS``, ``u0`` and ``v0`` read from its
+    ``principal_point``."""
+    u0, v0 = getattr(camera, "principal_point")
+    point = {"u0": u0, "v0": v0}
+    return {s.name: point[s.name] if s.name in point else getattr(camera, s.name)
+            for s in getattr(camera, "PARAMETERS")}
+
+
+def camera_from_parameters(cls: Callable[..., CameraT], specs: tuple[ParameterSpec, ...], pose: Pose,
+                           values: Mapping[str, object]) -> CameraT:
+    """A camera built by ``cls`` at ``pose`` from parameter ``values`` checked against ``specs``: each parameter a
+    field of its name, but ``u0``, ``v0`` (the ``principal_point``) and whole-pixel ``width``, ``height``."""
+    p = parameters_from_specs(specs, values)
+    fields = {s.name: p[s.name] for s in specs if s.name not in ("u0", "v0", "width", "height")}
+    return cls(pose, **fields, principal_point=(p["u0"], p["v0"]), width=int(p["width"]), height=int(p["height"]))
 
 
 def unchecked_normals(normals_world: np.ndarray) -> np.ndarray:

@@ -49,6 +49,7 @@ from .camera_model import (
     PRINCIPAL_POINT_PARAMETERS,
     DirectionImages,
     ParameterSpec,
+    arc_normals,
     as_direction,
     as_normals,
     check_pose,
@@ -233,11 +234,7 @@ class CatadioptricCamera:
         ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN and a whole
         number ``n_samples`` in ``3..MAX_SAMPLES``; nothing is checked.
         """
-        if check:
-            n_samples = check_sample_count(n_samples, "n_samples", 3)
-            n = as_normals(normals_world)
-        else:
-            n = unchecked_normals(cast(np.ndarray, normals_world))
+        n, n_samples = arc_normals(normals_world, n_samples, check)
         # Each normal's arcs as a tuple (a sequence, as the interface asks): no copy of hundreds of small lists.
         return great_circle_arcs(np.ascontiguousarray((n @ self.pose.R).T), n_samples, self.mirror.rim_cosine,
                                  self._unit_ray_pixels)

@@ -41,12 +41,15 @@ from .camera_model import (
     CameraProjection,
     DirectionImages,
     ParameterSpec,
+    arc_normals,
     as_direction,
     as_normals,
+    camera_from_parameters,
+    check_parameters,
+    check_pose,
     check_sample_count,
     finite_nonzero_rows,
-    parameters_from_specs,
-    unchecked_normals,
+    parameter_values,
 )
 from .poses import Pose
 
@@ -88,30 +91,18 @@ class FisheyeCamera:
     no_image: ClassVar[str] = "outside the field of view"
 
     def __post_init__(self, check: bool) -> None:
-        if not isinstance(self.pose, Pose):
-            raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
-        if check is False:
-            return
-        specs = {s.name: s for s in self.PARAMETERS}
-        for name in ("field_of_view", "focal_pixels", "width", "height"):
-            object.__setattr__(self, name, specs[name].check(getattr(self, name)))
-        try:
-            u0, v0 = self.principal_point
-        except (TypeError, ValueError) as exc:
-            raise GeometryError(f"principal_point: expected (u0, v0), got {self.principal_point!r}") from exc
-        object.__setattr__(self, "principal_point", (specs["u0"].check(u0), specs["v0"].check(v0)))
+        check_pose(self.pose)
+        if check is not False:
+            check_parameters(self, ("field_of_view", "focal_pixels", "width", "height"))
 
     # ------------------------------------------------------------------ parameters and frames
     @classmethod
     def from_parameters(cls, pose: Pose, **values: float) -> FisheyeCamera:
         """The camera at ``pose`` with ``field_of_view``, ``focal_pixels``, ``u0``, ``v0``, ``width``, ``height``."""
-        p = parameters_from_specs(cls.PARAMETERS, values)
-        return cls(pose, p["field_of_view"], p["focal_pixels"], (p["u0"], p["v0"]), int(p["width"]), int(p["height"]))
+        return camera_from_parameters(cls, cls.PARAMETERS, pose, values)
 
     def parameters(self) -> dict[str, float | int]:
-        u0, v0 = self.principal_point
-        return {"field_of_view": self.field_of_view, "focal_pixels": self.focal_pixels, "u0": u0, "v0": v0,
-                "width": self.width, "height": self.height}
+        return parameter_values(self)
 
     def moved(self, pose: Pose) -> FisheyeCamera:
         """The same camera at another pose (the parameters, checked once, are not checked again)."""
@@ -224,11 +215,7 @@ class FisheyeCamera:
         ``check=False``: the caller promises a float64 (N, 3) array whose rows are finite or all NaN and a whole
         number ``n_samples`` in ``3..MAX_SAMPLES``; nothing is checked.
         """
-        if check:
-            n_samples = check_sample_count(n_samples, "n_samples", 3)
-            n = as_normals(normals_world)
-        else:
-            n = unchecked_normals(cast(np.ndarray, normals_world))
+        n, n_samples = arc_normals(normals_world, n_samples, check)
         out: list[list[np.ndarray]] = [[] for _ in range(len(n))]
         good = finite_nonzero_rows(n)
         if len(good) == 0:

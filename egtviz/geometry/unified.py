@@ -69,11 +69,15 @@ from .camera_model import (
     CameraProjection,
     DirectionImages,
     ParameterSpec,
+    arc_normals,
     as_direction,
     as_normals,
+    camera_from_parameters,
+    check_parameters,
+    check_pose,
     check_sample_count,
     finite_nonzero_rows,
-    parameters_from_specs,
+    parameter_values,
     unchecked_normals,
 )
 from .homogeneous import normalize_homogeneous
@@ -125,30 +129,18 @@ class UnifiedCamera:
     no_image: ClassVar[str] = "behind the projection centre"
 
     def __post_init__(self, check: bool) -> None:
-        if not isinstance(self.pose, Pose):
-            raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
-        if check is False:
-            return
-        specs = {s.name: s for s in self.PARAMETERS}
-        for name in ("xi", "focal_pixels", "width", "height"):
-            object.__setattr__(self, name, specs[name].check(getattr(self, name)))
-        try:
-            u0, v0 = self.principal_point
-        except (TypeError, ValueError) as exc:
-            raise GeometryError(f"principal_point: expected (u0, v0), got {self.principal_point!r}") from exc
-        object.__setattr__(self, "principal_point", (specs["u0"].check(u0), specs["v0"].check(v0)))
+        check_pose(self.pose)
+        if check is not False:
+            check_parameters(self, ("xi", "focal_pixels", "width", "height"))
 
     # ------------------------------------------------------------------ parameters and frames
     @classmethod
     def from_parameters(cls, pose: Pose, **values: float) -> UnifiedCamera:
         """The camera at ``pose`` with parameters ``xi``, ``focal_pixels``, ``u0``, ``v0``, ``width``, ``height``."""
-        p = parameters_from_specs(cls.PARAMETERS, values)
-        return cls(pose, p["xi"], p["focal_pixels"], (p["u0"], p["v0"]), int(p["width"]), int(p["height"]))
+        return camera_from_parameters(cls, cls.PARAMETERS, pose, values)
 
     def parameters(self) -> dict[str, float | int]:
-        u0, v0 = self.principal_point
-        return {"xi": self.xi, "focal_pixels": self.focal_pixels, "u0": u0, "v0": v0, "width": self.width,
-                "height": self.height}
+        return parameter_values(self)
 
     def moved(self, pose: Pose) -> UnifiedCamera:
         """The same camera at another pose (the fast path of a drag: the parameters, checked once, are not checked again)."""
@@ -361,11 +353,7 @@ class UnifiedCamera:
             For each normal a list with one (k, 2) polyline, or an empty list (zero or NaN normal, or the
             circle misses the cap).
         """
-        if check:
-            n_samples = check_sample_count(n_samples, "n_samples", 3)
-            n = as_normals(normals_world)
-        else:
-            n = unchecked_normals(cast(np.ndarray, normals_world))
+        n, n_samples = arc_normals(normals_world, n_samples, check)
         out: list[list[np.ndarray]] = [[] for _ in range(len(n))]
         good = finite_nonzero_rows(n)
         if len(good) == 0:
