@@ -285,6 +285,9 @@ def run_lab(scene: Scene, settings: LabSettings = LabSettings(), methods: tuple[
     names = _pinhole_pair(scene, derived)
     data = make_correspondences(scene, settings, derived)
     F_true = np.asarray(derived.pair.F)
-    e_true = (normalize_homogeneous(derived.pair.e1), normalize_homogeneous(derived.pair.e2))
+    e1_true, e2_true = derived.pair.e1, derived.pair.e2
+    if e1_true is None or e2_true is None:  # set whenever F is, which _pinhole_pair checked
+        raise SceneError(f"the estimation lab: {derived.pair.message}")
+    e_true = (normalize_homogeneous(e1_true), normalize_homogeneous(e2_true))
     fits = tuple(_fit(m, data, settings, e_true) for m in methods)
     return LabResult(settings, names, F_true, e_true[0], e_true[1], data, fits)

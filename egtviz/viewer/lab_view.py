@@ -161,10 +161,14 @@ class LabPanel:
             )
         for slider, key in ((self.noise, "noise_px"), (self.outliers, "outlier_percent"),
                             (self.threshold, "threshold_px")):
-            on_event(slider.on_update, lambda e, k=key: self._set(k, e.target.value), report)
+            on_event(slider.on_update, self._setter(key), report)
         on_event(self.fit_dropdown.on_update, lambda e: self._choose(e.target.value), report)
 
     # -- events ---------------------------------------------------------------------------
+
+    def _setter(self, key: str) -> Callable[[Any], None]:
+        """The update callback of the slider for setting ``key``."""
+        return lambda event: self._set(key, event.target.value)
 
     def _set(self, key: str, value: Any) -> None:
         if self._syncing:
@@ -239,7 +243,7 @@ class LabPanel:
             self._mask_3d(scene, None)
             return derived, frozenset()
         fit = result.fit(self.drawn)
-        if fit.F is None:
+        if fit.F is None or fit.e1 is None or fit.e2 is None:  # a fit's epipoles come with its F
             return derived, frozenset()
         data = result.data
         n = len(scene.points)

@@ -134,7 +134,7 @@ class LensPanel:
             shown = self._shown()
             for f in fields(LensToggles):
                 box = gui.add_checkbox(LENS_LABELS[f.name], getattr(shown, f.name))
-                on_event(box.on_update, lambda e, k=f.name: self._toggle(k, e.target.value), report)
+                on_event(box.on_update, self._toggler(f.name), report)
                 self.toggles[f.name] = box
             self.readout = gui.add_html("")
         self.note.content = HIDDEN_NOTE if hidden_lens(run) is not None else ""
@@ -143,6 +143,10 @@ class LensPanel:
         """What the boxes show: the run's toggles, or what was switched since the step hid its mistake."""
         hidden = hidden_lens(self.run)
         return self.run.lens if hidden is None else hidden.switched(self.run.lens)
+
+    def _toggler(self, key: str) -> Callable[[Any], None]:
+        """The update callback of the checkbox for the lens toggle ``key``."""
+        return lambda event: self._toggle(key, event.target.value)
 
     def _toggle(self, key: str, value: Any) -> None:
         if self._syncing:

@@ -37,6 +37,7 @@ notification in this tab.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from html import escape
 from typing import Any
 
@@ -47,7 +48,7 @@ from ..lessons.answers import EXAMPLE
 from ..lessons.changes import RANGED_FIELDS, SetLab, SetLens, SetRange
 from ..lessons.progress import LearnerNameError, learner_key
 from ..lessons.runner import ResolvedTask
-from ..lessons.tasks import RESET_ADVICE
+from ..lessons.tasks import RESET_ADVICE, ChoiceTask
 from ..scene import SceneError
 from ..scene.constraints import CameraRanges
 from .camera_fields import field_of_spec
@@ -125,8 +126,21 @@ def lock_refusal(run: LessonRun) -> str | None:
     return None
 
 
-def _range_terms(run: LessonRun, camera: str, field: str) -> tuple[str, NumberRule, Callable[[float], float]]:
-    """A ranged spec field in the words and unit of its GUI field: ``(label, rule, stored -> shown)``."""
+@dataclass(frozen=True)
+class _RangeTerms:
+    """A ranged spec field in the words and unit of its GUI field."""
+
+    label: str
+    rule: NumberRule
+    """The rule of the range as shown, ``lo`` to ``hi``."""
+    convert: Callable[[float], float]
+    """Stored value -> shown value."""
+    lo: float
+    hi: float
+
+
+def _range_terms(run: LessonRun, camera: str, field: str) -> _RangeTerms:
+    """A ranged spec field in the words and unit of its GUI field, and its range as shown."""
     scene = run.model.scene
     limit = run.ranges[(camera, field)]
     convert: Callable[[float], float]
@@ -137,7 +151,7 @@ def _range_terms(run: LessonRun, camera: str, field: str) -> tuple[str, NumberRu
         label, unit, convert = field.replace("_", " "), "", float
     unit = unit or (RANGED_FIELDS[field].unit if field in RANGED_FIELDS else "")
     lo, hi = sorted((convert(limit.low), convert(limit.high)))  # a reciprocal (pixel size) swaps the bounds
-    return label, NumberRule(label, unit, lo, hi), convert
+    return _RangeTerms(label, NumberRule(label, unit, lo, hi), convert, lo, hi)
 
 
 def field_range_refusal(run: LessonRun, camera: str, fields: dict[str, Any]) -> str | None:
@@ -150,10 +164,11 @@ def field_range_refusal(run: LessonRun, camera: str, fields: dict[str, Any]) -> 
             continue
         values = value if isinstance(value, tuple) else (value,)
         if any(not isinstance(v, (int, float)) or not _inside(limit, float(v)) for v in values):
-            label, rule, convert = _range_terms(run, camera, field)
-            shown = ", ".join(rule.with_units(convert(float(v))) for v in values if isinstance(v, (int, float)))
-            return (f"In this step {camera}'s {label} must stay between {rule.with_units(rule.lo)} and "
-                    f"{rule.with_units(rule.hi)} (it is {shown})")
+            terms = _range_terms(run, camera, field)
+            rule = terms.rule
+            shown = ", ".join(rule.with_units(terms.convert(float(v))) for v in values if isinstance(v, (int, float)))
+            return (f"In this step {camera}'s {terms.label} must stay between {rule.with_units(terms.lo)} and "
+                    f"{rule.with_units(terms.hi)} (it is {shown})")
     return None
 
 
@@ -229,7 +244,7 @@ class TaskRow:
         self.prompt = gui.add_markdown(f"**Task {number}.** {resolved.prompt_html}")
         self.answer: Any = None
         self.options: tuple[str, ...] = ()
-        if task.kind == "choice":
+        if isinstance(task, ChoiceTask):  # the only task kind "choice"
             self.options = tuple(task.options)
             self.answer = gui.add_dropdown(f"answer {number}", (CHOOSE, *self.options), initial_value=CHOOSE)
         elif task.question:
@@ -420,15 +435,15 @@ class LessonPanel:
                 self._add_demo_row(run)
             for k, resolved in enumerate(run.tasks(), start=1):
                 row = TaskRow(gui, k, resolved, passed_before=(i, resolved.task.id) in passed)
-                self._on(row.button.on_click, lambda _, r=row: self._check(r))
+                self._on(row.button.on_click, self._checker(row))
                 self.rows.append(row)
             # The lesson's end: what the learner did in it and what comes next, kept current by each check.
             self.summary = gui.add_markdown(run.summary().markdown()) if run.on_last_step else None
         limits = []
         for c, f in sorted(run.ranges):
-            label, rule, _ = _range_terms(run, c, f)
-            shown = f"{format_number(rule.lo)} to {rule.with_units(rule.hi)}"
-            limits.append(f"{escape(c)}: {escape(label)} {escape(shown)}")
+            terms = _range_terms(run, c, f)
+            shown = f"{format_number(terms.lo)} to {terms.rule.with_units(terms.hi)}"
+            limits.append(f"{escape(c)}: {escape(terms.label)} {escape(shown)}")
         self.ranges.content = ('<div style="font-size:0.8em">In this step: ' + "; ".join(limits) + "</div>"
                                if limits else "")
         for instrument in (self.lab, self.lens):
@@ -473,6 +488,10 @@ class LessonPanel:
             self.view.redraw()
 
     # -- tasks --------------------------------------------------------------------------------
+
+    def _checker(self, row: TaskRow) -> Callable[[Any], None]:
+        """The click callback of ``row``'s check button."""
+        return lambda _event: self._check(row)
 
     def _check(self, row: TaskRow) -> None:
         answer = row.answer_text()
