@@ -299,8 +299,45 @@ class _CameraSpecBase:
         return dataclasses.replace(self, **fields)  # type: ignore[type-var]
 
 
+class _EgtPlacedSpec(_CameraSpecBase):
+    """A camera spec placed like EGT's pin-hole (``f_Rt2H``): its model's frame is a pin-hole's, its angles yaw,
+    pitch, roll about the camera's own axes (all zero: looking along world +y)."""
+
+    @staticmethod
+    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
+        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
+        return _egt_placement(xy, target_xy, 1.5)
+
+    def _pose_from_fields(self) -> Pose:
+        """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
+        return _egt_pose(self.ypr_deg, self.position)
+
+    @staticmethod
+    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
+        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
+        return _egt_ypr_from_world_rotation(R_world)
+
+    def _check_image_fields(self, name: str, fields: tuple[str, ...]) -> None:
+        """Check the model fields ``fields``, then ``principal_point``, ``width`` and ``height`` (whole pixels),
+        each against its model parameter, setting the checked values."""
+        set_ = object.__setattr__
+        k = self.model_kind
+        for field in fields:
+            set_(self, field, _parameter(getattr(self, field), k, field, field, name))
+        set_(self, "principal_point", _parameter_pair(getattr(self, "principal_point"), k, ("u0", "v0"),
+                                                      "principal_point", name))
+        for field in ("width", "height"):
+            set_(self, field, int(_parameter(getattr(self, field), k, field, field, name)))
+
+
+#: The image fields' parameters, shared by the models placed like a pin-hole (``PARAMETER_FIELDS``' tail).
+_IMAGE_PARAMETER_FIELDS: dict[str, tuple[str, int | None]] = {
+    "u0": ("principal_point", 0), "v0": ("principal_point", 1), "width": ("width", None), "height": ("height", None),
+}
+
+
 @dataclass(frozen=True)
-class PinholeSpec(_CameraSpecBase):
+class PinholeSpec(_EgtPlacedSpec):
     """A pin-hole camera placed in EGT's convention (``f_Rt2H``); the ``pinhole`` model."""
 
     name: str
@@ -331,14 +368,8 @@ class PinholeSpec(_CameraSpecBase):
     )
     PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
         "focal_length": ("focal_length", None), "ku": ("pixels_per_metre", 0), "kv": ("pixels_per_metre", 1),
-        "skew": ("skew", None), "u0": ("principal_point", 0), "v0": ("principal_point", 1),
-        "width": ("width", None), "height": ("height", None),
+        "skew": ("skew", None), **_IMAGE_PARAMETER_FIELDS,
     }
-
-    @staticmethod
-    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
-        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
-        return _egt_placement(xy, target_xy, 1.5)
 
     def __post_init__(self) -> None:
         name = self._check_place()
@@ -368,15 +399,6 @@ class PinholeSpec(_CameraSpecBase):
     @property
     def intrinsics(self) -> Intrinsics:
         return self.camera().intrinsics  # type: ignore[attr-defined]
-
-    def _pose_from_fields(self) -> Pose:
-        """``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
-        return _egt_pose(self.ypr_deg, self.position)
-
-    @staticmethod
-    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
-        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
-        return _egt_ypr_from_world_rotation(R_world)
 
 
 def panoramic_rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
@@ -517,7 +539,7 @@ _MIRROR_KINDS = {HYPERBOLIC.kind: ("a", "b"), PARABOLIC.kind: ("h",)}
 
 
 @dataclass(frozen=True)
-class UnifiedSpec(_CameraSpecBase):
+class UnifiedSpec(_EgtPlacedSpec):
     """A unified sphere camera, placed like a pin-hole (its frame is a pin-hole's); the ``unified`` model."""
 
     name: str
@@ -544,24 +566,11 @@ class UnifiedSpec(_CameraSpecBase):
         "axis); all zero: looking along world +y. The projection centre is xi behind the sphere's centre."
     )
     PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
-        "xi": ("xi", None), "focal_pixels": ("focal_pixels", None), "u0": ("principal_point", 0), "v0": ("principal_point", 1),
-        "width": ("width", None), "height": ("height", None),
+        "xi": ("xi", None), "focal_pixels": ("focal_pixels", None), **_IMAGE_PARAMETER_FIELDS,
     }
 
-    @staticmethod
-    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
-        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
-        return _egt_placement(xy, target_xy, 1.5)
-
     def __post_init__(self) -> None:
-        name = self._check_place()
-        set_ = object.__setattr__
-        k = self.model_kind
-        set_(self, "xi", _parameter(self.xi, k, "xi", "xi", name))
-        set_(self, "focal_pixels", _parameter(self.focal_pixels, k, "focal_pixels", "focal_pixels", name))
-        set_(self, "principal_point", _parameter_pair(self.principal_point, k, ("u0", "v0"), "principal_point", name))
-        set_(self, "width", int(_parameter(self.width, k, "width", "width", name)))
-        set_(self, "height", int(_parameter(self.height, k, "height", "height", name)))
+        self._check_image_fields(self._check_place(), ("xi", "focal_pixels"))
         self._check_model()
 
     @property
@@ -569,18 +578,8 @@ class UnifiedSpec(_CameraSpecBase):
         return UnifiedCamera.kind
 
 
-    def _pose_from_fields(self) -> Pose:
-        """As a pin-hole's: ``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
-        return _egt_pose(self.ypr_deg, self.position)
-
-    @staticmethod
-    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
-        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
-        return _egt_ypr_from_world_rotation(R_world)
-
-
 @dataclass(frozen=True)
-class FisheyeSpec(_CameraSpecBase):
+class FisheyeSpec(_EgtPlacedSpec):
     """An equidistant fisheye camera (``r = f theta``), placed like a pin-hole (its frame is a pin-hole's); the
     ``fisheye`` model."""
 
@@ -609,38 +608,16 @@ class FisheyeSpec(_CameraSpecBase):
         "looking along world +y."
     )
     PARAMETER_FIELDS: ClassVar[dict[str, tuple[str, int | None]]] = {
-        "field_of_view": ("field_of_view", None), "focal_pixels": ("focal_pixels", None),
-        "u0": ("principal_point", 0), "v0": ("principal_point", 1), "width": ("width", None), "height": ("height", None),
+        "field_of_view": ("field_of_view", None), "focal_pixels": ("focal_pixels", None), **_IMAGE_PARAMETER_FIELDS,
     }
 
-    @staticmethod
-    def placement(xy: tuple[float, float], target_xy: tuple[float, float]) -> dict[str, Any]:
-        """Fields of a camera at ``xy`` (1.5 m up) looking at ``target_xy``, slightly down."""
-        return _egt_placement(xy, target_xy, 1.5)
-
     def __post_init__(self) -> None:
-        name = self._check_place()
-        set_ = object.__setattr__
-        k = self.model_kind
-        for field in ("field_of_view", "focal_pixels"):
-            set_(self, field, _parameter(getattr(self, field), k, field, field, name))
-        set_(self, "principal_point", _parameter_pair(self.principal_point, k, ("u0", "v0"), "principal_point", name))
-        set_(self, "width", int(_parameter(self.width, k, "width", "width", name)))
-        set_(self, "height", int(_parameter(self.height, k, "height", "height", name)))
+        self._check_image_fields(self._check_place(), ("field_of_view", "focal_pixels"))
         self._check_model()
 
     @property
     def model_kind(self) -> str:
         return FisheyeCamera.kind
-
-    def _pose_from_fields(self) -> Pose:
-        """As a pin-hole's: ``Pose.from_egt(egt_rotation_from_ypr(*radians(ypr_deg)), position)``."""
-        return _egt_pose(self.ypr_deg, self.position)
-
-    @staticmethod
-    def ypr_from_world_rotation(R_world: np.ndarray) -> tuple[float, float, float]:
-        """Yaw, pitch, roll (degrees) of a camera whose pose rotation is ``R_world``."""
-        return _egt_ypr_from_world_rotation(R_world)
 
 
 CameraSpec = PinholeSpec | PanoramicSpec | UnifiedSpec | FisheyeSpec
