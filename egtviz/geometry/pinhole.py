@@ -182,11 +182,11 @@ class PinholeProjection:
         """(N,) bool, in front and inside ``[0, width] x [0, height]`` (computed when first read)."""
         w, h = self.image_size
         u, v = self.pixels[:, 0], self.pixels[:, 1]
-        with np.errstate(invalid="ignore"):
-            in_image = u >= 0  # NaN compares False: points behind are never in the image
-            in_image &= u <= w
-            in_image &= v >= 0
-            in_image &= v <= h
+        # NaN compares False, without a warning (no error context needed): points behind are never in the image.
+        in_image = u >= 0
+        in_image &= u <= w
+        in_image &= v >= 0
+        in_image &= v <= h
         return in_image
 
     @property
