@@ -24,9 +24,10 @@ def _add_bench(subparsers) -> None:
         description="Time the numeric core, the viewer's update path or the servo simulations; prints medians.",
     )
     p.add_argument("suite", nargs="?", default="all",
-                   choices=["core", "viewer", "servo", "classroom", "figures", "all"],
+                   choices=["core", "viewer", "servo", "classroom", "figures", "progress", "all"],
                    help="what to measure (default all; classroom: many tabs on one server, figures: EGT's plots "
-                        "and drawing loops with tabs open, neither in all)")
+                        "and drawing loops with tabs open, progress: the start page's read of a large progress "
+                        "database; none of these three in all)")
     p.add_argument("--repeats", type=whole_number_in(1, 10_000), default=20,
                    help="timed repetitions per case, 1..10000 (median is reported; default 20)")
     p.add_argument("--json", metavar="FILE", default=None,

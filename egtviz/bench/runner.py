@@ -21,6 +21,10 @@ def _suites(name: str, repeats: int):
         from .servo import run_servo_bench
 
         yield "servo", run_servo_bench
+    if name == "progress":  # the start page's read of a large progress database (builds it first: about a minute)
+        from .progress import progress_rows
+
+        yield "progress", lambda: progress_rows(repeats=repeats)
     if name == "figures":  # EGT's figures: plots at up to a million points, drawing loops with tabs open
         from .figures import run_figures_bench
 
