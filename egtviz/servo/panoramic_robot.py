@@ -43,7 +43,7 @@ import math
 import time as _time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -54,6 +54,7 @@ from egtviz.geometry.panoramic_epipolar import biconic
 from egtviz.geometry.poses import Pose, rotz
 
 from .result import Recorder, ServoResult
+from .settings import NoiseDefaults, run_summary
 
 __all__ = [
     "CAMERA_HEIGHT",
@@ -329,7 +330,7 @@ def step_state(state: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
 
 # ---------------------------------------------------------------- simulation: settings, scene, image
 @dataclass(frozen=True)
-class PanoramicSettings:
+class PanoramicSettings(NoiseDefaults):
     """The checked settings of one panoramic run: :func:`simulate_panoramic`'s scalar arguments.
 
     Raises:
@@ -361,6 +362,9 @@ class PanoramicSettings:
     conic_every: int
     """Store the bi-conics every this many steps (and at the first and last)."""
 
+    STOP_PX_DEFAULT: ClassVar[float] = 5e-4
+    """The default early-stop threshold (pixels) without noise."""
+
     def __post_init__(self) -> None:
         noise_px, steps = self.noise_px, self.steps
         if not isinstance(noise_px, (int, float)) or not math.isfinite(noise_px) or noise_px < 0:
@@ -374,26 +378,6 @@ class PanoramicSettings:
         every = self.conic_every
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise ValueError(f"conic_every: expected a positive integer, got {every!r}")
-
-    @property
-    def noisy(self) -> bool:
-        """Whether the features carry noise."""
-        return self.noise_px > 0
-
-    @property
-    def stop_threshold_px(self) -> float:
-        """``stop_px``; by default 5e-4 px without noise, 0 (no early stop) with noise."""
-        return (0.0 if self.noisy else 5e-4) if self.stop_px is None else float(self.stop_px)
-
-    @property
-    def rotation_tolerance(self) -> float:
-        """``rotation_tol``; by default 1e-3 rad, or 1e-2 with noise."""
-        return (1e-2 if self.noisy else 1e-3) if self.rotation_tol is None else float(self.rotation_tol)
-
-    @property
-    def translation_tolerance(self) -> float:
-        """``translation_tol``; by default 1e-3 m, or 1e-2 with noise."""
-        return (1e-2 if self.noisy else 1e-3) if self.translation_tol is None else float(self.translation_tol)
 
 
 @dataclass(frozen=True)
@@ -583,7 +567,6 @@ def _panoramic_result(
         )
     return ServoResult(
         demo="panoramic",
-        time=np.arange(len(rot)) * s.dt,
         camera_poses=np.stack([mirror_pose(st).matrix for st in data["state"]]),
         features=data["features"],
         desired_features=scene.desired,
@@ -596,13 +579,7 @@ def _panoramic_result(
         },
         converged=not reason,
         reason=reason,
-        initial_rotation_error_rad=float(rot[0]),
-        initial_translation_error=float(trans[0]),
-        final_rotation_error_rad=final_rot,
-        final_translation_error=final_trans,
-        steps=k,
-        sim_time_s=k * s.dt,
-        wall_time_s=_time.perf_counter() - wall0,
+        **run_summary(rot, trans, s.dt, k, wall0),
         states=data["state"],
         extras={
             "s_px": data["s_px"],

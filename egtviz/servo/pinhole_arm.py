@@ -55,7 +55,7 @@ import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -65,6 +65,7 @@ from egtviz.geometry.pinhole import Intrinsics
 from egtviz.geometry.poses import Pose
 
 from .result import Recorder, ServoResult
+from .settings import NoiseDefaults, run_summary
 
 __all__ = [
     "CAMERA_TOOL",
@@ -417,7 +418,7 @@ def _draw_start_q(
 
 # ---------------------------------------------------------------- simulation: settings, scene, control law
 @dataclass(frozen=True)
-class PinholeSettings:
+class PinholeSettings(NoiseDefaults):
     """The checked settings of one pin-hole run: :func:`simulate_pinhole`'s scalar arguments.
 
     Raises:
@@ -457,6 +458,9 @@ class PinholeSettings:
     translation_tol: float | None
     """Convergence tolerance on the translation error (m), or ``None`` for the default."""
 
+    STOP_PX_DEFAULT: ClassVar[float] = 0.005
+    """The default early-stop threshold (pixels) without noise."""
+
     def __post_init__(self) -> None:
         _check_params(self.beta, self.noise_px, self.f_algorithm, self.steps, self.dt)
         if self.priority not in ("exact", "linearized"):
@@ -465,26 +469,6 @@ class PinholeSettings:
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0:
                 raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
-
-    @property
-    def noisy(self) -> bool:
-        """Whether the features carry noise."""
-        return self.noise_px > 0
-
-    @property
-    def stop_threshold_px(self) -> float:
-        """``stop_px``; by default 0.005 px without noise, 0 (no early stop) with noise."""
-        return (0.0 if self.noisy else 0.005) if self.stop_px is None else float(self.stop_px)
-
-    @property
-    def rotation_tolerance(self) -> float:
-        """``rotation_tol``; by default 1e-3 rad, or 1e-2 with noise."""
-        return (1e-2 if self.noisy else 1e-3) if self.rotation_tol is None else float(self.rotation_tol)
-
-    @property
-    def translation_tolerance(self) -> float:
-        """``translation_tol``; by default 1e-3 m, or 1e-2 with noise."""
-        return (1e-2 if self.noisy else 1e-3) if self.translation_tol is None else float(self.translation_tol)
 
 
 @dataclass(frozen=True)
@@ -921,7 +905,6 @@ def _pinhole_result(
     epi = data["epi_px"]
     return ServoResult(
         demo="pinhole",
-        time=np.arange(len(rot)) * s.dt,
         camera_poses=data["poses"],
         features=data["features"],
         desired_features=scene.desired,
@@ -937,13 +920,7 @@ def _pinhole_result(
         },
         converged=not reason,
         reason=reason,
-        initial_rotation_error_rad=float(rot[0]),
-        initial_translation_error=float(trans[0]),
-        final_rotation_error_rad=float(rot[-1]),
-        final_translation_error=float(trans[-1]),
-        steps=k,
-        sim_time_s=k * s.dt,
-        wall_time_s=_time.perf_counter() - wall0,
+        **run_summary(rot, trans, s.dt, k, wall0),
         translation_servoed=s.beta > 0,
         joint_angles=data["q"],
         extras={
