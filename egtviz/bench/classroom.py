@@ -48,6 +48,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
 
@@ -386,7 +387,11 @@ class _PoolProfiler:
 
             return run
 
-        self._pool.submit = lambda fn, *a, **k: self._submit(profiled(fn), *a, **k)
+        def submit(fn: Callable[..., Any], /, *a: Any, **k: Any) -> Future[Any]:
+            return self._submit(profiled(fn), *a, **k)
+
+        # On the pool object itself: viser submits every callback through this pool's submit.
+        self._pool.submit = submit  # type: ignore[method-assign]
         ready = threading.Event()
 
         def start() -> None:
@@ -405,7 +410,7 @@ class _PoolProfiler:
 
         self._loop.call_soon_threadsafe(finish)
         done.wait(5)
-        self._pool.submit = self._submit
+        self._pool.submit = self._submit  # type: ignore[method-assign]  # the pool's own method back
         stats = pstats.Stats(self.profiles[0])
         for prof in self.profiles[1:]:
             stats.add(prof)

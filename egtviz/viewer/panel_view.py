@@ -280,7 +280,10 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
         lo_x, hi_x, lo_y, hi_y = ax - rx, ax + rx, ay - ry, ay + ry
         # The obstacles, then the earlier labels, in the order given: the same sums as over all of them.
         boxes = others + [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
-        placed.append(_best_box(ax, ay, r + gap, w, h, boxes, box_bounds))
+        box = _best_box(ax, ay, r + gap, w, h, boxes, box_bounds)
+        if box is None:  # every cost compared false: a NaN anchor, radius or size
+            raise ValueError(f"place_labels: label {len(placed)} has no finite box")
+        placed.append(box)
     return np.array(placed)
 
 

@@ -50,6 +50,8 @@ def pair_html(derived: Derived) -> str:
             f"{escape(p.names[1])}</b>&nbsp; {law}<br>")
     if p.message:
         return f'{head}<b style="color:#a00">{escape(p.message)}</b></div>'
+    if p.E is None:  # set for every pair without a message
+        raise ValueError("the drawn pair's read-out has neither E nor a message")
     pre = 'style="margin:2px 0;font-size:0.95em;background:#f3f3f3;padding:2px 4px"'
     if p.F is None:
         cams = derived.cameras

@@ -100,7 +100,7 @@ class ServoPanel:
         for label, colour, scale in series:
             s = uplot.Series(label=label, stroke=colour, width=1.6, scale=scale)
             if scale == "w" and self.dashed_rates:
-                s["dash"] = [6, 4]
+                s["dash"] = (6, 4)
             ser.append(s)
         axes: tuple[uplot.Axis, ...]
         if dual:

@@ -212,7 +212,8 @@ class ServoRunForm:
             gen = self._gen
             kw = self.params()
             self.btn_run.disabled = True
-            self.progress.value = 0.0
+            # viser's _GuiInputHandle.value has a setter (it syncs the bar); mypy sees the props class's read-only one.
+            self.progress.value = 0.0  # type: ignore[misc]
             self.progress.visible = True
             self.say("running", "Simulating ...")
         self._thread = threading.Thread(target=self._simulate, args=(gen, kw), daemon=True,
@@ -241,7 +242,8 @@ class ServoRunForm:
 
         def progress(step: int, steps: int) -> None:
             if not stale():
-                self.progress.value = float(min(100.0, 100.0 * step / max(steps, 1)))
+                percent = float(min(100.0, 100.0 * step / max(steps, 1)))
+                self.progress.value = percent  # type: ignore[misc]  # settable, as above
 
         try:
             self.budget.reserve(self._owner, kw["steps"] + 1, cancelled=stale,

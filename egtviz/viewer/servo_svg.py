@@ -24,7 +24,7 @@ presentation mode.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from html import escape
 
@@ -59,7 +59,8 @@ class ServoImage:
     """(k, N, 2) feature pixels from the start up to this frame (already thinned)."""
     lines: np.ndarray | None = None
     """(N, 2, 2) clipped epipolar-line segments (NaN rows: off the image)."""
-    conics: list[list[np.ndarray]] = field(default_factory=list)
+    conics: list[Sequence[np.ndarray]] = field(default_factory=list)
+    """Per feature, the (k, 2) polylines of its bi-conic."""
     epipoles: list[tuple[str, np.ndarray]] = field(default_factory=list)
     rim: np.ndarray | None = None
     caption: str = ""

@@ -477,7 +477,7 @@ def _line_tags(idx_bytes: bytes, selected_point: int | None, thick: str, colours
     return tags
 
 
-def numbered_points(n_in_image: int, show_labels: bool) -> bool:
+def numbered_points(n_in_image: int, show_labels: bool | str) -> bool:
     """Whether every point in the image gets its number (else only the selected and highlighted ones, as always
     when ``show_labels`` is ``"marked"``: a lesson step's ``labels = "selected"``)."""
     return bool(show_labels) and show_labels != "marked" and n_in_image <= MAX_NUMBERED_POINTS
@@ -566,11 +566,11 @@ class _EpipoleLabel:
 def _marked_points(P: np.ndarray, drawn: np.ndarray, selected_point: int | None, highlighted: frozenset) -> set[int]:
     """The selected and highlighted points that are drawn (each gets a ring)."""
     candidates = set(highlighted) | ({selected_point} if selected_point is not None else set())
-    return {i for i in candidates if isinstance(i, (int, np.integer)) and 0 <= i < len(P) and drawn[i]}
+    return {int(i) for i in candidates if isinstance(i, (int, np.integer)) and 0 <= i < len(P) and drawn[i]}
 
 
 def _place_numbers(P: np.ndarray, in_image: np.ndarray, in_view: np.ndarray, marked: set[int],
-                   selected_point: int | None, show_labels: bool, style: PanelStyle, k: float,
+                   selected_point: int | None, show_labels: bool | str, style: PanelStyle, k: float,
                    bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]
                    ) -> tuple[dict[int, Any], dict[int, Any], tuple, int]:
     """Where the epipole labels and the point numbers go, clear of the marks and of each other.
@@ -644,7 +644,7 @@ def _point_group(i: int, kind: str, xy: np.ndarray, *, ring: bool, selected: boo
 
 @lru_cache(maxsize=16)
 def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
-           highlighted: frozenset, show_labels: bool, style: PanelStyle, k: float, dp: int,
+           highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float, dp: int,
            bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple, int]:
     """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
 
@@ -791,7 +791,7 @@ def image_plane_svg(
     *,
     selected_point: int | None = None,
     highlighted: frozenset[int] | set[int] = frozenset(),
-    show_labels: bool = True,
+    show_labels: bool | str = True,
     revision: int | None = None,
     max_height: str | None = None,
     view: ViewBox | None = None,
@@ -809,7 +809,7 @@ def image_plane_svg(
         selected_point: 0-based index of the selected scene point: drawn with a
             ring, its epipolar line/conic thicker.
         highlighted: 0-based indices of highlighted points (a ring too).
-        show_labels: write the point numbers (1-based) next to the points.
+        show_labels: write the point numbers (1-based) next to the points (``"marked"``: the marked ones).
         revision: written as ``data-rev`` on the root (lets a browser test or
             the benchmark recognise a given update).
         max_height: a CSS ``max-height`` for the SVG (it keeps its aspect ratio).
@@ -867,8 +867,8 @@ def image_plane_svg(
     return "".join(out)
 
 
-def _status_lines(plane: ImagePlane, n_points: int, n_in: int, show_labels: bool, style: PanelStyle, panel_px: float
-                  ) -> tuple[list[str], bool]:
+def _status_lines(plane: ImagePlane, n_points: int, n_in: int, show_labels: bool | str, style: PanelStyle,
+                  panel_px: float) -> tuple[list[str], bool]:
     """The status rows under the frame (the point counts, wrapped to the panel's width) and whether the numbering
     note takes one more."""
     n_hidden = int(plane.n_hidden)
@@ -878,7 +878,7 @@ def _status_lines(plane: ImagePlane, n_points: int, n_in: int, show_labels: bool
         clauses.append(f"{n_hidden} hidden ({plane.no_image})")
     if n_outside > 0:
         clauses.append(f"{n_outside} outside the image")
-    return _wrap(clauses, 0.8 * panel_px, style.status_px), show_labels and not numbered_points(n_in, True)
+    return _wrap(clauses, 0.8 * panel_px, style.status_px), bool(show_labels) and not numbered_points(n_in, True)
 
 
 def _frame_svg(plane: ImagePlane, view: ViewBox, lay: PanelLayout, style: PanelStyle) -> list[str]:

@@ -16,6 +16,7 @@ assignment sends, so an upgrade of viser is noticed at once (then fall back to t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import time
@@ -23,6 +24,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
+_props_setattr: Callable[[Any, str, Any], None] | None
 try:  # what a handle's public assignment runs
     from viser._assignable_props_api import props_setattr as _props_setattr
 except ImportError:  # pragma: no cover - another viser: the public path only
