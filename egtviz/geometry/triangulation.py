@@ -1,7 +1,8 @@
 r"""Triangulation of corresponding points in two views (Hartley & Zisserman 2nd ed., chapter 12).
 
 * :func:`triangulate_linear`: the homogeneous linear (DLT) method, H&Z 12.2,
-  exact (one batched SVD) at any parallax; NaN on the baseline.
+  the SVD's solution at any parallax (closed form where it is provably as
+  accurate, a batched SVD elsewhere); NaN on the baseline.
 * :func:`correct_correspondences`: the optimal correction of H&Z Algorithm 12.1,
   the pair of points nearest to the measurements that satisfies the epipolar
   constraint exactly.
@@ -221,7 +222,8 @@ def triangulate_linear(
               \hat X = \arg\min_{\|X\| = 1} \|A X\| ,
 
     :math:`\hat X` is the right singular vector of the smallest singular
-    value, computed for all points at once by one batched SVD, exact for
+    value, computed for all points at once (closed form for well-conditioned
+    points, a batched SVD for the others), the SVD's answer for
     every conditioning (low parallax included). ``P1`` and ``P2`` are divided
     by one common factor (the largest absolute entry of the two), so the
     answer for ``(c P1, c P2)`` is the answer for ``(P1, P2)``, and it is the
