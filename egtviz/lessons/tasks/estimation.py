@@ -13,7 +13,7 @@ from ...geometry import PinholeCamera
 from ...geometry.error_metrics import sampson_distance
 from ...geometry.triangulation import triangulate_linear, triangulate_optimal
 from ...scene import Scene
-from ...scene.lab import METHODS, LabResult
+from ...scene.lab import METHODS, FitResult, LabResult
 from ...scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT
 from .. import fields
 from ..errors import EntryError
@@ -81,8 +81,35 @@ def _lab_constraints(ctx: TaskContext, min_noise: float, min_outliers: float) ->
     return None
 
 
+class _LabFitJudged:
+    """What a task judged on the lab's fit by ``method`` shares, once the lab has the noise and outliers it asks for
+    (a mixin before :class:`Task`: the fields are the task's)."""
+
+    method: str
+    min_noise_px: float
+    min_outlier_percent: float
+
+    def validate(self, scene: Scene) -> None:
+        _lab_scene(scene)
+
+    def missing(self, scene: Scene) -> str | None:
+        return pair_gone(scene, pinhole=True)
+
+    def _fit(self, ctx: TaskContext) -> tuple[LabResult, FitResult] | TaskResult:
+        """The lab's result and its fit by ``method``, or the result that refuses the check (the lab lacks noise or
+        outliers, or the fit failed)."""
+        refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
+        if refused is not None:
+            return refused
+        lab = ctx.lab_result()
+        fit = lab.fit(self.method)
+        if fit.F is None:
+            return TaskResult(False, f"{fit.title} failed: {fit.message}")
+        return lab, fit
+
+
 @dataclass(frozen=True, kw_only=True)
-class SampsonBelowTask(Task):
+class SampsonBelowTask(_LabFitJudged, Task):
     """The lab's ``method`` has a mean Sampson error below ``below_px2`` (``against`` the true or the measured
     pixels of the true inliers), with the lab's noise and outliers at least the given minimum."""
 
@@ -112,19 +139,11 @@ class SampsonBelowTask(Task):
             return {"below_px2": self.below_px2}
         return {"below_px2": self.below_px2, "held_out_below_px2": self.held_out_below_px2}
 
-    def validate(self, scene: Scene) -> None:
-        _lab_scene(scene)
-
-    def missing(self, scene: Scene) -> str | None:
-        return pair_gone(scene, pinhole=True)
-
     def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
-        refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
-        if refused is not None:
-            return refused
-        fit = ctx.lab_result().fit(self.method)
-        if fit.F is None:
-            return TaskResult(False, f"{fit.title} failed: {fit.message}")
+        got = self._fit(ctx)
+        if isinstance(got, TaskResult):
+            return got
+        _, fit = got
         err = fit.sampson_true if self.against == "true" else fit.sampson_noisy
         msg = f"{fit.title}'s mean Sampson error is {err:.3g} px^2"
         if not err < params["below_px2"]:
@@ -143,7 +162,7 @@ class SampsonBelowTask(Task):
 
 
 @dataclass(frozen=True, kw_only=True)
-class InliersRecallTask(Task):
+class InliersRecallTask(_LabFitJudged, Task):
     """The lab's robust ``method`` marks at least ``at_least`` of the true inliers as inliers, and its fit is not
     ruined: at most ``1 - min_precision`` of what it marks are outliers, and the mean Sampson error of its ``F``
     against the true pixels is at most ``max_sampson_px2`` (default :func:`default_max_sampson_px2` of the
@@ -172,20 +191,11 @@ class InliersRecallTask(Task):
     def params(self) -> dict[str, Param]:
         return {"at_least": self.at_least, "at_least_percent": 100.0 * self.at_least}
 
-    def validate(self, scene: Scene) -> None:
-        _lab_scene(scene)
-
-    def missing(self, scene: Scene) -> str | None:
-        return pair_gone(scene, pinhole=True)
-
     def judge(self, ctx: TaskContext, params: dict[str, float]) -> TaskResult:
-        refused = _lab_constraints(ctx, self.min_noise_px, self.min_outlier_percent)
-        if refused is not None:
-            return refused
-        lab = ctx.lab_result()
-        fit = lab.fit(self.method)
-        if fit.F is None:
-            return TaskResult(False, f"{fit.title} failed: {fit.message}")
+        got = self._fit(ctx)
+        if isinstance(got, TaskResult):
+            return got
+        lab, fit = got
         msg = f"{fit.title} marks {100 * fit.inlier_recall:.0f} % of the true inliers as inliers"
         if fit.inlier_recall < params["at_least"]:
             return TaskResult(False, f"Not yet: {msg}; at least {100 * params['at_least']:g} % needed.")
