@@ -131,8 +131,7 @@ class CatadioptricCamera:
     """Where points without an image lie (the camera-model interface)."""
 
     def __post_init__(self, check: bool) -> None:
-        if not isinstance(self.pose, Pose):
-            raise GeometryError(f"pose: expected a Pose, got {type(self.pose).__name__}")
+        check_pose(self.pose)
         if check is not False:
             self._check_fields()
 

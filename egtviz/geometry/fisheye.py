@@ -34,7 +34,7 @@ from typing import ClassVar, cast
 import numpy as np
 import numpy.typing as npt
 
-from ._validate import GeometryError, as_points
+from ._validate import as_points
 from .camera_model import (
     IMAGE_SIZE_PARAMETERS,
     PRINCIPAL_POINT_PARAMETERS,
@@ -106,8 +106,7 @@ class FisheyeCamera:
 
     def moved(self, pose: Pose) -> FisheyeCamera:
         """The same camera at another pose (the parameters, checked once, are not checked again)."""
-        if not isinstance(pose, Pose):
-            raise GeometryError(f"pose: expected a Pose, got {type(pose).__name__}")
+        check_pose(pose)
         return FisheyeCamera(pose, self.field_of_view, self.focal_pixels, self.principal_point, self.width,
                              self.height, check=False)
 

@@ -144,8 +144,7 @@ class UnifiedCamera:
 
     def moved(self, pose: Pose) -> UnifiedCamera:
         """The same camera at another pose (the fast path of a drag: the parameters, checked once, are not checked again)."""
-        if not isinstance(pose, Pose):
-            raise GeometryError(f"pose: expected a Pose, got {type(pose).__name__}")
+        check_pose(pose)
         return UnifiedCamera(pose, self.xi, self.focal_pixels, self.principal_point, self.width, self.height,
                              check=False)
 
