@@ -279,3 +279,15 @@ def test_lesson_7s_diagnosis_steps_show_the_mistakes_effect_not_its_setting():
     run.go_to(2)  # a repair step without a diagnosis shows its settings
     panel = LensPanel(_Gui(), run, redraw=lambda: None, report=lambda exc: None, order=1.0)
     assert panel.toggles["f_transposed"].value and panel.note.content == ""
+
+
+def test_every_task_of_the_course_has_a_counter_example_questions_too():
+    """Issue 18 is done when every task, choice, number and servo read-off included, names a wrong answer."""
+    counted, missing = 0, []
+    for info in list_lessons():
+        for i, step in enumerate(load(info.name).steps):
+            for task in step.tasks:
+                counted += 1
+                if not step.counter_examples_of(task.id):
+                    missing.append((info.name, i, task.id, task.kind))
+    assert counted > 50 and missing == []
