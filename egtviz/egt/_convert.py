@@ -8,7 +8,15 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ..geometry._validate import GeometryError, as_array, as_calibration, as_count, as_matrix, as_positive
+from ..geometry._validate import (
+    MAX_MAGNITUDE,
+    GeometryError,
+    as_array,
+    as_calibration,
+    as_count,
+    as_matrix,
+    as_positive,
+)
 from ..geometry.catadioptric import CatadioptricCamera
 from ..geometry.mirrors import HyperbolicMirror, ParabolicMirror
 from ..geometry.pinhole import Intrinsics, PinholeCamera
@@ -38,7 +46,7 @@ def _column_rows(arr: np.ndarray, name: str, rows: int) -> np.ndarray:
 
 def world_columns(X: npt.ArrayLike, name: str) -> np.ndarray:
     """World points as ``(3, N)`` or homogeneous ``(4, N)`` columns -> ``(N, 3)`` rows (EGT passes both)."""
-    arr = as_array(X, name, allow_empty=False)
+    arr = X if _plainly_in_range(X) else as_array(X, name, allow_empty=False)
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim == 2 and arr.shape[0] == 4 and arr.shape[1] > 0:
@@ -47,6 +55,24 @@ def world_columns(X: npt.ArrayLike, name: str) -> np.ndarray:
             raise GeometryError(f"{name}: a homogeneous point has last coordinate 0 (a point at infinity)")
         arr = as_array(arr[:3] / w, name)  # the division can leave the accepted range
     return _column_rows(arr, name, 3)
+
+
+#: Sum of squares below which every entry is within ``MAX_MAGNITUDE``: half of ``MAX_MAGNITUDE**2`` leaves room for
+#: the sum's rounding (relative error at most n eps, far below 1/2 for any array that fits in memory).
+_SQUARES_LIMIT = 0.5 * MAX_MAGNITUDE**2
+
+
+def _plainly_in_range(X: object) -> bool:
+    """Whether ``X`` is a large contiguous float64 array whose entries are all finite and within ``MAX_MAGNITUDE``,
+    by one BLAS pass (the sum of squares: NaN and inf make it NaN or inf, a huge entry makes it large) instead of
+    the check's two reductions, min and max. False is no verdict: the caller runs the full check, which names
+    what is wrong, or accepts an array of many large but acceptable entries."""
+    if type(X) is not np.ndarray or X.dtype != np.float64 or X.size <= 64 or X.ndim > 2:
+        return False
+    if not (X.flags.c_contiguous or X.flags.f_contiguous):
+        return False
+    flat = X.ravel(order="K")  # a view of a contiguous array
+    return bool(flat @ flat <= _SQUARES_LIMIT)
 
 
 def pixels(m: npt.ArrayLike, name: str) -> np.ndarray:
