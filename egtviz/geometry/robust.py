@@ -45,8 +45,11 @@ __all__ = [
 _MIN_REFIT = 8
 # Samples per batch of the robust estimators: the first batch, then what the
 # adaptive bound still asks for, within [_BATCH_MIN, _BATCH_MAX]. Batches
-# amortise numpy's per-call overhead.
-_BATCH_FIRST = 100
+# amortise numpy's per-call overhead; the first is large enough for the bound
+# at 0.999 and an inlier ratio of 0.66 (124 samples), so that a typical search
+# is one batch rather than a full one and a second of 16 (the fixed cost of a
+# batch is about that of 100 samples).
+_BATCH_FIRST = 128
 _BATCH_MIN = 16
 _BATCH_MAX = 256
 # Relative tolerance (cost and step) of the final Sampson refinement of the robust estimators.
@@ -55,7 +58,10 @@ _REFINE_TOL = 1e-3
 _SIGMA_FLOOR = 1e-9
 # Pre-emptive scoring: subset size, and hypotheses per batch scored on all points.
 _SUBSET = 100
-_KEEP = 4
+_KEEP = 2
+# ... in two stages: all hypotheses on the subset's first points, the best of them on the whole subset.
+_SUBSET_FIRST = 25
+_PREEMPT_KEEP = 64
 # 8-ray samples per batch of the robust essential estimator.
 _RAYS_BATCH = 128
 # chi-square 95% quantile with one degree of freedom: F is a manifold of codimension 1 in the
@@ -177,16 +183,31 @@ def _local_refits(
     return best_cost, best_F, best_d
 
 
+def _preempt(cand: np.ndarray, At_sub: np.ndarray, s1: float, s2: float, scorer: _Scorer) -> np.ndarray:
+    """The ``_KEEP`` best hypotheses of a batch on the subset ``At_sub``, scored in two stages.
+
+    Every hypothesis is scored on the first ``_SUBSET_FIRST`` points of the subset (a random draw, as the
+    subset's points are in random order); only the best ``_PREEMPT_KEEP`` of them on the whole subset.
+    """
+    if cand.shape[0] > _PREEMPT_KEEP:
+        c_first = scorer.cost(sampson_distances_normalized(cand, At_sub[:, :_SUBSET_FIRST], s1, s2))
+        cand = cand[np.sort(np.argsort(c_first, kind="stable")[:_PREEMPT_KEEP])]
+    c_sub = scorer.cost(sampson_distances_normalized(cand, At_sub, s1, s2))
+    return cand[np.argsort(c_sub, kind="stable")[:_KEEP]]
+
+
 def _search(
     At: np.ndarray, s1: float, s2: float, scorer: _Scorer, widen: float, confidence: float, max_iterations: int,
     rng: np.random.Generator,
-) -> tuple[np.ndarray, int]:
-    """The sampling loop: the best hypothesis in normalised coordinates and the number of samples drawn."""
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """The sampling loop: the best hypothesis in normalised coordinates, its squared Sampson distances and
+    the number of samples drawn."""
     N = At.shape[1]
     A = At.T  # rows of the design matrix, for gathering samples
     # Pre-emptive scoring: every hypothesis is scored on a fixed random subset,
     # only the best few of each batch on all the points.
-    sub = np.sort(rng.choice(N, _SUBSET, replace=False)) if N > 2 * _SUBSET else None
+    # In the order drawn (not sorted): its first _SUBSET_FIRST points are a random subset too.
+    sub = rng.choice(N, _SUBSET, replace=False) if N > 2 * _SUBSET else None
     At_sub = At[:, sub] if sub is not None else At
     best: tuple[float, np.ndarray, np.ndarray] | None = None
     bound = math.inf
@@ -199,8 +220,7 @@ def _search(
         if cand.shape[0] == 0:
             continue
         if sub is not None:
-            c_sub = scorer.cost(sampson_distances_normalized(cand, At_sub, s1, s2))
-            cand = cand[np.argsort(c_sub, kind="stable")[:_KEEP]]
+            cand = _preempt(cand, At_sub, s1, s2, scorer)
         d = sampson_distances_normalized(cand, At, s1, s2)
         cost = scorer.cost(d)
         j = int(np.argmin(cost))
@@ -210,19 +230,24 @@ def _search(
         bound = _iteration_bound(float(scorer.inliers(best[2], best[0]).mean()), confidence)
     if best is None:
         raise DegenerateConfigurationError("U1, U2: no 7-point sample gave a fundamental matrix")
-    return best[1], done
+    return best[1], best[2], done
 
 
 def _final_fit(
-    Fn: np.ndarray, At: np.ndarray, s1: float, s2: float, scorer: _Scorer, mode: str, threshold: float, widen: float
+    Fn: np.ndarray, d: np.ndarray, At: np.ndarray, s1: float, s2: float, scorer: _Scorer, mode: str,
+    threshold: float, widen: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Linear refits on the support, then the Sampson refinement: ``(Fn, inliers)``."""
+    """Linear refits on the support, then the Sampson refinement: ``(Fn, inliers)``; ``d`` are ``Fn``'s
+    squared Sampson distances."""
 
     def support(Fn: np.ndarray, widen: float) -> tuple[np.ndarray, np.ndarray]:
         d = sampson_distances_normalized(Fn[None], At, s1, s2)[0]
         return scorer.inliers(d / widen**2, float(scorer.cost(d))), d
 
-    sel, d = support(Fn, widen)
+    if mode == "ransac":
+        Fn, d = _sampson_reweighted(Fn, d, At, s1, s2, widen**2 * scorer.th2)
+        return Fn, scorer.inliers(d, float(scorer.cost(d)))
+    sel = scorer.inliers(d / widen**2, float(scorer.cost(d)))
     for _ in range(3):  # linear refits until the support is stable
         if sel.sum() < _MIN_REFIT:
             break
@@ -239,17 +264,16 @@ def _final_fit(
         raise DegenerateConfigurationError(
             f"U1, U2: the best model has only {int(sel.sum())} inliers, at least {_MIN_REFIT} are needed"
         )
-    # Sampson refinement. RANSAC and LMedS make it robust by reweighting passes
-    # (one for RANSAC, two for LMedS, whose band is looser) with Cauchy weights
-    # 1 / (1 + d / c^2), c = 2 threshold (RANSAC) or 2 sigma (LMedS); tighter
-    # weights tie the fit to the starting F (the same bias as truncation).
+    # Sampson refinement. LMedS makes it robust by two reweighting passes with
+    # Cauchy weights 1 / (1 + d / c^2), c = 2 sigma; tighter weights tie the fit
+    # to the starting F (the same bias as truncation).
     # MAPSAC refines the plain Sampson cost of its inliers (Torr's maximum
     # likelihood step), twice, the inliers recomputed in between.
     if mode == "lmeds":
         c2 = 4.0 * scorer.lmeds_scale / 2.5**2 * max(float(scorer.cost(d)), scorer.floor2)
     else:
         c2 = 4.0 * threshold**2
-    for _ in range(1 if mode == "ransac" else 2):
+    for _ in range(2):
         weights = None if mode == "mapsac" else 1.0 / (1.0 + d[sel] / max(c2, 1e-300))
         # The Sampson cost of n inliers is a sum of n noisy squares whose own spread is about sqrt(2 / n) of
         # it (5 % at n = 700): a relative change of _REFINE_TOL is far below that noise. Tighter (1e-6) moved F
@@ -259,7 +283,36 @@ def _final_fit(
         if new.sum() < _MIN_REFIT:
             break
         sel = new
-    return Fn, support(Fn, 1.0)[0]
+    return Fn, scorer.inliers(d, float(scorer.cost(d)))  # d is the last Fn's
+
+
+def _sampson_reweighted(
+    Fn: np.ndarray, d: np.ndarray, At: np.ndarray, s1: float, s2: float, band2: float
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""RANSAC's final fit: two 8-point refits on :math:`d_i < \text{band2}`, each row weighted by the inverse
+    Sampson denominator of the previous ``F`` (iteratively reweighted least squares of the Sampson
+    distance), rank 2 by SVD. Returns ``(Fn, d)``, ``d`` the squared Sampson distances of ``Fn``.
+
+    A second pass changes the mean error on the bench scenes by under 0.1 %; at a quarter of the time of
+    Levenberg-Marquardt on the Sampson cost, it is at least as accurate there (0.077 px against 0.078 px).
+    """
+    for _ in range(2):
+        sel = d < band2
+        if sel.sum() < _MIN_REFIT:
+            break
+        A = At[:, sel]
+        l2 = Fn[:2] @ A[6:9]  # (F m1)_{1,2}: lines in image 2
+        l1 = Fn[:, :2].T @ A[2::3]  # (F^T m2)_{1,2}: lines in image 1
+        den = s2 * s2 * np.add.reduce(l2 * l2) + s1 * s1 * np.add.reduce(l1 * l1)
+        # A point at an epipole has a vanishing denominator: bounded so that it cannot outweigh the rest.
+        den = np.maximum(den, 1e-6 * float(den.mean()) + 1e-300)
+        try:
+            F_w = nearest_rank2(null_vector(A / np.sqrt(den)).reshape(3, 3), check=False)
+        except DegenerateConfigurationError:
+            break
+        Fn = F_w / np.linalg.norm(F_w)
+        d = sampson_distances_normalized(Fn[None], At, s1, s2)[0]
+    return Fn, d
 
 
 def _robust(
@@ -280,8 +333,8 @@ def _robust(
     # would favour the hypothesis that chose them (truncation bias).
     widen = 1.5 if mode == "ransac" else 1.0
     rng = np.random.default_rng(seed)
-    Fn, done = _search(At, s1, s2, scorer, widen, confidence, max_iterations, rng)
-    Fn, inl = _final_fit(Fn, At, s1, s2, scorer, mode, threshold, widen)
+    Fn, d, done = _search(At, s1, s2, scorer, widen, confidence, max_iterations, rng)
+    Fn, inl = _final_fit(Fn, d, At, s1, s2, scorer, mode, threshold, widen)
     return RobustEstimate(F=canonical_fundamental(T2.T @ Fn @ T1), inliers=inl, iterations=int(done))
 
 
@@ -305,14 +358,18 @@ def fundamental_ransac(
 
     with the number of samples adapted to the inlier ratio :math:`w` of the
     best hypothesis so far and the confidence :math:`p`. Samples are drawn in
-    batches; each batch is scored on a fixed random subset of 100
-    correspondences and its best few hypotheses on all of them. A new best
-    hypothesis is improved at once by linear refits on its support (LO-RANSAC).
-    The final model is refitted on the correspondences with
-    :math:`d_i < (1.5\tau)^2` (a wider band than the inlier test, against the
-    truncation bias) by the normalised 8-point algorithm and a Sampson
-    refinement with Cauchy weights :math:`1 / (1 + d_i / (2\tau)^2)`. Inliers
-    are :math:`d_i < \tau^2` under the final ``F``.
+    batches, the first of 128 (so at least 128 samples unless
+    ``max_iterations`` is smaller; the search stops once the bound is met).
+    Each batch is pre-scored on a fixed random subset of 100 correspondences,
+    in two stages (every hypothesis on 25 of them, the best 64 on all 100), and
+    its best two hypotheses on all the correspondences. A new best hypothesis
+    is improved at once by linear refits on its support (LO-RANSAC). The final
+    model is refitted on the correspondences with :math:`d_i < (1.5\tau)^2` (a
+    wider band than the inlier test, against the truncation bias) by two
+    normalised 8-point fits weighted by the inverse Sampson denominators of the
+    previous ``F`` (iteratively reweighted least squares of the Sampson
+    distance), each made rank 2. Inliers are :math:`d_i < \tau^2` under the
+    final ``F``.
 
     Args:
         U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.

@@ -114,6 +114,10 @@ class _SampsonProblem:
         return r if self.sw is None else r * self.sw
 
     def jacobian(self, p: np.ndarray) -> np.ndarray:
+        # leastsq evaluates the Jacobian at the start once to check its shape, then again to iterate.
+        key = p.tobytes()
+        if key == getattr(self, "_jkey", None):
+            return self._jac
         _, l1, l2, e, den, L, Rt, J1, J2 = self._eval(p)
         dF = np.empty((7, 3, 3))
         D = np.diag([1.0, p[6], 0.0])
@@ -132,7 +136,8 @@ class _SampsonProblem:
         J = de * rs - dden * g
         if self.sw is not None:
             J *= self.sw
-        return J.T
+        self._jkey, self._jac = key, J.T
+        return self._jac
 
 
 def refine_sampson(
