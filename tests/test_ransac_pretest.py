@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 import egtviz.geometry.robust as robust
 from egtviz.bench.estimation import _scene
-from egtviz.geometry.error_metrics import sampson_distances_normalized
+from egtviz.geometry.error_metrics import sampson_distance, sampson_distances_normalized
 from egtviz.geometry.fundamental import seven_point_candidates
 
 
@@ -52,14 +52,18 @@ def test_the_first_stage_prunes_and_keeps_the_best_on_the_first_points() -> None
     assert not any(np.array_equal(k, rivals[i]) for k in kept for i in pruned)
 
 
-@settings(max_examples=10, deadline=None)
+@settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 10_000), outliers=st.sampled_from([0.0, 0.3]))
 def test_ransac_recovers_the_true_model_and_inliers_on_noise_free_data(seed: int, outliers: float) -> None:
     s = _scene(300, 0.0, outliers, seed)
     est = robust.fundamental_ransac(s["U1"], s["U2"])
     F = s["F"] / np.linalg.norm(s["F"])
     F = F * np.sign(F.flat[np.argmax(np.abs(F))])
-    np.testing.assert_allclose(est.F, F, rtol=0, atol=1e-8)
+    # The final fit uses the band d < (1.5 tau)^2: exact unless a random outlier falls in it (then it pulls
+    # F by about 1e-5 here, as the Levenberg-Marquardt refinement before did).
+    out = ~s["inl"]
+    near = sampson_distance(s["F"], s["U1"][out], s["U2"][out]) < 1.5**2 if out.any() else np.zeros(0, bool)
+    np.testing.assert_allclose(est.F, F, rtol=0, atol=1e-3 if near.any() else 1e-9)
     # Random outliers can fall on their epipolar line: every true inlier is found, and no more than a few others.
     assert np.all(est.inliers[s["inl"]])
     assert int(est.inliers[~s["inl"]].sum()) <= max(3, int(0.02 * (~s["inl"]).sum()))
