@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -46,7 +46,7 @@ def _column_rows(arr: np.ndarray, name: str, rows: int) -> np.ndarray:
 
 def world_columns(X: npt.ArrayLike, name: str) -> np.ndarray:
     """World points as ``(3, N)`` or homogeneous ``(4, N)`` columns -> ``(N, 3)`` rows (EGT passes both)."""
-    arr = X if _plainly_in_range(X) else as_array(X, name, allow_empty=False)
+    arr = cast(np.ndarray, X) if _plainly_in_range(X) else as_array(X, name, allow_empty=False)
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim == 2 and arr.shape[0] == 4 and arr.shape[1] > 0:

@@ -390,7 +390,7 @@ def _essential_and_fundamental(pose1: Pose, pose2: Pose, K1: np.ndarray | None,
     m = (A0 * ea + A3 * ed + A6 * eg, A0 * eb + A3 * ee + A6 * eh, A0 * ec + A3 * ef + A6 * ei,
          A1 * ea + A4 * ed + A7 * eg, A1 * eb + A4 * ee + A7 * eh, A1 * ec + A4 * ef + A7 * ei,
          A2 * ea + A5 * ed + A8 * eg, A2 * eb + A5 * ee + A8 * eh, A2 * ec + A5 * ef + A8 * ei)
-    F = []
+    F: list[float] = []
     for r in (0, 3, 6):
         u, v, w = m[r], m[r + 1], m[r + 2]
         F += (u * B0 + v * B3 + w * B6, u * B1 + v * B4 + w * B7, u * B2 + v * B5 + w * B8)
