@@ -105,7 +105,7 @@ def _run_scene(args) -> int:
 
 
 def _add_figure(subparsers, with_arguments: bool) -> None:
-    """``figure``: its arguments come from ``egtviz.viewer.figure_export``, imported only when it runs."""
+    """``figure``: its arguments come from ``egtviz.viewer.render.figure_export``, imported only when it runs."""
     p = subparsers.add_parser(
         "figure",
         help="export a scene's figure to a file (see `egtviz figure --help`)",
@@ -113,7 +113,7 @@ def _add_figure(subparsers, with_arguments: bool) -> None:
     )
     if with_arguments:
         try:
-            from .viewer import figure_export
+            from .viewer.render import figure_export
         except ImportError as exc:
             p.set_defaults(figure_missing=str(exc))
             return
@@ -125,7 +125,7 @@ def _run_figure(args) -> int:
     if missing is not None:
         print(f"egtviz figure: not available in this installation ({printable(missing)})", file=sys.stderr)
         return 1
-    from .viewer import figure_export
+    from .viewer.render import figure_export
 
     return figure_export.run(args)
 
@@ -148,7 +148,7 @@ _LESSON_COMMANDS = {"lessons": "run_lessons", "progress": "run_progress", "check
 
 def _serve_options_epilog() -> str:
     """The ``serve`` options as the top-level help shows them (``egtviz --port 8081`` means ``egtviz serve ...``)."""
-    from .viewer.cli import add_arguments
+    from .viewer.server.cli import add_arguments
 
     p = argparse.ArgumentParser(prog="egtviz [serve]", add_help=False)
     add_arguments(p)
@@ -172,7 +172,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"egtviz {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="{serve,lesson,lessons,progress,check,scene,servo,figure,bench,version}",
                                 help="what to do (default: serve)")
-    from .viewer.cli import add_parser as add_serve
+    from .viewer.server.cli import add_parser as add_serve
 
     add_serve(sub)
     _add_lesson(sub)
@@ -189,7 +189,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def _add_lesson(subparsers) -> None:
     """``egtviz lesson NAME [serve options]``: serve with ``--lesson NAME``."""
-    from .viewer.cli import add_arguments
+    from .viewer.server.cli import add_arguments
 
     p = subparsers.add_parser(
         "lesson", help="open one lesson in the viewer (egtviz serve --lesson NAME)",
@@ -239,7 +239,7 @@ def main(argv: list[str] | None = None) -> int:
         refused = _check_scene_argument(args)
         if refused is not None:
             return refused
-        from .viewer.cli import run as run_serve
+        from .viewer.server.cli import run as run_serve
 
         return run_serve(args)
     if args.command == "servo":

@@ -18,7 +18,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     browser_tests = [item for item in items if item.get_closest_marker("browser")]
     if not browser_tests:
         return
-    from egtviz.viewer.browser import CHROMIUM, chromium_available
+    from egtviz.viewer.server.browser import CHROMIUM, chromium_available
 
     if chromium_available():
         return

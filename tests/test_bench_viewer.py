@@ -83,8 +83,8 @@ def test_classroom_profile_splits_the_time_by_area():
     areas = dict(classroom.profile_areas(stats))
     assert run.applied > 0
     # The update path's own code shows up where it belongs (geometry, the SVG, the 3D nodes, viser).
-    for area in ("geometry (egtviz.geometry)", "SVG: the rest (egtviz.viewer.svg)",
-                 "3D nodes (egtviz.viewer.scene3d, models)", "viser messages + transport (infra)"):
+    for area in ("geometry (egtviz.geometry)", "SVG: the rest (egtviz.viewer.render.svg)",
+                 "3D nodes (egtviz.viewer.workbench.scene3d, models)", "viser messages + transport (infra)"):
         assert areas.get(area, 0.0) > 0, (area, areas)
 
 
@@ -118,7 +118,7 @@ def test_parts_split_the_process_time_without_losing_any():
 
 
 def test_profile_areas_give_c_functions_to_their_callers():
-    from egtviz.viewer.panel_view import place_labels
+    from egtviz.viewer.render.panel_view import place_labels
 
     rng = np.random.default_rng(3)
     prof = cProfile.Profile()
@@ -133,10 +133,10 @@ def test_profile_areas_give_c_functions_to_their_callers():
     areas = dict(classroom.profile_areas(stats))
     # C functions (numpy methods, list building) that only place_labels called: their time is the caller's.
     c_time = sum(v[2] for (path, _l, _name), v in stats.stats.items()
-                 if path == "~" and v[4] and all(c[0].endswith("egtviz/viewer/panel_view.py") for c in v[4]))
+                 if path == "~" and v[4] and all(c[0].endswith("egtviz/viewer/render/panel_view.py") for c in v[4]))
     assert c_time > 0
-    own = sum(v[2] for (path, _l, _name), v in stats.stats.items() if path.endswith("egtviz/viewer/panel_view.py"))
-    assert areas["SVG: label placement (egtviz.viewer.panel_view)"] > own  # its own time and its C calls' time
+    own = sum(v[2] for (path, _l, _name), v in stats.stats.items() if path.endswith("egtviz/viewer/render/panel_view.py"))
+    assert areas["SVG: label placement (egtviz.viewer.render.panel_view)"] > own  # its own time and its C calls' time
     assert sum(areas.values()) == pytest.approx(sum(v[2] for v in stats.stats.values()), rel=1e-9)
 
 

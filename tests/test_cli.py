@@ -194,22 +194,22 @@ def test_scene_argument_is_a_built_in_name_or_a_file(tmp_path):
 
 
 def test_figure_runs_the_export_module_with_its_own_arguments(monkeypatch, capsys):
-    fake = types.ModuleType("egtviz.viewer.figure_export")
+    fake = types.ModuleType("egtviz.viewer.render.figure_export")
     calls = []
     fake.add_arguments = lambda p: p.add_argument("output", help="the figure file")
     fake.run = lambda args: calls.append(args.output) or 0
-    monkeypatch.setitem(sys.modules, "egtviz.viewer.figure_export", fake)
-    import egtviz.viewer
+    monkeypatch.setitem(sys.modules, "egtviz.viewer.render.figure_export", fake)
+    import egtviz.viewer.render
 
-    monkeypatch.setattr(egtviz.viewer, "figure_export", fake, raising=False)
+    monkeypatch.setattr(egtviz.viewer.render, "figure_export", fake, raising=False)
     assert main(["figure", "out.svg"]) == 0 and calls == ["out.svg"]
 
 
 def test_figure_without_the_export_module_says_so(monkeypatch, capsys):
-    import egtviz.viewer
+    import egtviz.viewer.render
 
-    monkeypatch.setitem(sys.modules, "egtviz.viewer.figure_export", None)  # import fails
-    monkeypatch.delattr(egtviz.viewer, "figure_export", raising=False)
+    monkeypatch.setitem(sys.modules, "egtviz.viewer.render.figure_export", None)  # import fails
+    monkeypatch.delattr(egtviz.viewer.render, "figure_export", raising=False)
     assert main(["figure"]) == 1
     err = capsys.readouterr().err
     assert "egtviz figure: not available" in err and "Traceback" not in err

@@ -199,7 +199,7 @@ def test_a_models_drag_update_calls_no_checked_converter(monkeypatch):
 
 def test_a_viewer_drag_update_checks_only_the_dragged_pose(monkeypatch):
     from egtviz.bench.viewer import _drag_event
-    from egtviz.viewer.headless import start_headless
+    from egtviz.viewer.server.headless import start_headless
 
     server, _app, fakes, views = start_headless(default_scene())
     try:

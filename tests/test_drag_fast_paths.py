@@ -17,7 +17,7 @@ from egtviz.geometry.epipolar_curves import epipolar_curves
 from egtviz.geometry.homogeneous import clip_lines_to_rect
 from egtviz.scene import compute_derived, default_scene
 from egtviz.scene.derived import CONIC_SAMPLES, CONIC_VERTEX_BUDGET
-from egtviz.viewer.panel_view import place_labels
+from egtviz.viewer.render.panel_view import place_labels
 
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
 
@@ -171,7 +171,7 @@ def test_cached_conic_tags_follow_the_selection_and_the_style():
     import xml.etree.ElementTree as ET
 
     from egtviz.scene import panoramic_scene
-    from egtviz.viewer.svg import NORMAL, PRESENT, image_plane_svg
+    from egtviz.viewer.render.svg import NORMAL, PRESENT, image_plane_svg
 
     scene = panoramic_scene()
     plane = compute_derived(scene).image_planes[scene.drawn_pair[0]]

@@ -412,7 +412,7 @@ def _kinds(svg: str) -> dict[str, int]:
 
 
 def test_example_3_plot_panels_count_their_marks():
-    from egtviz.viewer.plot_svg import plot_svg
+    from egtviz.viewer.render.plot_svg import plot_svg
 
     _, scene = _run("03_pinhole_epipolar.py")
     for plot in scene.annotations.plots:
@@ -425,7 +425,7 @@ def test_example_3_plot_panels_count_their_marks():
 
 
 def test_plot_panel_circles_and_image_border():
-    from egtviz.viewer.plot_svg import plot_svg, plot_view
+    from egtviz.viewer.render.plot_svg import plot_svg, plot_view
 
     plot = Plot(number=4, points=((100.0, 50.0),), circles=(PlotCircle((320.0, 240.0), 100.0, "#0000e0"),),
                 image_size=(640, 480))
@@ -441,7 +441,7 @@ def test_plot_panel_circles_and_image_border():
 def test_annotations_3d_nodes():
     import viser
 
-    from egtviz.viewer.annotations3d import Annotations3D
+    from egtviz.viewer.workbench.annotations3d import Annotations3D
 
     _, scene = _run("07_planar_mirror_demo.py")
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -492,7 +492,7 @@ def test_jupyter_detection_without_jupyter():
 
 
 def test_the_server_starts_once_prints_its_url_once_and_tabs_show_the_current_figure(monkeypatch, capsys):
-    from egtviz.viewer.headless import FakeTab
+    from egtviz.viewer.server.headless import FakeTab
 
     monkeypatch.setenv("EGTVIZ_FIGURE", "on")
     try:

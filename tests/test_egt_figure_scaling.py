@@ -341,7 +341,7 @@ def test_the_publisher_settles_a_while_after_the_last_push():
 
 def test_real_tabs_get_few_pushes_and_end_with_the_last_state(monkeypatch):
     from egtviz.egt_figure import _server
-    from egtviz.viewer.headless import FakeTab
+    from egtviz.viewer.server.headless import FakeTab
 
     monkeypatch.setenv("EGTVIZ_FIGURE", "on")
     monkeypatch.setattr(_server, "FIRST_PORT", 0)

@@ -11,8 +11,8 @@ import pytest
 from PIL import Image
 
 from egtviz.scene import SCENES
-from egtviz.viewer.figure_export import add_arguments, panel_svg, run, svg_to_png
-from egtviz.viewer.svg import NORMAL, PRESENT
+from egtviz.viewer.render.figure_export import add_arguments, panel_svg, run, svg_to_png
+from egtviz.viewer.render.svg import NORMAL, PRESENT
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

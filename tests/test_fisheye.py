@@ -128,7 +128,7 @@ def test_the_workbench_adds_a_fisheye_and_draws_its_epipolar_curves_through_the_
     import xml.etree.ElementTree as ET
 
     from egtviz.scene import default_scene
-    from egtviz.viewer.headless import start_headless
+    from egtviz.viewer.server.headless import start_headless
 
     server, _app, fakes, views = start_headless(default_scene())
     try:

@@ -22,7 +22,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.scene import SCENES, SceneError, default_scene, limits, scene_from_bytes
-from egtviz.viewer.fields import (
+from egtviz.viewer.workbench.fields import (
     Debouncer,
     FieldError,
     NumberRule,
@@ -31,7 +31,7 @@ from egtviz.viewer.fields import (
     parse_numbers,
     safe_callback,
 )
-from egtviz.viewer.headless import start_headless
+from egtviz.viewer.server.headless import start_headless
 
 from _waiting import wait_until  # noqa: E402
 
@@ -365,10 +365,11 @@ def test_every_callback_of_the_viewer_is_registered_safely():
 
     import egtviz.viewer
 
-    names = [m.name for m in pkgutil.iter_modules(egtviz.viewer.__path__)]
-    assert {"app", "scene3d", "servo_player"} <= set(names)
+    names = [m.name for m in pkgutil.walk_packages(egtviz.viewer.__path__, "egtviz.viewer.")]
+    assert {"egtviz.viewer.workbench.app", "egtviz.viewer.workbench.scene3d",
+            "egtviz.viewer.servo.servo_player"} <= set(names)
     for name in names:
-        module = importlib.import_module(f"egtviz.viewer.{name}")
+        module = importlib.import_module(name)
         src = inspect.getsource(module)
         bare = re.findall(r"\.on_(?:update|click|upload)\(", src)
         assert bare == [], f"{module.__name__}: {len(bare)} callbacks registered without fields.on_event"
@@ -384,7 +385,7 @@ def upload(view, name: str, content) -> None:
 
 
 def test_an_oversized_upload_is_refused_before_parsing(tab, monkeypatch):
-    import egtviz.viewer.workbench_controls as app_module
+    import egtviz.viewer.workbench.workbench_controls as app_module
 
     app, fake, view = tab
     parsed = []
@@ -477,7 +478,7 @@ def test_titles_and_names_from_files_are_shown_as_text():
 
 
 def test_a_tab_whose_scene_cannot_be_built_falls_back_to_the_default_scene(monkeypatch):
-    import egtviz.viewer.app as app_module
+    import egtviz.viewer.workbench.app as app_module
 
     scene = default_scene().replace(title="broken")
     real = app_module.SceneModel
@@ -507,7 +508,7 @@ def test_a_tab_whose_scene_cannot_be_built_falls_back_to_the_default_scene(monke
 
 
 def test_a_servo_demo_that_cannot_open_leaves_a_working_workbench(tab, monkeypatch):
-    import egtviz.viewer.servo_demo as servo_demo
+    import egtviz.viewer.servo.servo_demo as servo_demo
 
     app, fake, view = tab
 
@@ -527,7 +528,7 @@ def test_a_servo_demo_that_cannot_open_leaves_a_working_workbench(tab, monkeypat
 
 
 def test_a_render_failure_shows_the_message_and_the_tab_stays_usable(tab, monkeypatch):
-    from egtviz.viewer import panel_dock as app_module
+    from egtviz.viewer.workbench import panel_dock as app_module
 
     app, fake, view = tab
     real = app_module.image_plane_svg

@@ -1,4 +1,4 @@
-"""Point numbers in crowded panels stay with their points (the ``data-kind`` contract of :mod:`egtviz.viewer.svg`).
+"""Point numbers in crowded panels stay with their points (the ``data-kind`` contract of :mod:`egtviz.viewer.render.svg`).
 
 A drawn number's box is within ``NUMBER_NEAR`` times (its mark's radius plus the placement gap) of its point,
 and no other point stands nearly as close to it; otherwise a ``label-leader`` line in the point's group ends at the
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from egtviz.scene import SCENES, ImagePlane
-from egtviz.viewer.figure_export import panel_svg
-from egtviz.viewer.svg import NORMAL, NUMBER_CLEAR, NUMBER_NEAR, PRESENT, image_plane_svg
+from egtviz.viewer.render.figure_export import panel_svg
+from egtviz.viewer.render.svg import NORMAL, NUMBER_CLEAR, NUMBER_NEAR, PRESENT, image_plane_svg
 
 
 def _box_distance(box: tuple[float, ...], x: float, y: float) -> float:
@@ -107,7 +107,7 @@ def test_numbers_with_no_free_place_are_counted_in_a_note():
 
 
 def test_servo_feature_numbers_stay_with_their_features():
-    from egtviz.viewer.servo_svg import ServoImage, servo_image_svg
+    from egtviz.viewer.render.servo_svg import ServoImage, servo_image_svg
 
     rng = np.random.default_rng(7)
     n = 12

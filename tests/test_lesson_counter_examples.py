@@ -20,7 +20,7 @@ from egtviz.lessons.proof import prove_counter_examples
 from egtviz.lessons.tasks import TaskContext
 from egtviz.scene import SceneError
 from egtviz.scene.lens import LensToggles
-from egtviz.viewer.lens_view import HIDDEN_NOTE, LensPanel
+from egtviz.viewer.course.lens_view import HIDDEN_NOTE, LensPanel
 
 HEAD = '''title = "T"
 summary = "S"

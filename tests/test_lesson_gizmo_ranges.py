@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from egtviz.geometry.poses import matrix_from_quat_wxyz
 from egtviz.lessons import LessonRun, parse_lesson
-from egtviz.viewer.headless import start_headless
-from egtviz.viewer.lesson_view import LessonPanel, pose_within_ranges, range_refusal
+from egtviz.viewer.server.headless import start_headless
+from egtviz.viewer.course.lesson_view import LessonPanel, pose_within_ranges, range_refusal
 
 from _waiting import wait_until  # noqa: E402
 
@@ -220,8 +220,8 @@ def _drag_arrow(page, camera, box: dict, centre: np.ndarray, axis: np.ndarray, d
 def test_in_the_browser_a_dragged_camera_stops_at_the_range_and_its_gizmo_is_put_there():
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
-    from egtviz.viewer.browser import chromium, close_notifications, open_viewer
+    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.server.browser import chromium, close_notifications, open_viewer
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:

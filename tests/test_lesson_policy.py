@@ -9,9 +9,9 @@ import pytest
 
 from egtviz.bench.viewer import _drag_event
 from egtviz.scene import default_scene
-from egtviz.viewer.fields import FieldError
-from egtviz.viewer.headless import start_headless
-from egtviz.viewer.lesson_policy import ALLOW_ALL, LessonPolicy
+from egtviz.viewer.workbench.fields import FieldError
+from egtviz.viewer.server.headless import start_headless
+from egtviz.viewer.workbench.lesson_policy import ALLOW_ALL, LessonPolicy
 
 
 @pytest.fixture

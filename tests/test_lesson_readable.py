@@ -20,12 +20,12 @@ from egtviz.lessons.cli import check_file
 from egtviz.lessons.changes import RandomPoints, SetField
 from egtviz.lessons.display import PanelDisplay, thin_lines
 from egtviz.lessons.progress import ProgressStore
-from egtviz.viewer.app import EgtvizApp
+from egtviz.viewer.workbench.app import EgtvizApp
 from egtviz.scene.examples import SCENES
-from egtviz.viewer.headless import FakeTab, start_headless
-from egtviz.viewer.lesson_policy import LessonPolicy
-from egtviz.viewer.lesson_view import LessonPanel
-from egtviz.viewer.start_page import StartPage
+from egtviz.viewer.server.headless import FakeTab, start_headless
+from egtviz.viewer.workbench.lesson_policy import LessonPolicy
+from egtviz.viewer.course.lesson_view import LessonPanel
+from egtviz.viewer.course.start_page import StartPage
 from egtviz.lessons.markup import PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, formula_width_px
 
 LESSON = """\

@@ -16,16 +16,16 @@ from scipy.optimize import least_squares
 
 from egtviz.lessons import ProgressStore, load
 from egtviz.scene import SceneError
-from egtviz.viewer.app import EgtvizApp
-from egtviz.viewer.fields import format_number
-from egtviz.viewer.headless import FakeTab
-from egtviz.viewer.lesson_view import (
+from egtviz.viewer.workbench.app import EgtvizApp
+from egtviz.viewer.workbench.fields import format_number
+from egtviz.viewer.server.headless import FakeTab
+from egtviz.viewer.course.lesson_view import (
     CHOOSE,
     LessonPanel,
     lesson_instruments,
     range_refusal,
 )
-from egtviz.viewer.start_page import StartPage
+from egtviz.viewer.course.start_page import StartPage
 
 LESSON6 = "06-pinhole-epipolar"
 
@@ -376,7 +376,7 @@ def test_a_task_whose_camera_was_removed_says_so_at_check(store):
 
 def test_a_mirrors_virtual_camera_follows_its_camera_without_breaking_its_lock():
     from egtviz.scene import SCENES, SceneModel
-    from egtviz.viewer.lesson_view import lock_refusal
+    from egtviz.viewer.course.lesson_view import lock_refusal
 
     model = SceneModel(SCENES["mirror"]())  # cam_virtual: locked by the scene, the reflection of cam
     model.set_undo_barrier("Undo stops here.")
@@ -498,7 +498,7 @@ def test_a_servo_demo_opened_from_a_lesson_comes_back_to_the_lesson(store):
 
 
 def test_egtviz_without_arguments_serves_the_course_and_lesson_opens_one(monkeypatch):
-    import egtviz.viewer.cli as serve_cli
+    import egtviz.viewer.server.cli as serve_cli
     from egtviz.cli import main
 
     calls = []

@@ -1,4 +1,4 @@
-"""Panel layout, per-panel views and the first 3D view (egtviz.viewer.panels): pure functions, no server."""
+"""Panel layout, per-panel views and the first 3D view (egtviz.viewer.render.panels): pure functions, no server."""
 
 from __future__ import annotations
 
@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 
 from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
 from egtviz.scene.extent import scene_extent
-from egtviz.viewer.app import PRESENT_LABEL_SCALE
-from egtviz.viewer.headless import FakeTab, start_headless
-from egtviz.viewer.panel_view import fit_view, image_view
-from egtviz.viewer.panels import (
+from egtviz.viewer.workbench.app import PRESENT_LABEL_SCALE
+from egtviz.viewer.server.headless import FakeTab, start_headless
+from egtviz.viewer.render.panel_view import fit_view, image_view
+from egtviz.viewer.render.panels import (
     CELL_CHROME_PX,
     CONTROL_PX,
     DEFAULT_WINDOW,
@@ -32,7 +32,7 @@ from egtviz.viewer.panels import (
     plan_grid,
     window_from_canvas,
 )
-from egtviz.viewer.svg import NORMAL, PRESENT, panel_layout
+from egtviz.viewer.render.svg import NORMAL, PRESENT, panel_layout
 
 from _waiting import wait_until  # noqa: E402
 
@@ -388,7 +388,7 @@ def test_presentation_mode_toggle(four_camera_tab):
 def test_present_option_starts_every_tab_in_presentation_mode():
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
@@ -429,7 +429,7 @@ def test_the_first_3d_view_frames_the_scene_in_the_free_canvas(four_camera_tab):
 
 def test_serve_present_option_reaches_the_app():
     from egtviz.cli import build_parser
-    from egtviz.viewer.cli import start
+    from egtviz.viewer.server.cli import start
 
     assert build_parser("serve").parse_args(["serve", "--present"]).present is True
     assert build_parser("serve").parse_args(["serve"]).present is False

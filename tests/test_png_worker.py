@@ -15,10 +15,10 @@ import pytest
 from PIL import Image
 
 from egtviz.scene import default_scene, limits
-from egtviz.viewer.figure_export import panel_svg, png_pixels, png_refusal, svg_to_png
-from egtviz.viewer.headless import start_headless
-from egtviz.viewer.png_worker import PngDownloads, PngJob, PngRenderer, PngRenderError, WorkerProcess
-from egtviz.viewer.svg import NORMAL
+from egtviz.viewer.render.figure_export import panel_svg, png_pixels, png_refusal, svg_to_png
+from egtviz.viewer.server.headless import start_headless
+from egtviz.viewer.render.png_worker import PngDownloads, PngJob, PngRenderer, PngRenderError, WorkerProcess
+from egtviz.viewer.render.svg import NORMAL
 
 from _waiting import wait_until  # noqa: E402
 

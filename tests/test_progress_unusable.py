@@ -19,10 +19,10 @@ import viser
 from egtviz.lessons import LessonRun, ProgressStore, load
 from egtviz.lessons.cli import run_progress
 from egtviz.lessons.progress import SCHEMA_VERSION
-from egtviz.viewer.app import ClientView, EgtvizApp
-from egtviz.viewer.headless import FakeTab
-from egtviz.viewer.lesson_view import LessonPanel
-from egtviz.viewer.start_page import StartPage
+from egtviz.viewer.workbench.app import ClientView, EgtvizApp
+from egtviz.viewer.server.headless import FakeTab
+from egtviz.viewer.course.lesson_view import LessonPanel
+from egtviz.viewer.course.start_page import StartPage
 
 LESSON6 = "06-pinhole-epipolar"
 MEET = "at the epipole e1, the image of cam2's centre"

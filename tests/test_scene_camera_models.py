@@ -188,14 +188,14 @@ GENERIC_MODULES = [
     "egtviz/scene/scene.py",
     "egtviz/scene/limits.py",
     "egtviz/geometry/epipolar_curves.py",
-    "egtviz/viewer/scene3d.py",
-    "egtviz/viewer/svg.py",
-    "egtviz/viewer/camera_fields.py",
-    "egtviz/viewer/viser_adapter.py",
-    "egtviz/viewer/models/pinhole.py",
-    "egtviz/viewer/models/catadioptric.py",
-    "egtviz/viewer/models/unified.py",
-    "egtviz/viewer/models/common.py",
+    "egtviz/viewer/workbench/scene3d.py",
+    "egtviz/viewer/render/svg.py",
+    "egtviz/viewer/workbench/camera_fields.py",
+    "egtviz/viewer/server/viser_adapter.py",
+    "egtviz/viewer/workbench/models/pinhole.py",
+    "egtviz/viewer/workbench/models/catadioptric.py",
+    "egtviz/viewer/workbench/models/unified.py",
+    "egtviz/viewer/workbench/models/common.py",
 ]
 KIND_NAMES = re.compile(r"""["'](pinhole|panoramic|hyperbolic|parabolic|unified|fisheye)["']""")
 KIND_TEST = re.compile(r"""(?<!dtype)\.(model_)?kind\s*(==|!=|in\b|not in\b)|isinstance\([^)]*(PinholeCamera|CatadioptricCamera|UnifiedCamera|"""
@@ -226,11 +226,11 @@ def test_no_camera_kind_is_tested_or_named_outside_the_registry(module):
 
 
 def test_the_registries_name_each_kind_once_and_agree():
-    from egtviz.viewer.models import DRAWINGS, SHORT_LABELS, drawing_class
+    from egtviz.viewer.workbench.models import DRAWINGS, SHORT_LABELS, drawing_class
 
     assert list(DRAWINGS) == list(CAMERA_MODELS) == list(SHORT_LABELS)
     for kind in CAMERA_MODELS:
-        assert drawing_class(kind).__module__.startswith("egtviz.viewer.models.")
+        assert drawing_class(kind).__module__.startswith("egtviz.viewer.workbench.models.")
     # The scene file's kinds: only in the spec classes (file format), each spec building registered models.
     from egtviz.scene.specs import CAMERA_KINDS, spec_for_model
 

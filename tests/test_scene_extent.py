@@ -11,9 +11,9 @@ import viser
 
 from egtviz.scene import SCENES, SceneModel, compute_derived, panoramic_scene
 from egtviz.scene.extent import GLYPH_RANGE, scene_extent
-from egtviz.viewer.panels import WindowSize, framed_camera, plan_grid
-from egtviz.viewer.scene3d import Scene3D
-from egtviz.viewer.svg import NORMAL, PRESENT
+from egtviz.viewer.render.panels import WindowSize, framed_camera, plan_grid
+from egtviz.viewer.workbench.scene3d import Scene3D
+from egtviz.viewer.render.svg import NORMAL, PRESENT
 
 
 def _in_view(framed, aspect: float, P: np.ndarray) -> np.ndarray:
@@ -99,7 +99,7 @@ def test_scene3d_draws_gizmos_axes_and_marks_at_the_glyph_size():
 
 
 def test_a_tab_draws_glyphs_at_the_scene_size_and_frames_again_when_a_camera_is_added():
-    from egtviz.viewer.headless import start_headless
+    from egtviz.viewer.server.headless import start_headless
 
     server, app, fakes, views = start_headless(panoramic_scene())
     try:

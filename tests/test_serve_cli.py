@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from egtviz.viewer.cli import ServeAddressError, _port, check_bind, reachable_urls
+from egtviz.viewer.server.cli import ServeAddressError, _port, check_bind, reachable_urls
 
 EGTVIZ = [sys.executable, "-m", "egtviz.cli"]
 

@@ -1,4 +1,4 @@
-"""The server guards (egtviz.viewer.guard) against raw websocket clients on a real server.
+"""The server guards (egtviz.viewer.server.guard) against raw websocket clients on a real server.
 
 Each test starts a viser server on a free loopback port with the guards installed, speaks viser's
 wire protocol itself (msgpack messages up, zstd-framed msgpack down, as ``viser/infra/_infra.py``
@@ -27,8 +27,8 @@ import websockets.exceptions
 
 from egtviz.bench import ws_client
 from egtviz.bench.ws_client import CAMERA
-from egtviz.viewer import guard
-from egtviz.viewer.guard import FairExecutor, GuardLimits, install_guards, origin_allowed
+from egtviz.viewer.server import guard
+from egtviz.viewer.server.guard import FairExecutor, GuardLimits, install_guards, origin_allowed
 
 CALLBACK_SECONDS = 0.003
 

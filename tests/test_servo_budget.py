@@ -1,4 +1,4 @@
-"""The server's budget of servo-run frames (egtviz.viewer.servo_budget) and the demos that reserve from it.
+"""The server's budget of servo-run frames (egtviz.viewer.servo.servo_budget) and the demos that reserve from it.
 
 Demos run on a real viser server with websocket stand-ins (FakeTab) as tabs; a small budget stands for the
 server's (the same code, fewer frames), so runs of a few dozen steps fill it.
@@ -15,9 +15,9 @@ import pytest
 import viser
 
 from egtviz.scene.limits import SERVO_DEMO_STEPS, SERVO_SERVER_FRAMES
-from egtviz.viewer.headless import FakeTab
-from egtviz.viewer.servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy
-from egtviz.viewer.servo_demo import make_servo_demo
+from egtviz.viewer.server.headless import FakeTab
+from egtviz.viewer.servo.servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy
+from egtviz.viewer.servo.servo_demo import make_servo_demo
 
 STEPS = 40
 """Steps of the test runs: too few for the pin-hole demo to converge, so each run has STEPS + 1 frames."""
@@ -139,7 +139,7 @@ def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another
 
 
 def test_a_run_replaced_by_a_shorter_one_or_failing_frees_its_frames(clients, notes, monkeypatch):
-    from egtviz.viewer import servo_pinhole_demo
+    from egtviz.viewer.servo import servo_pinhole_demo
 
     budget = ServoBudget(frames=STEPS + 1)
     demo = make_servo_demo(clients[0], "pinhole", steps=STEPS, autoplay=False, budget=budget)

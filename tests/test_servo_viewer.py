@@ -1,6 +1,6 @@
-"""Headless tests of the servo demos (egtviz.viewer.servo_demo and its per-demo classes) on a real viser server.
+"""Headless tests of the servo demos (egtviz.viewer.servo.servo_demo and its per-demo classes) on a real viser server.
 
-A websocket stand-in (egtviz.viewer.headless.FakeTab) is the browser tab; GUI
+A websocket stand-in (egtviz.viewer.server.headless.FakeTab) is the browser tab; GUI
 handle values are set directly (their callbacks run synchronously).
 """
 
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 import viser
 
-from egtviz.viewer.headless import FakeTab
-from egtviz.viewer.servo_demo import SERVO_DEMOS, ServoDemo, make_servo_demo
-from egtviz.viewer.servo_panoramic_demo import PanoramicServoDemo
-from egtviz.viewer.servo_pinhole_demo import PinholeServoDemo
-from egtviz.viewer.servo_svg import ServoImage, servo_image_svg
+from egtviz.viewer.server.headless import FakeTab
+from egtviz.viewer.servo.servo_demo import SERVO_DEMOS, ServoDemo, make_servo_demo
+from egtviz.viewer.servo.servo_panoramic_demo import PanoramicServoDemo
+from egtviz.viewer.servo.servo_pinhole_demo import PinholeServoDemo
+from egtviz.viewer.render.servo_svg import ServoImage, servo_image_svg
 
 
 @pytest.fixture(scope="module")
@@ -222,7 +222,7 @@ def test_forged_drop_downs_and_slider_are_refused(client, notes):
 
 
 def test_a_failing_run_is_shown_not_raised(client, notes, monkeypatch):
-    from egtviz.viewer import servo_pinhole_demo
+    from egtviz.viewer.servo import servo_pinhole_demo
 
     def refuse(**kw):
         raise ValueError("beta: the simulation refused it")
@@ -262,7 +262,7 @@ def test_rerun_while_running_is_refused_and_close_stops(client):
 
 
 def test_app_opens_demo_and_goes_back():
-    from egtviz.viewer.headless import start_headless
+    from egtviz.viewer.server.headless import start_headless
 
     server, app, fakes, views = start_headless()
     try:
@@ -293,7 +293,7 @@ def test_app_opens_demo_and_goes_back():
 
 
 def test_app_demo_mode_and_cli():
-    from egtviz.viewer.cli import start
+    from egtviz.viewer.server.cli import start
 
     server, app = start("127.0.0.1", 0, demo="pinhole")
     try:
@@ -349,7 +349,7 @@ def test_one_class_per_demo_and_the_factory(client):
 def test_the_viewer_modules_branch_on_no_kind_and_register_callbacks_safely():
     import inspect
 
-    from egtviz.viewer import (
+    from egtviz.viewer.servo import (
         servo_demo,
         servo_panoramic_demo,
         servo_pinhole_demo,

@@ -9,7 +9,7 @@ import time
 import pytest
 
 from egtviz.lessons import ProgressStore, list_lessons
-from egtviz.viewer.lesson_view import LessonPanel
+from egtviz.viewer.course.lesson_view import LessonPanel
 
 from test_progress_unusable import LESSON6, course, start_page
 

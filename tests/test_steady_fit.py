@@ -1,4 +1,4 @@
-"""A fitted panel during a drag (egtviz.viewer.panel_view.steady_fit): still axes while everything stays in view."""
+"""A fitted panel during a drag (egtviz.viewer.render.panel_view.steady_fit): still axes while everything stays in view."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from egtviz.viewer.panel_view import (
+from egtviz.viewer.render.panel_view import (
     STEADY_FILL,
     STEADY_SLACK,
     ViewBox,
     steady_fit,
     zoom,
 )
-from egtviz.viewer.panels import PanelView
+from egtviz.viewer.render.panels import PanelView
 
 KEPT = ViewBox(-100.0, -50.0, 800.0, 600.0)
 
@@ -102,8 +102,8 @@ def test_a_fitted_panel_holds_its_axes_during_a_drag_and_fits_exactly_at_its_end
     import numpy as np
 
     from egtviz.bench.viewer import _scenes
-    from egtviz.viewer.headless import start_headless
-    from egtviz.viewer.panel_view import fit_view
+    from egtviz.viewer.server.headless import start_headless
+    from egtviz.viewer.render.panel_view import fit_view
 
     scene = _scenes(200)["pin-hole"]
     server, _app, fakes, views = start_headless(scene)

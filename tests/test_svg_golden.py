@@ -5,8 +5,8 @@ text depends only on the drawing code) and compares the SHA-256 of the SVG with 
 functions were split into named steps. A change meant to alter the drawing changes these hashes: then look at the
 new SVGs, and record the hashes this test prints (``pytest -s tests/test_svg_golden.py``) in the same commit.
 
-The cases cover the branches of :func:`egtviz.viewer.svg.image_plane_svg` and
-:func:`egtviz.viewer.servo_svg.servo_image_svg`: epipoles inside, outside and at infinity, epipolar lines in the
+The cases cover the branches of :func:`egtviz.viewer.render.svg.image_plane_svg` and
+:func:`egtviz.viewer.render.servo_svg.servo_image_svg`: epipoles inside, outside and at infinity, epipolar lines in the
 image and across a zoomed-out view, conics, a rim and a horizon, a message, a selected and highlighted points,
 numbers beside their points, with leader lines, and left out (the crowded note), the numbering note over
 ``MAX_NUMBERED_POINTS``, and the servo panel's curves, features, legend, caption and message.
@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from egtviz.scene import Epipole, ImagePlane
-from egtviz.viewer.panel_view import ViewBox
-from egtviz.viewer.servo_svg import ServoImage, servo_image_svg
-from egtviz.viewer.svg import NORMAL, PRESENT, image_plane_svg
+from egtviz.viewer.render.panel_view import ViewBox
+from egtviz.viewer.render.servo_svg import ServoImage, servo_image_svg
+from egtviz.viewer.render.svg import NORMAL, PRESENT, image_plane_svg
 
 W, H = 640, 480
 

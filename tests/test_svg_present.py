@@ -15,10 +15,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.scene import SCENES, Epipole, ImagePlane, compute_derived
-from egtviz.viewer.palette import POINT_COLOURS, PRESENT_POINT_COLOURS, contrast_ratio
-from egtviz.viewer.panel_view import ViewBox, fit_view, image_view, pan, place_labels, tick_values, zoom
-from egtviz.viewer.servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
-from egtviz.viewer.svg import NORMAL, PRESENT, image_plane_svg
+from egtviz.viewer.render.palette import POINT_COLOURS, PRESENT_POINT_COLOURS, contrast_ratio
+from egtviz.viewer.render.panel_view import ViewBox, fit_view, image_view, pan, place_labels, tick_values, zoom
+from egtviz.viewer.render.servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
+from egtviz.viewer.render.svg import NORMAL, PRESENT, image_plane_svg
 
 NS = "{http://www.w3.org/2000/svg}"
 FONTS = Path(matplotlib.get_data_path()) / "fonts" / "ttf"

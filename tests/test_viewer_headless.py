@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from egtviz.scene import default_scene, scene_from_bytes
-from egtviz.viewer.headless import start_headless
+from egtviz.viewer.server.headless import start_headless
 
 
 def kinds(svg: str, kind: str) -> list[ET.Element]:
@@ -285,7 +285,7 @@ def test_concurrent_events_end_in_the_latest_state(tabs):
 
 
 def test_cli_serve_reports_the_real_port_and_bad_scene(tmp_path, capsys):
-    from egtviz.viewer.cli import serve
+    from egtviz.viewer.server.cli import serve
 
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")

@@ -8,10 +8,10 @@ import pytest
 import viser
 
 from egtviz.scene import SceneModel, compute_derived, default_scene, panoramic_scene
-from egtviz.viewer.headless import start_headless
-from egtviz.viewer.palette import point_rgb
-from egtviz.viewer.models.pinhole import IMAGE_PLANE_DEPTH
-from egtviz.viewer.scene3d import MAX_RAY_POINTS, Scene3D
+from egtviz.viewer.server.headless import start_headless
+from egtviz.viewer.render.palette import point_rgb
+from egtviz.viewer.workbench.models.pinhole import IMAGE_PLANE_DEPTH
+from egtviz.viewer.workbench.scene3d import MAX_RAY_POINTS, Scene3D
 
 
 @pytest.fixture
@@ -172,7 +172,7 @@ def test_the_mirror_is_a_reflective_mesh_above_its_ccd_sent_once_per_shape(serve
 
     import trimesh
 
-    from egtviz.viewer.models.catadioptric import MIRROR_METALLIC, MIRROR_ROUGHNESS
+    from egtviz.viewer.workbench.models.catadioptric import MIRROR_METALLIC, MIRROR_ROUGHNESS
 
     model = SceneModel(panoramic_scene())
     s3 = scene3d_on(server)

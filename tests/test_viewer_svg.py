@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from egtviz.scene import Epipole, ImagePlane, compute_derived, default_scene
-from egtviz.viewer.svg import MAX_NUMBERED_POINTS, image_plane_svg
+from egtviz.viewer.render.svg import MAX_NUMBERED_POINTS, image_plane_svg
 
 NS = "{http://www.w3.org/2000/svg}"
 
@@ -180,7 +180,7 @@ def test_default_scene_counts_match_the_derived_data():
 
 
 def test_many_conics_are_thinned_but_keep_their_ends():
-    from egtviz.viewer.svg import CONIC_VERTEX_BUDGET
+    from egtviz.viewer.render.svg import CONIC_VERTEX_BUDGET
 
     t = np.linspace(0, 2 * np.pi, 129)
     arc = np.column_stack([320 + 100 * np.cos(t), 240 + 100 * np.sin(t)])

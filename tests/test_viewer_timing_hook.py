@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from egtviz.scene import default_scene
-from egtviz.viewer.app import UpdateTiming
-from egtviz.viewer.headless import start_headless
+from egtviz.viewer.workbench.app import UpdateTiming
+from egtviz.viewer.server.headless import start_headless
 
 BENCH = Path(__file__).resolve().parents[1] / "egtviz" / "bench"
 
@@ -56,5 +56,5 @@ def _private_reaches(path: Path) -> list[str]:
 
 @pytest.mark.parametrize("name", ["classroom.py", "viewer.py"])
 def test_the_viewer_benchmarks_reach_no_private_names(name):
-    # The viewer's timing hook and egtviz.viewer.viser_adapter are their only way in.
+    # The viewer's timing hook and egtviz.viewer.server.viser_adapter are their only way in.
     assert _private_reaches(BENCH / name) == []

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from egtviz.scene import Scene, UnifiedSpec, default_scene
-from egtviz.viewer.fields import FieldError
-from egtviz.viewer.headless import start_headless
-from egtviz.viewer.models.unified import SPHERE_RADIUS
-from egtviz.viewer.scene3d import MAX_LABELLED_POINTS
+from egtviz.viewer.workbench.fields import FieldError
+from egtviz.viewer.server.headless import start_headless
+from egtviz.viewer.workbench.models.unified import SPHERE_RADIUS
+from egtviz.viewer.workbench.scene3d import MAX_LABELLED_POINTS
 
 
 def kinds(svg: str, kind: str) -> list[ET.Element]:

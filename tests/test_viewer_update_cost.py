@@ -1,7 +1,7 @@
 """A drag redraws only what it changes: a panel whose camera neither moved nor is in the drawn pair keeps its SVG,
 and a panel whose points stay put keeps their discs' text.
 
-Run on a real viser server with a websocket stand-in for the browser (``egtviz.viewer.headless``); the drag
+Run on a real viser server with a websocket stand-in for the browser (``egtviz.viewer.server.headless``); the drag
 events are made as viser makes them (``egtviz.bench.viewer._drag_event``).
 """
 
@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 
 from egtviz.bench.viewer import _drive
 from egtviz.scene import SceneModel, default_scene
-from egtviz.viewer import svg
-from egtviz.viewer.headless import start_headless
-from egtviz.viewer.svg import image_plane_svg
+from egtviz.viewer.render import svg
+from egtviz.viewer.server.headless import start_headless
+from egtviz.viewer.render.svg import image_plane_svg
 
 
 def _rev(svg: str) -> int:

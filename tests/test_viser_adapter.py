@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import viser
 
-from egtviz.viewer import viser_adapter
-from egtviz.viewer.viser_adapter import (
+from egtviz.viewer.server import viser_adapter
+from egtviz.viewer.server.viser_adapter import (
     PRIVATE_NAMES,
     assign,
     assign_array,

@@ -2,8 +2,8 @@
 
 Method (also in ``docs/benchmarks.md``):
 
-* **Server.** The real ``egtviz serve`` server (:func:`egtviz.viewer.cli.start`: viser, the guards of
-  :mod:`egtviz.viewer.guard`, the app) on a free loopback port, in this process.
+* **Server.** The real ``egtviz serve`` server (:func:`egtviz.viewer.server.cli.start`: viser, the guards of
+  :mod:`egtviz.viewer.server.guard`, the app) on a free loopback port, in this process.
 * **Tabs.** K raw websocket clients (:mod:`egtviz.bench.ws_client`) in one separate process, so that
   their work is not counted as the server's. Each joins like a browser in a 1366 x 768 window (its first
   camera message, which sets the panels' layout),
@@ -320,7 +320,7 @@ class _Server:
 
     def __init__(self, scene: str | None) -> None:
         from ..scene import model as scene_model
-        from ..viewer.cli import start
+        from ..viewer.server.cli import start
 
         self.clock = _StageClock()
         self._model_module = scene_model
@@ -361,7 +361,7 @@ class _PoolProfiler:
     """cProfile on the event loop's thread and on every pool thread (each thread its own profiler)."""
 
     def __init__(self, server: Any) -> None:
-        from ..viewer.viser_adapter import callback_pool, event_loop
+        from ..viewer.server.viser_adapter import callback_pool, event_loop
 
         self._loop = event_loop(server)
         self._pool = callback_pool(server)
@@ -491,11 +491,11 @@ def run_classroom(tabs: int, *, seconds: float = DRAG_SECONDS, rate: float = RAT
 PROFILE_AREAS = (
     ("geometry (egtviz.geometry)", ("egtviz/geometry/",)),
     ("scene model + compute_derived", ("egtviz/scene/",)),
-    ("SVG: label placement (egtviz.viewer.panel_view)", ("egtviz/viewer/panel_view.py",)),
-    ("SVG: the rest (egtviz.viewer.svg)", ("egtviz/viewer/svg.py", "egtviz/viewer/plot_svg.py")),
-    ("3D nodes (egtviz.viewer.scene3d, models)", ("egtviz/viewer/scene3d.py", "egtviz/viewer/models/",
-                                                 "egtviz/viewer/viser_adapter.py", "egtviz/viewer/annotations3d.py")),
-    ("guards (egtviz.viewer.guard)", ("egtviz/viewer/guard.py",)),
+    ("SVG: label placement (egtviz.viewer.render.panel_view)", ("egtviz/viewer/render/panel_view.py",)),
+    ("SVG: the rest (egtviz.viewer.render.svg)", ("egtviz/viewer/render/svg.py", "egtviz/viewer/render/plot_svg.py")),
+    ("3D nodes (egtviz.viewer.workbench.scene3d, models)", ("egtviz/viewer/workbench/scene3d.py", "egtviz/viewer/workbench/models/",
+                                                 "egtviz/viewer/server/viser_adapter.py", "egtviz/viewer/workbench/annotations3d.py")),
+    ("guards (egtviz.viewer.server.guard)", ("egtviz/viewer/server/guard.py",)),
     ("viewer app (egtviz.viewer)", ("egtviz/viewer/", "egtviz/bench/classroom.py")),
     ("viser property handling (handles, props, GUI)", ("viser/_scene_handles.py", "viser/_gui_handles.py",
                                                        "viser/_assignable_props_api.py", "viser/_gui_api.py",

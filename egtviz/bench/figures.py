@@ -57,7 +57,7 @@ def _loop_row(tabs: int, baseline_ms: float | None) -> dict[str, Any]:
     """``LOOP_CALLS`` calls of ``f_3Dframe`` with ``tabs`` headless tabs open on the figure server."""
     import egtviz.egt_figure as ef
     from egtviz.egt import f_3Dframe, f_Rt2H, rotoz
-    from egtviz.viewer.headless import FakeTab
+    from egtviz.viewer.server.headless import FakeTab
 
     ef.reset()
     ef.figure(1)

@@ -2,7 +2,7 @@
 
 ``python -m egtviz.bench.progress [--learners N ...]`` builds a progress database of N learners (each in three
 lessons, three tasks checked in each) in a temporary folder, then times one render's read of the course's
-statuses (:func:`~egtviz.viewer.start_page.course_statuses`: one indexed query) against the read the page did
+statuses (:func:`~egtviz.viewer.course.start_page.course_statuses`: one indexed query) against the read the page did
 before (three queries per lesson, one of them the whole table's summary), timed in the same run. Prints
 medians in milliseconds and their ratio.
 """
@@ -62,7 +62,7 @@ def _median_ms(action, repeats: int) -> float:
 
 def run_progress_bench(learners: list[int], repeats: int = 20, baseline_repeats: int = 1) -> list[dict]:
     """Rows ``{learners, new_ms, old_ms, ratio}`` for each database size."""
-    from ..viewer.start_page import course_statuses
+    from ..viewer.course.start_page import course_statuses
 
     lessons = {info.name: load(info.name) for info in list_lessons()}
     rows = []

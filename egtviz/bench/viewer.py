@@ -110,7 +110,7 @@ def _scenes(n_points: int) -> dict[str, Any]:
 
 def _drag_event(gizmo: Any, position: np.ndarray) -> Any:
     """What viser does on a TransformControlsUpdateMessage before calling our callback."""
-    from ..viewer.viser_adapter import gizmo_moved_by_client
+    from ..viewer.server.viser_adapter import gizmo_moved_by_client
 
     gizmo_moved_by_client(gizmo, position)
     return types.SimpleNamespace(target=gizmo, phase="update", client=None, client_id=None)
@@ -120,7 +120,7 @@ def _drive(view: Any, name: str, n: int, spacing: float) -> list[tuple[int, floa
     """Drag camera ``name`` 2 mm further ``n`` times (always to a new place), ``spacing`` seconds apart.
 
     Returns ``(revision, wall time at the end of the update, its wall seconds by part)`` per applied update, from
-    the view's timing hook (:attr:`~egtviz.viewer.app.ClientView.on_update_timed`).
+    the view's timing hook (:attr:`~egtviz.viewer.workbench.app.ClientView.on_update_timed`).
     """
     gizmo = view.scene3d.gizmo(name)
     start = np.array(gizmo.position, float)
@@ -140,7 +140,7 @@ def server_latency(scene: Any, n: int = EVENTS, *, spacing: float = 0.005) -> di
 
     Each event moves the camera to a new place (no cached result is reused); ``spacing`` seconds apart.
     """
-    from ..viewer.headless import start_headless
+    from ..viewer.server.headless import start_headless
 
     server, _app, fakes, views = start_headless(scene)
     try:
@@ -166,8 +166,8 @@ def browser_latency(scene: Any, n: int = BROWSER_EVENTS, *, width: int = 1600, h
     """
     import viser
 
-    from ..viewer.app import EgtvizApp
-    from ..viewer.browser import chromium, chromium_available, open_viewer
+    from ..viewer.workbench.app import EgtvizApp
+    from ..viewer.server.browser import chromium, chromium_available, open_viewer
 
     if not chromium_available():
         return None

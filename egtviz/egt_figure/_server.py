@@ -73,7 +73,7 @@ class FigureServer:
         """Start the viewer on ``port`` (None: :data:`FIRST_PORT` or the next free one); ``viewer``: an already
         started ``(server, app)`` pair instead (tests)."""
         if viewer is None:
-            from ..viewer.cli import start
+            from ..viewer.server.cli import start
 
             viewer = start("127.0.0.1", FIRST_PORT if port is None else port)
         self.server, self.app = viewer

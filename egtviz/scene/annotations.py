@@ -3,8 +3,8 @@ mirrors and 2D plots (frozen, serialisable, checked like the rest of a scene).
 
 EGT drew these with ``plot3``/``text``/``surf`` into a MATLAB figure; here they
 are part of the :class:`~egtviz.scene.Scene`, so a figure is saved, loaded and
-drawn like any scene (3D: ``egtviz.viewer.annotations3d``; plots:
-``egtviz.viewer.plot_svg``). Colours are ``"#rrggbb"``; coordinates are world
+drawn like any scene (3D: ``egtviz.viewer.workbench.annotations3d``; plots:
+``egtviz.viewer.render.plot_svg``). Colours are ``"#rrggbb"``; coordinates are world
 coordinates (metres) for 3D items and pixels for plots.
 
 A :class:`PlanarMirror` may *reflect* a pin-hole camera of the scene: the

@@ -183,7 +183,7 @@ MESH_OPACITY = Range(0.0, 1.0, "")
 FRAME_AXIS_LENGTH = Range(1e-6, 1e4, "m")
 """A frame's axis length."""
 
-# -- PNG downloads of a panel (egtviz.viewer.png_worker) --------------------------------------------------
+# -- PNG downloads of a panel (egtviz.viewer.render.png_worker) --------------------------------------------------
 
 MAX_PNG_SVG_BYTES = 2_000_000
 """Largest panel SVG rendered to PNG for a tab (2 MB; a panel of 2,000 numbered points with their epipolar lines
@@ -226,7 +226,7 @@ bound (10,001 frames each; two non-converging panoramic runs raised a server's m
 or dozens of the demos' default runs, which converge in a few hundred steps. A run reserves ``steps + 1`` frames
 when it starts and keeps the frames it has once drawn; a run that does not fit waits for up to half a minute, then
 is refused in its tab with a notification naming how many other runs hold the budget
-(``egtviz.viewer.servo_budget``)."""
+(``egtviz.viewer.servo.servo_budget``)."""
 
 # -- lesson files (egtviz.lessons) --------------------------------------------------------------------
 

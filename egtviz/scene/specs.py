@@ -182,7 +182,7 @@ class _CameraSpecBase:
     #: The registered models (``egtviz.geometry.CAMERA_MODELS``) this spec builds, and the field values that select
     #: each (``{"mirror": "parabolic"}``; empty for a spec of one model): the spec's registry entry.
     MODELS: ClassVar[dict[str, dict[str, Any]]] = {}
-    #: How the viewer shows each of those models: ``"module:Class"`` of its 3D drawing (in ``egtviz.viewer.models``,
+    #: How the viewer shows each of those models: ``"module:Class"`` of its 3D drawing (in ``egtviz.viewer.workbench.models``,
     #: imported by the viewer on first use) and a few words naming it in the GUI.
     DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {}
 
@@ -356,7 +356,7 @@ class PinholeSpec(_EgtPlacedSpec):
 
     MODELS: ClassVar[dict[str, dict[str, Any]]] = {PinholeCamera.kind: {}}
     DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
-        PinholeCamera.kind: ("egtviz.viewer.models.pinhole:PinholeDrawing", "pin-hole")}
+        PinholeCamera.kind: ("egtviz.viewer.workbench.models.pinhole:PinholeDrawing", "pin-hole")}
     kind: ClassVar[str] = "pinhole"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "cam"
@@ -429,8 +429,8 @@ class PanoramicSpec(_CameraSpecBase):
     MODELS: ClassVar[dict[str, dict[str, Any]]] = {HYPERBOLIC.kind: {"mirror": HYPERBOLIC.kind},
                                                   PARABOLIC.kind: {"mirror": PARABOLIC.kind}}
     DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
-        HYPERBOLIC.kind: ("egtviz.viewer.models.catadioptric:CatadioptricDrawing", "panoramic, hyperbolic mirror"),
-        PARABOLIC.kind: ("egtviz.viewer.models.catadioptric:CatadioptricDrawing", "panoramic, parabolic mirror")}
+        HYPERBOLIC.kind: ("egtviz.viewer.workbench.models.catadioptric:CatadioptricDrawing", "panoramic, hyperbolic mirror"),
+        PARABOLIC.kind: ("egtviz.viewer.workbench.models.catadioptric:CatadioptricDrawing", "panoramic, parabolic mirror")}
     kind: ClassVar[str] = "panoramic"
     """The entry's ``kind`` in a scene file (the mirror's shape is ``mirror``)."""
     NAME_PREFIX: ClassVar[str] = "pano"
@@ -556,7 +556,7 @@ class UnifiedSpec(_EgtPlacedSpec):
 
     MODELS: ClassVar[dict[str, dict[str, Any]]] = {UnifiedCamera.kind: {}}
     DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
-        UnifiedCamera.kind: ("egtviz.viewer.models.unified:UnifiedDrawing", "unified sphere")}
+        UnifiedCamera.kind: ("egtviz.viewer.workbench.models.unified:UnifiedDrawing", "unified sphere")}
     kind: ClassVar[str] = "unified"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "uni"
@@ -598,7 +598,7 @@ class FisheyeSpec(_EgtPlacedSpec):
 
     MODELS: ClassVar[dict[str, dict[str, Any]]] = {FisheyeCamera.kind: {}}
     DRAWINGS: ClassVar[dict[str, tuple[str, str]]] = {
-        FisheyeCamera.kind: ("egtviz.viewer.models.fisheye:FisheyeDrawing", "equidistant fisheye")}
+        FisheyeCamera.kind: ("egtviz.viewer.workbench.models.fisheye:FisheyeDrawing", "equidistant fisheye")}
     kind: ClassVar[str] = "fisheye"
     """The entry's ``kind`` in a scene file."""
     NAME_PREFIX: ClassVar[str] = "fish"

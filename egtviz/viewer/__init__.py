@@ -4,18 +4,18 @@ The only package that imports viser. It draws what :mod:`egtviz.scene` derives
 and never computes geometry itself. See ``docs/viewer.md``.
 """
 
-from .svg import image_plane_svg as image_plane_svg
+from .render.svg import image_plane_svg as image_plane_svg
 
 __all__ = ["image_plane_svg", "EgtvizApp", "ClientView", "serve"]
 
 
 def __getattr__(name: str):  # lazy: importing the SVG builder must not start viser
     if name in ("EgtvizApp", "ClientView"):
-        from . import app
+        from .workbench import app
 
         return getattr(app, name)
     if name == "serve":
-        from .cli import serve
+        from .server.cli import serve
 
         return serve
     raise AttributeError(name)

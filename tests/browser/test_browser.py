@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from egtviz.scene import compute_derived, default_scene, panoramic_scene
-from egtviz.viewer.browser import (
+from egtviz.viewer.server.browser import (
     COUNT_JS,
     LINES_JS,
     chromium,
@@ -27,7 +27,7 @@ pytestmark = pytest.mark.browser
 def _serve(scene):
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, scene)
@@ -183,7 +183,7 @@ def test_second_tab_edits_do_not_reach_the_first(browser, pinhole_server):
 
 
 def test_screenshot_script_writes_a_png(browser, tmp_path):
-    from egtviz.viewer.screenshot import take_screenshot
+    from egtviz.viewer.server.screenshot import take_screenshot
 
     out = take_screenshot(tmp_path / "shot.png", browser=browser)
     data = out.read_bytes()

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from egtviz.lessons import ProgressStore, load
-from egtviz.viewer.browser import PANEL_SELECTOR, chromium, close_notifications, folder_field
+from egtviz.viewer.server.browser import PANEL_SELECTOR, chromium, close_notifications, folder_field
 
 pytestmark = pytest.mark.browser
 
@@ -30,7 +30,7 @@ def browser():
 def course(tmp_path):
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, course=True, progress=ProgressStore(tmp_path / "progress.sqlite3"))
@@ -52,7 +52,7 @@ def _labelled_input(page, label: str):
 
 
 def _panel_of(app, learner: str):
-    from egtviz.viewer.lesson_view import LessonPanel
+    from egtviz.viewer.course.lesson_view import LessonPanel
 
     found = []
     _wait(lambda: found.extend(t for t in app.course.tabs.values()

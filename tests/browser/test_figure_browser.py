@@ -15,7 +15,7 @@ import pytest
 import egtviz.egt_figure as ef
 from egtviz.egt_figure import _server
 from egtviz.scene import compute_derived
-from egtviz.viewer.browser import COUNT_JS, chromium, close_notifications, open_viewer
+from egtviz.viewer.server.browser import COUNT_JS, chromium, close_notifications, open_viewer
 
 pytestmark = pytest.mark.browser
 

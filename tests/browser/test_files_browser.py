@@ -12,7 +12,7 @@ import time
 import pytest
 
 from egtviz.scene import default_scene, scene_from_bytes, scene_to_bytes
-from egtviz.viewer.browser import chromium, open_viewer
+from egtviz.viewer.server.browser import chromium, open_viewer
 
 pytestmark = pytest.mark.browser
 
@@ -22,7 +22,7 @@ pytestmark = pytest.mark.browser
 def served():
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, default_scene())

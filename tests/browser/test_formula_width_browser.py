@@ -15,9 +15,9 @@ from egtviz.lessons.markup import (
     formula_to_mathml,
     formula_width_px,
 )
-from egtviz.viewer.browser import chromium
-from egtviz.viewer.lesson_view import MATH_CSS
-from egtviz.viewer.palette import PRESENT_GUI_CSS
+from egtviz.viewer.server.browser import chromium
+from egtviz.viewer.course.lesson_view import MATH_CSS
+from egtviz.viewer.render.palette import PRESENT_GUI_CSS
 
 pytestmark = pytest.mark.browser
 

@@ -20,14 +20,14 @@ import numpy as np
 import pytest
 
 from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
-from egtviz.viewer.browser import (
+from egtviz.viewer.server.browser import (
     chromium,
     close_notifications,
     folder_field,
     open_viewer,
 )
-from egtviz.viewer.panels import MIN_PANEL_PX
-from egtviz.viewer.svg import NORMAL, PRESENT
+from egtviz.viewer.render.panels import MIN_PANEL_PX
+from egtviz.viewer.render.svg import NORMAL, PRESENT
 
 pytestmark = pytest.mark.browser
 
@@ -68,7 +68,7 @@ POINTS_JS = """(camera) => {
 def _serve(scene, *, present=False):
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, scene, present=present)
@@ -297,7 +297,7 @@ PANEL_SCROLL_JS = """() => [...document.querySelectorAll('svg[data-egtviz="image
 def _serve_app(*, present=False, **kw):
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, present=present, **kw)
@@ -322,7 +322,7 @@ def _smallest(page, *, settle=1.0):
 @pytest.mark.parametrize(("width", "height"), WINDOWS)
 @pytest.mark.parametrize("present", [False, True])
 def test_start_page_uses_its_width_and_presentation_mode(browser, present, width, height):
-    from egtviz.viewer.palette import PRESENT_MIN_TEXT_PX
+    from egtviz.viewer.render.palette import PRESENT_MIN_TEXT_PX
 
     server, app, url = _serve_app(present=present, course=True)
     page = _open(browser, url, '[data-egtviz="start-preview"] svg[data-egtviz="image-plane"]', width, height)
@@ -352,7 +352,7 @@ def test_start_page_uses_its_width_and_presentation_mode(browser, present, width
 @pytest.mark.parametrize(("width", "height"), WINDOWS)
 @pytest.mark.parametrize("present", [False, True])
 def test_servo_demo_image_panel_is_readable(browser, present, width, height):
-    from egtviz.viewer.palette import PRESENT_MIN_TEXT_PX
+    from egtviz.viewer.render.palette import PRESENT_MIN_TEXT_PX
 
     server, app, url = _serve_app(present=present, demo="pinhole")
     page = _open(browser, url, 'svg[data-egtviz="servo-image"]', width, height)
@@ -374,7 +374,7 @@ def test_servo_demo_image_panel_is_readable(browser, present, width, height):
 
 @pytest.mark.parametrize(("width", "height"), WINDOWS)
 def test_workbench_in_presentation_mode_reads_and_no_panel_scrolls(browser, width, height):
-    from egtviz.viewer.palette import PRESENT_MIN_TEXT_PX
+    from egtviz.viewer.render.palette import PRESENT_MIN_TEXT_PX
 
     scene = SCENES["example3"]()
     server, app, url = _serve(scene, present=True)

@@ -11,7 +11,7 @@ import pytest
 
 from egtviz.lessons.images import LessonImages
 from egtviz.lessons.markup import render_markdown
-from egtviz.viewer.browser import chromium
+from egtviz.viewer.server.browser import chromium
 
 pytestmark = pytest.mark.browser
 

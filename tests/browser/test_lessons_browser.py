@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import least_squares
 
 from egtviz.lessons import ProgressStore
-from egtviz.viewer.browser import (
+from egtviz.viewer.server.browser import (
     PANEL_SELECTOR,
     chromium,
     close_notifications,
@@ -38,7 +38,7 @@ def browser():
 def course(tmp_path):
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, course=True, progress=ProgressStore(tmp_path / "progress.sqlite3"))
@@ -55,7 +55,7 @@ def _start(browser, url, *, width=1366, height=768):
 
 
 def _panel(app):
-    from egtviz.viewer.lesson_view import LessonPanel
+    from egtviz.viewer.course.lesson_view import LessonPanel
 
     (panel,) = app.course.wait_for_tab(LessonPanel, timeout=30)
     return panel

@@ -13,8 +13,8 @@ import time
 import pytest
 
 from egtviz.scene import default_scene, limits
-from egtviz.viewer.browser import PANEL_SELECTOR, chromium, folder_field
-from egtviz.viewer.svg import NORMAL
+from egtviz.viewer.server.browser import PANEL_SELECTOR, chromium, folder_field
+from egtviz.viewer.render.svg import NORMAL
 
 pytestmark = pytest.mark.browser
 
@@ -23,7 +23,7 @@ CAM1 = "cam1 (pin-hole)"
 def served():
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, default_scene(), field_delay=0.0)  # a field's text is judged at once

@@ -9,7 +9,7 @@ import io
 import pytest
 
 from egtviz.lessons import ProgressStore
-from egtviz.viewer.browser import chromium, close_notifications
+from egtviz.viewer.server.browser import chromium, close_notifications
 
 pytestmark = pytest.mark.browser
 
@@ -20,8 +20,8 @@ TIMEOUT_MS = 60_000
 def test_download_my_record_gives_the_learners_rows_as_csv(tmp_path):
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
-    from egtviz.viewer.start_page import StartPage
+    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.course.start_page import StartPage
 
     store = ProgressStore(tmp_path / "data" / "progress.sqlite3")
     store.record_attempt("Ada", LESSON6, 0, "meet", False, hint_tiers=3)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from egtviz.viewer.browser import chromium
+from egtviz.viewer.server.browser import chromium
 
 pytestmark = pytest.mark.browser
 
@@ -19,7 +19,7 @@ SVG = 'svg[data-egtviz="servo-image"]'
 
 @pytest.mark.parametrize("kind, curve", [("pinhole", "epipolar-line"), ("panoramic", "epipolar-conic")])
 def test_demo_plays_in_the_browser(kind, curve):
-    from egtviz.viewer.cli import start
+    from egtviz.viewer.server.cli import start
 
     server, app = start("127.0.0.1", 0, demo=kind)
     try:

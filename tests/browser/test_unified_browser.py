@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from egtviz.scene import Scene, UnifiedSpec, default_scene
-from egtviz.viewer.browser import COUNT_JS, chromium, open_viewer
+from egtviz.viewer.server.browser import COUNT_JS, chromium, open_viewer
 
 pytestmark = pytest.mark.browser
 
@@ -21,7 +21,7 @@ CONICS_JS = """(camera) => [...document.querySelectorAll(
 def test_moving_the_xi_slider_moves_the_conics():
     import viser
 
-    from egtviz.viewer.app import EgtvizApp
+    from egtviz.viewer.workbench.app import EgtvizApp
 
     base = default_scene()
     scene = Scene(cameras=(UnifiedSpec("uni", (-3.0, -8.0, 1.5), (20.0, -3.0, 0.0), xi=0.8), base.cameras[1]),

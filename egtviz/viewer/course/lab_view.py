@@ -26,18 +26,18 @@ from typing import Any
 
 import numpy as np
 
-from ..lessons.changes import SetLab
-from ..scene import Derived, Scene, SceneError
-from ..scene.derived import with_pair_lines
-from ..scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_THRESHOLD_PX
-from ..scene.lab import (
+from ...lessons.changes import SetLab
+from ...scene import Derived, Scene, SceneError
+from ...scene.derived import with_pair_lines
+from ...scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_THRESHOLD_PX
+from ...scene.lab import (
     METHOD_TITLES,
     METHODS,
     ROBUST_METHODS,
     LabResult,
     run_lab,
 )
-from .fields import FieldError, format_number, on_event
+from ..workbench.fields import FieldError, format_number, on_event
 from .lens_view import LessonInstruments
 
 __all__ = ["LabPanel", "fits_table_html", "threshold_text"]

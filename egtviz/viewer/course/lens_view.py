@@ -30,11 +30,11 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..lessons.changes import SetLens
-from ..scene import Derived, Scene, SceneError
-from ..scene.derived import with_pair_lines
-from ..scene.lens import LensToggles, LensView, lens_view
-from .fields import on_event
+from ...lessons.changes import SetLens
+from ...scene import Derived, Scene, SceneError
+from ...scene.derived import with_pair_lines
+from ...scene.lens import LensToggles, LensView, lens_view
+from ..workbench.fields import on_event
 
 __all__ = ["HIDDEN_NOTE", "LENS_LABELS", "LensPanel", "LessonInstruments", "hidden_lens", "residual_table_html"]
 

@@ -11,7 +11,7 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
   the options for a choice), a "Check" button, the feedback on each attempt and the hint after a failed one;
 * the learner's name: progress (the step, the tasks passed) is kept under it in the
   :class:`~egtviz.lessons.ProgressStore`, so a reload, a new tab or a restarted server resumes there;
-* the estimation lab (:mod:`egtviz.viewer.lab_view`) or the convention lens (:mod:`egtviz.viewer.lens_view`)
+* the estimation lab (:mod:`egtviz.viewer.course.lab_view`) or the convention lens (:mod:`egtviz.viewer.course.lens_view`)
   when the lesson uses them; they draw the panels through the tab's lesson policy's ``panel_filter``;
 * when the step has a servo run (an ``open_demo`` change), its settings and a button that opens that demo
   with them in this tab (the demo's *Back* button returns to the lesson, at the same step).
@@ -30,7 +30,7 @@ A lock is the scene model's (it refuses every edit of a locked pose); a check al
 as the way back, when a camera locked at the step's start (the model's undo barrier) has gone or moved
 because the scene was replaced (:func:`lock_refusal`).
 
-Every callback is attached through :func:`egtviz.viewer.fields.on_event`, so an error becomes a
+Every callback is attached through :func:`egtviz.viewer.workbench.fields.on_event`, so an error becomes a
 notification in this tab.
 """
 
@@ -43,18 +43,18 @@ from typing import Any
 
 import numpy as np
 
-from ..lessons import Lesson, LessonRun, ProgressStore
-from ..lessons.answers import EXAMPLE
-from ..lessons.changes import RANGED_FIELDS, SetLab, SetLens, SetRange
-from ..lessons.progress import LearnerNameError, learner_key
-from ..lessons.runner import ResolvedTask
-from ..lessons.tasks import RESET_ADVICE, ChoiceTask
-from ..scene import SceneError
-from ..scene.constraints import CameraRanges
-from .camera_fields import field_of_spec
-from .fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
+from ...lessons import Lesson, LessonRun, ProgressStore
+from ...lessons.answers import EXAMPLE
+from ...lessons.changes import RANGED_FIELDS, SetLab, SetLens, SetRange
+from ...lessons.progress import LearnerNameError, learner_key
+from ...lessons.runner import ResolvedTask
+from ...lessons.tasks import RESET_ADVICE, ChoiceTask
+from ...scene import SceneError
+from ...scene.constraints import CameraRanges
+from ..workbench.camera_fields import field_of_spec
+from ..workbench.fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
 from .progress_notice import progress_notice_html, show_name_in_use
-from .lesson_policy import LessonPolicy
+from ..workbench.lesson_policy import LessonPolicy
 
 __all__ = [
     "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "lock_refusal",
@@ -286,7 +286,7 @@ class LessonPanel:
     """A lesson in a workbench tab.
 
     Args:
-        view: the tab's :class:`~egtviz.viewer.app.ClientView`; its model must be ``run.model``.
+        view: the tab's :class:`~egtviz.viewer.workbench.app.ClientView`; its model must be ``run.model``.
         run: the lesson run (already at the learner's remembered step).
         progress: where progress is kept when the learner types a name here.
         on_back: opens the course's start page in this tab (None: no such button).

@@ -4,7 +4,7 @@
 shows the :class:`StartPage`: the learner's name, one line per lesson (its number and title, its summary, and
 "done", "step k of n" or "not started" for that name), a button to open each lesson and one to open the
 workbench. A lesson opens as the workbench with the lesson's panel on top
-(:class:`~egtviz.viewer.lesson_view.LessonPanel`); "Back to the course" returns to the start page, and the
+(:class:`~egtviz.viewer.course.lesson_view.LessonPanel`); "Back to the course" returns to the start page, and the
 workbench has the same button. ``egtviz lesson NAME`` opens that lesson in every new tab instead.
 
 The lessons are read once, when the server starts: a lesson file edited later is read on the next start.
@@ -21,12 +21,12 @@ from typing import Any
 
 import viser
 
-from ..lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
-from ..lessons.progress import LessonProgress
-from ..scene import SceneModel
-from .fields import Debouncer, FieldError, on_event
+from ...lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
+from ...lessons.progress import LessonProgress
+from ...scene import SceneModel
+from ..workbench.fields import Debouncer, FieldError, on_event
 from .lesson_view import LESSON_ORDER, LessonPanel, typed_learner_key
-from .palette import PRESENT_GUI_CSS
+from ..render.palette import PRESENT_GUI_CSS
 from .start_preview import start_preview_html
 from .progress_notice import progress_notice_html, show_name_in_use
 
@@ -124,7 +124,7 @@ class StartPage:
 
     def _window(self) -> Any:
         """The tab's window, as it reported its canvas (nothing is docked on the start page)."""
-        from .panels import DEFAULT_WINDOW, window_from_canvas
+        from ..render.panels import DEFAULT_WINDOW, window_from_canvas
 
         try:
             return window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
@@ -136,7 +136,7 @@ class StartPage:
         return max(self._window().height - 2 * START_PAGE_MARGIN_PX, 300.0)
 
     def _preview(self, width: float, present: bool) -> str:
-        """The workbench's scene drawn beside the page's column (:mod:`egtviz.viewer.start_preview`)."""
+        """The workbench's scene drawn beside the page's column (:mod:`egtviz.viewer.course.start_preview`)."""
         try:
             return start_preview_html(self.course.app.initial_scene, self._window(),
                                       left_px=START_PAGE_MARGIN_PX + width, margin_px=START_PAGE_MARGIN_PX,
@@ -146,7 +146,7 @@ class StartPage:
 
     def report(self, exc: BaseException) -> None:
         """Show what went wrong in this tab."""
-        from .fields import notify_error
+        from ..workbench.fields import notify_error
 
         notify_error(self.client, exc)
 
@@ -187,7 +187,7 @@ class StartPage:
         """Send this learner's record to the browser as a CSV download (the server writes no file)."""
         if not self.learner:
             raise FieldError("download my record: type your name first (your record is kept under it)")
-        from ..lessons.records import records_csv
+        from ...lessons.records import records_csv
 
         text = records_csv(self.course.progress.task_records(self.learner))
         self.client.send_file_download("egtviz-record.csv", text.encode("utf-8"), save_immediately=True)
@@ -213,7 +213,7 @@ class StartPage:
 
 
 class Course:
-    """The course served by an :class:`~egtviz.viewer.app.EgtvizApp`: what each tab shows, and its learner.
+    """The course served by an :class:`~egtviz.viewer.workbench.app.EgtvizApp`: what each tab shows, and its learner.
 
     Args:
         app: the app (its ``show_workbench`` and ``clear_tab`` build and clear a tab).

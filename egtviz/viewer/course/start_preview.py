@@ -2,7 +2,7 @@
 
 The start page's lesson list is a column on the left; the rest of the window would be blank. This draws the
 scene the workbench opens on, one panel per camera (the first two), with the image-plane panels' own renderer
-(:func:`egtviz.viewer.svg.image_plane_svg`), so a learner sees what "Open the workbench" leads to. It is plain
+(:func:`egtviz.viewer.render.svg.image_plane_svg`), so a learner sees what "Open the workbench" leads to. It is plain
 HTML placed beside the page's column (``position:fixed``), sized from the window the tab reported; it takes no
 input.
 """
@@ -12,10 +12,10 @@ from __future__ import annotations
 from html import escape
 from typing import Any
 
-from ..scene import compute_derived
-from .panel_view import fit_view
-from .panels import WindowSize, initial_view
-from .svg import NORMAL, PRESENT, image_plane_svg
+from ...scene import compute_derived
+from ..render.panel_view import fit_view
+from ..render.panels import WindowSize, initial_view
+from ..render.svg import NORMAL, PRESENT, image_plane_svg
 
 __all__ = ["PREVIEW_CAMERAS", "PREVIEW_MIN_PX", "start_preview_html"]
 

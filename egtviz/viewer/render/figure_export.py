@@ -1,7 +1,7 @@
 """Image-plane panels as figure files: SVG, and PNG rendered without a browser; the ``egtviz figure`` command.
 
 The numbers come from the scene layer (:func:`egtviz.scene.compute_derived`),
-the drawing from :func:`egtviz.viewer.svg.image_plane_svg`; this module only
+the drawing from :func:`egtviz.viewer.render.svg.image_plane_svg`; this module only
 fixes the figure's size and renders it. PNGs are rendered by resvg
 (``resvg-py``, a binary wheel: no system library, no browser) with the
 DejaVu Sans fonts that matplotlib ships, so a figure looks the same on every
@@ -10,7 +10,7 @@ machine, fonts installed or not.
 How the GUI uses it: ``panel_svg_of(plane, ...)`` for its "download SVG"
 button (the panel it shows, with its view); for "download PNG" it asks
 :func:`png_refusal` whether the figure is small enough and has
-:func:`svg_to_png` run in a worker process (:mod:`egtviz.viewer.png_worker`:
+:func:`svg_to_png` run in a worker process (:mod:`egtviz.viewer.render.png_worker`:
 resvg holds the GIL for the whole render). ``egtviz figure`` calls
 :func:`add_arguments` and :func:`run`, which renders in its own process::
 
@@ -32,7 +32,7 @@ from .panel_view import ViewBox, fit_view
 from .svg import NORMAL, PRESENT, image_plane_svg
 
 if TYPE_CHECKING:
-    from ..scene.derived import ImagePlane
+    from ...scene.derived import ImagePlane
 
 __all__ = ["FIGURE_FORMATS", "add_arguments", "panel_svg", "panel_svg_of", "png_pixels", "png_refusal", "run",
            "svg_to_png"]
@@ -72,12 +72,12 @@ def panel_svg(scene: Any, camera_name: str, *, present: bool = False, fit: bool 
         camera_name: the camera whose panel is drawn.
         present: presentation style.
         fit: show all the content (points outside the image, epipoles) as
-            :func:`~egtviz.viewer.panel_view.fit_view` does; else the image rectangle.
+            :func:`~egtviz.viewer.render.panel_view.fit_view` does; else the image rectangle.
 
     Raises:
         KeyError: no camera ``camera_name`` in the scene (the message lists the names).
     """
-    from ..scene import compute_derived
+    from ...scene import compute_derived
 
     names = [c.name for c in scene.cameras]
     if camera_name not in names:
@@ -145,7 +145,7 @@ def png_refusal(svg: str, *, scale: float = 2.0) -> str | None:
     ``MAX_PNG_SVG_BYTES``, ``MAX_PNG_SVG_ELEMENTS`` and ``MAX_PNG_PIXELS`` (output width x height). The check
     reads the text only (no XML parse): it costs milliseconds for a panel of 2,000 points.
     """
-    from ..scene import limits
+    from ...scene import limits
 
     pixels = png_pixels(svg, scale=scale)
     if pixels is None:
@@ -184,8 +184,8 @@ def _fail(message: str) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Write the figure; 0 on success, 2 (with one line on stderr) for a bad scene, camera, extension or output."""
-    from ..files import FileSafetyError, printable, write_atomic
-    from ..scene import SCENES, SceneError, load_scene_file
+    from ...files import FileSafetyError, printable, write_atomic
+    from ...scene import SCENES, SceneError, load_scene_file
 
     out = Path(args.out)
     ext = out.suffix.lower()

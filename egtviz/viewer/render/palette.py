@@ -35,7 +35,7 @@ RIM_COLOUR = "#777777"
 CAMERA_COLOURS: tuple[str, ...] = ("#1b1b1b", "#5a3e8c", "#2f6d3a", "#8c4a1e")
 
 #: Smallest text of a page in presentation mode, CSS pixels (what a projector's back row reads; the panels'
-#: :data:`egtviz.viewer.svg.PRESENT` sizes meet it too).
+#: :data:`egtviz.viewer.render.svg.PRESENT` sizes meet it too).
 PRESENT_MIN_TEXT_PX = 16.0
 #: Presentation mode's GUI type, for every page (workbench, start page, servo demos): Mantine (viser's GUI toolkit)
 #: scales its rem-based sizes by ``--mantine-scale``; the pages' own smaller notes (an inline ``font-size:0.8em``)

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from ..scene.derived import ImagePlane
+    from ...scene.derived import ImagePlane
 
 __all__ = [
     "FIT_MARGIN",

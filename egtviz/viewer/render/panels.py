@@ -1,6 +1,6 @@
 """Image-plane panels beside the 3D view: the grid they form, what each one shows, and the first 3D view.
 
-Pure layout in CSS pixels (no viser here; :mod:`egtviz.viewer.app` applies it):
+Pure layout in CSS pixels (no viser here; :mod:`egtviz.viewer.workbench.app` applies it):
 
 * :func:`window_from_canvas` estimates the browser window from the canvas
   size the tab reports when it connects;
@@ -33,7 +33,7 @@ from .panel_view import ViewBox, fit_view, fit_with_content, image_view, pan, st
 from .svg import NORMAL, PanelStyle, panel_layout
 
 if TYPE_CHECKING:
-    from ..scene.derived import ImagePlane
+    from ...scene.derived import ImagePlane
 
 __all__ = [
     "CONTROL_PX",
@@ -343,7 +343,7 @@ class PanelView:
         """The view box to draw ``plane`` with (None: the image rectangle).
 
         ``kept``: during a drag, the view of its previous step; a ``fit`` panel keeps it while it still shows all
-        the content (:func:`~egtviz.viewer.panel_view.steady_fit`).
+        the content (:func:`~egtviz.viewer.render.panel_view.steady_fit`).
         """
         if self.mode != "fit":
             return self.box

@@ -1,9 +1,9 @@
 """A figure's 2D plot (:class:`egtviz.scene.annotations.Plot`) as an inline SVG panel.
 
-A plot is drawn by the image-plane panel itself (:func:`egtviz.viewer.svg.image_plane_svg`): its pixels,
+A plot is drawn by the image-plane panel itself (:func:`egtviz.viewer.render.svg.image_plane_svg`): its pixels,
 lines and epipoles are handed over as an :class:`~egtviz.scene.ImagePlane` of a camera named after the plot
 (``Figure <n>``), so axes, ticks, numbered points, lines, epipole marks and arrows look and are tagged
-exactly as in a camera's panel (the ``data-kind`` contract of :mod:`egtviz.viewer.svg`). What a plot adds:
+exactly as in a camera's panel (the ``data-kind`` contract of :mod:`egtviz.viewer.render.svg`). What a plot adds:
 
 * the root also carries ``data-plot="<n>"``;
 * circles, as ``<circle data-kind="circle">`` in their MATLAB colour;
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from ..scene import Epipole, ImagePlane
-from ..scene.shown_numbers import shown_components
+from ...scene import Epipole, ImagePlane
+from ...scene.shown_numbers import shown_components
 from .panel_view import FIT_MARGIN, FIT_MAX_EXTENT, ViewBox, aspect_box
 from .svg import NORMAL, PanelStyle, image_plane_svg, panel_layout
 
@@ -115,7 +115,7 @@ def plot_image_plane(plot: Any, view: ViewBox) -> ImagePlane:
 
 def plot_svg(plot: Any, *, revision: int | None = None, max_height: str | None = None, style: PanelStyle = NORMAL,
              panel_px: float | None = None, fixed_size: bool = False) -> str:
-    """Inline SVG of a figure's 2D plot (arguments as :func:`egtviz.viewer.svg.image_plane_svg`)."""
+    """Inline SVG of a figure's 2D plot (arguments as :func:`egtviz.viewer.render.svg.image_plane_svg`)."""
     view = plot_view(plot)
     plane = plot_image_plane(plot, view)
     svg = image_plane_svg(plane, revision=revision, max_height=max_height, view=view, style=style,

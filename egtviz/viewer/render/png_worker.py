@@ -1,10 +1,10 @@
 """PNG downloads rendered in a worker process: one tab's PNG never holds up another tab.
 
-resvg (:func:`egtviz.viewer.figure_export.svg_to_png`) keeps Python's GIL for
+resvg (:func:`egtviz.viewer.render.figure_export.svg_to_png`) keeps Python's GIL for
 the whole render, seconds for a panel of 2,000 points. Run in the server's
 process it would stop every thread meanwhile, the websocket loop included, so
 that every other tab's edits waited for it. Here the render runs in a separate,
-long-lived Python process (``python -m egtviz.viewer.png_worker``) started at
+long-lived Python process (``python -m egtviz.viewer.render.png_worker``) started at
 the first PNG; the server's thread only waits on a pipe, without the GIL.
 
 A plain subprocess rather than :mod:`multiprocessing`: its "spawn" start runs
@@ -21,7 +21,7 @@ Three parts:
   turns, so that one tab's clicks cannot queue unbounded work or starve
   another tab's download.
 - :class:`PngDownloads`: one tab's PNG button. It refuses a figure above the
-  limits (:func:`~egtviz.viewer.figure_export.png_refusal`, with the reason),
+  limits (:func:`~egtviz.viewer.render.figure_export.png_refusal`, with the reason),
   shows "Rendering PNG..." while it waits, then sends the file, or a
   notification saying why not.
 
@@ -113,7 +113,7 @@ class WorkerProcess:
         root = str(Path(__file__).resolve().parents[2])
         env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH", "")) if p)
         # A session of its own: Ctrl-C stops the server, whose exit closes the pipe and so ends the worker.
-        self._proc = subprocess.Popen([sys.executable, "-m", "egtviz.viewer.png_worker"], stdin=subprocess.PIPE,
+        self._proc = subprocess.Popen([sys.executable, "-m", "egtviz.viewer.render.png_worker"], stdin=subprocess.PIPE,
                                       stdout=subprocess.PIPE, env=env, start_new_session=True)
         return self._proc
 

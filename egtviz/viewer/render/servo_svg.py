@@ -1,6 +1,6 @@
 """The servo demos' image plane as inline SVG: a pure function of one frame's drawing data.
 
-Testability contract (like :mod:`egtviz.viewer.svg`): the root ``<svg>`` carries
+Testability contract (like :mod:`egtviz.viewer.render.svg`): the root ``<svg>`` carries
 ``data-egtviz="servo-image"``, ``data-demo`` (``pinhole`` | ``panoramic``),
 ``data-frame`` (the frame index) and ``data-rev``; drawn elements carry
 ``data-kind``: ``border``, ``rim``, ``trail`` (``data-index``, one polyline per
@@ -9,13 +9,13 @@ feature with at least two finite samples), ``desired`` (``data-index``),
 (``data-index``), ``epipolar-conic`` (``data-index``; a bi-conic may have several
 pieces), ``epipole`` (``data-label``), ``message``, ``caption`` and ``legend``.
 
-The panel uses the image-plane panels' layout (:func:`egtviz.viewer.svg.panel_layout`):
-sizes in CSS pixels of a :class:`~egtviz.viewer.svg.PanelStyle` at the panel's
+The panel uses the image-plane panels' layout (:func:`egtviz.viewer.render.svg.panel_layout`):
+sizes in CSS pixels of a :class:`~egtviz.viewer.render.svg.PanelStyle` at the panel's
 width, tick steps from the view, the caption, the message and the legend in
 rows under the frame (never over the image), and the feature numbers and
 epipole labels placed clear of each other's marks
-(:func:`~egtviz.viewer.panel_view.place_labels`; each carries ``data-box``); a number
-farther from its feature than the panels allow (:func:`~egtviz.viewer.svg.number_fates`), or
+(:func:`~egtviz.viewer.render.panel_view.place_labels`; each carries ``data-box``); a number
+farther from its feature than the panels allow (:func:`~egtviz.viewer.render.svg.number_fates`), or
 nearer another, or on a mark, is joined to it by a ``label-leader`` line (``data-index``).
 The GUI calls ``servo_image_svg(img, style=PRESENT, panel_px=...)`` in
 presentation mode.
@@ -144,7 +144,7 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
         img: the frame's drawing data.
         revision: written as ``data-rev``.
         max_height: a CSS ``max-height`` for the SVG.
-        style: ``NORMAL`` or ``PRESENT`` (:mod:`egtviz.viewer.svg`).
+        style: ``NORMAL`` or ``PRESENT`` (:mod:`egtviz.viewer.render.svg`).
         panel_px: the panel's width on screen in CSS pixels, if known (default ``style.panel_px``).
         fixed_size: write ``width``/``height`` in pixels (a figure file).
     """
@@ -215,7 +215,7 @@ def _label_boxes(C: np.ndarray, D: np.ndarray, eps: list[tuple[str, np.ndarray]]
                  style: PanelStyle, k: float, bounds: tuple[float, float, float, float]
                  ) -> tuple[np.ndarray, list[bool], list[bool]]:
     """The boxes of the epipole labels and then the current features' numbers, clear of every disc, square and
-    cross, and which numbers are free and which need a leader line (:func:`~egtviz.viewer.svg.number_fates`)."""
+    cross, and which numbers are free and which need a leader line (:func:`~egtviz.viewer.render.svg.number_fates`)."""
     r_pt = style.mark_px * k
     lw = style.line_px * k
     a_sq = r_pt * 1.3

@@ -1,7 +1,7 @@
 """Image-plane panels as inline SVG: a pure function from an ``ImagePlane`` to a string.
 
 The SVG is in pixel units of the image: its ``viewBox`` is the panel's view
-(:class:`~egtviz.viewer.panel_view.ViewBox`, by default the image rectangle)
+(:class:`~egtviz.viewer.render.panel_view.ViewBox`, by default the image rectangle)
 plus margins for the axes' tick labels and the status lines under the frame.
 Sizes of text, lines and marks are given in CSS pixels by a
 :class:`PanelStyle` at a panel width ``panel_px`` and converted to image
@@ -12,11 +12,11 @@ It draws only what the scene layer computed (:class:`egtviz.scene.ImagePlane`):
 points, epipoles, clipped epipolar lines, epipolar conics, the mirror rim.
 
 How the GUI calls it: ``image_plane_svg(plane, view=view, style=PRESENT,
-panel_px=620)``, with ``view`` from :mod:`egtviz.viewer.panel_view`
+panel_px=620)``, with ``view`` from :mod:`egtviz.viewer.render.panel_view`
 (``fit_view``, ``zoom``, ``pan``; ``None`` = the image rectangle), ``style``
 ``NORMAL`` or ``PRESENT`` (presentation mode) and ``panel_px`` the width the
 panel will have on screen if the app knows it (else the style's own width).
-:mod:`egtviz.viewer.figure_export` writes the same SVG with a fixed size and
+:mod:`egtviz.viewer.render.figure_export` writes the same SVG with a fixed size and
 renders it to PNG.
 
 Testability contract (the browser tests rely on it):
@@ -40,7 +40,7 @@ Testability contract (the browser tests rely on it):
   how many point numbers found no free place and are not drawn), ``label-leader``
   (with ``data-index``: a line from a point number's box to its point);
 * every text that labels a mark (point numbers, epipole labels) is placed by
-  :func:`~egtviz.viewer.panel_view.place_labels` clear of the marks, arrows and
+  :func:`~egtviz.viewer.render.panel_view.place_labels` clear of the marks, arrows and
   other labels, and carries ``data-box="x0 y0 x1 y1"``: the box it was placed
   in (image pixels);
 * a point number is never free-floating: its box is within ``NUMBER_NEAR`` times
@@ -66,12 +66,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..scene.shown_numbers import format_value, format_vector
+from ...scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
 from .panel_view import ViewBox, image_view, place_labels, tick_values
 
 if TYPE_CHECKING:
-    from ..scene.derived import ImagePlane
+    from ...scene.derived import ImagePlane
 
 __all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "axes_svg", "empty_svg", "finite_runs", "image_plane_svg",
            "label_text", "number_fates", "panel_layout", "points_attr", "svg_number", "svg_open", "text_width_px"]
@@ -188,7 +188,7 @@ def panel_layout(view: ViewBox, style: PanelStyle, panel_px: float, n_rows: int)
     bottom the name ``v`` and the status rows. The scale is
     ``s = (panel_px - left - right) / view.width`` CSS pixels per image pixel,
     the same along v (square pixels), and the tick step is the smallest 1-2-5
-    step whose labels do not touch (:func:`~egtviz.viewer.panel_view.tick_values`).
+    step whose labels do not touch (:func:`~egtviz.viewer.render.panel_view.tick_values`).
     """
     t = style.tick_px
     tick_len, gap = 0.45 * t, 0.35 * t
@@ -813,7 +813,7 @@ def image_plane_svg(
         revision: written as ``data-rev`` on the root (lets a browser test or
             the benchmark recognise a given update).
         max_height: a CSS ``max-height`` for the SVG (it keeps its aspect ratio).
-        view: the part of the image plane shown (:mod:`egtviz.viewer.panel_view`);
+        view: the part of the image plane shown (:mod:`egtviz.viewer.render.panel_view`);
             ``None``: the image rectangle.
         style: ``NORMAL`` or ``PRESENT``.
         panel_px: the panel's width on screen in CSS pixels, if known: the

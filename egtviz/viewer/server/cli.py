@@ -2,7 +2,7 @@
 
 Before viser starts, the address is checked here (viser would retry an unusable one forever): the
 host is resolved with a time limit and a socket is bound to it. What the server then refuses from
-browsers is in :mod:`egtviz.viewer.guard`; both are described in ``docs/server.md``.
+browsers is in :mod:`egtviz.viewer.server.guard`; both are described in ``docs/server.md``.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import sys
 import threading
 from pathlib import Path
 
-from ..scene import scene_from_argument
+from ...scene import scene_from_argument
 
 __all__ = ["BindCheck", "ServeAddressError", "add_parser", "check_bind", "reachable_urls", "run", "serve", "start"]
 
@@ -208,7 +208,7 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
 
     ``course``: every new tab opens the course's start page; ``lesson``: every new tab opens that lesson.
 
-    The server gets the guards of :func:`egtviz.viewer.guard.install_guards` before any tab connects.
+    The server gets the guards of :func:`egtviz.viewer.server.guard.install_guards` before any tab connects.
 
     Raises:
         SceneFileError: the scene file cannot be read (the message names the file and entry).
@@ -218,12 +218,12 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     """
     import viser
 
-    from .app import EgtvizApp
+    from ..workbench.app import EgtvizApp
     from .guard import install_guards
 
     scene = scene_from_argument(str(scene_path)) if scene_path is not None else None
     if lesson is not None:
-        from ..lessons import load
+        from ...lessons import load
 
         load(lesson)  # before a server starts: LessonError names the lessons there are
     check_bind(host, port)
@@ -245,8 +245,8 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     Exit status 2 for a scene file that cannot be read or a lesson that does not exist, 1 for an address
     that cannot be used; either is reported in one line on stderr.
     """
-    from ..lessons import LessonError
-    from ..scene import SceneFileError
+    from ...lessons import LessonError
+    from ...scene import SceneFileError
 
     try:
         bind = check_bind(host, port)
@@ -287,7 +287,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m egtviz.viewer.cli [--host H] [--port P] [--scene FILE]``."""
+    """``python -m egtviz.viewer.server.cli [--host H] [--port P] [--scene FILE]``."""
     parser = argparse.ArgumentParser(prog="egtviz-serve")
     add_arguments(parser)
     _one_line_address_errors(parser)

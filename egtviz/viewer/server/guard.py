@@ -1,7 +1,7 @@
 """Server-side guards viser has no option for: the websocket's Origin, upload caps, event floods.
 
 :func:`install_guards` is called on a freshly made :class:`viser.ViserServer` (``egtviz serve`` does it
-in :func:`egtviz.viewer.cli.start`). It adds three things, all described in ``docs/server.md``:
+in :func:`egtviz.viewer.server.cli.start`). It adds three things, all described in ``docs/server.md``:
 
 * **Origin.** A websocket handshake whose ``Origin`` header is not the page's own origin is answered
   with HTTP 403: a page on another site (or a DNS-rebinding name) cannot drive the app. A handshake
@@ -65,7 +65,7 @@ _DRAIN_BATCH = 64
 def _default_upload_bytes() -> int:
     """The scene file size limit, shared with the CLI's reads when ``egtviz.scene.limits`` states it."""
     try:
-        from ..scene import limits
+        from ...scene import limits
     except ImportError:
         return FALLBACK_UPLOAD_BYTES
     value = getattr(limits, "MAX_SCENE_FILE_BYTES", None)

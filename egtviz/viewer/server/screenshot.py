@@ -1,4 +1,4 @@
-"""Save a screenshot of the viewer: ``python -m egtviz.viewer.screenshot [--panoramic] [OUT.png]``.
+"""Save a screenshot of the viewer: ``python -m egtviz.viewer.server.screenshot [--panoramic] [OUT.png]``.
 
 Starts an in-process server on a free port, opens it in headless Chromium at
 1600 x 900, selects point 3 (so its epipolar plane shows) and writes the PNG
@@ -24,8 +24,8 @@ def take_screenshot(out: str | Path = DEFAULT_OUT, *, width: int = 1600, height:
     """
     import viser
 
-    from ..scene import default_scene
-    from .app import EgtvizApp
+    from ...scene import default_scene
+    from ..workbench.app import EgtvizApp
     from .browser import chromium, close_notifications, open_viewer
 
     out = Path(out)
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     scene = None
     if "--panoramic" in argv:
-        from ..scene import panoramic_scene
+        from ...scene import panoramic_scene
 
         argv.remove("--panoramic")
         scene = panoramic_scene().replace(selected_point=2)

@@ -158,7 +158,7 @@ def event_loop(server: Any) -> Any:
 
 def callback_pool(server: Any) -> ThreadPoolExecutor:
     """The executor ``server`` submits GUI and scene callbacks to (viser's thread pool, or egtviz's fair
-    executor over it when the guards of :mod:`egtviz.viewer.guard` are on): each ``submit`` runs a callback."""
+    executor over it when the guards of :mod:`egtviz.viewer.server.guard` are on): each ``submit`` runs a callback."""
     return server._thread_executor
 
 

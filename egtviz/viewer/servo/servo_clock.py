@@ -18,7 +18,7 @@ import viser
 
 from egtviz.servo import ServoResult
 
-from .fields import FieldError
+from ..workbench.fields import FieldError
 
 __all__ = ["FPS", "ServoClock"]
 

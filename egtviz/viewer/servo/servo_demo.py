@@ -1,11 +1,11 @@
 """The visual-servoing demos in the browser by name (EGT reference, section 7): one class per demo.
 
 :data:`SERVO_DEMOS` maps each demo's name to its class, every one a
-:class:`~egtviz.viewer.servo_player.ServoPlayer` (the shared run fields, playback, panel and plots):
+:class:`~egtviz.viewer.servo.servo_player.ServoPlayer` (the shared run fields, playback, panel and plots):
 
-* ``"pinhole"``: :class:`~egtviz.viewer.servo_pinhole_demo.PinholeServoDemo`, a camera on a Puma 560 under
+* ``"pinhole"``: :class:`~egtviz.viewer.servo.servo_pinhole_demo.PinholeServoDemo`, a camera on a Puma 560 under
   Rives' hybrid task;
-* ``"panoramic"``: :class:`~egtviz.viewer.servo_panoramic_demo.PanoramicServoDemo`, a catadioptric camera on a
+* ``"panoramic"``: :class:`~egtviz.viewer.servo.servo_panoramic_demo.PanoramicServoDemo`, a catadioptric camera on a
   holonomic robot, bi-conics.
 
 Lessons load a demo and drive it::

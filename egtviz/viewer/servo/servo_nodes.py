@@ -1,6 +1,6 @@
 """The 3D nodes every servo demo shares: the numbered scene points, the moving body's path and the viewing rays.
 
-Pure drawing helpers for :class:`~egtviz.viewer.servo_player.ServoPlayer`: they add nodes under ``/servo`` and
+Pure drawing helpers for :class:`~egtviz.viewer.servo.servo_player.ServoPlayer`: they add nodes under ``/servo`` and
 pose them from the run's :class:`~egtviz.servo.frames.ServoFrames`; they compute no geometry.
 """
 
@@ -13,7 +13,7 @@ import numpy as np
 from egtviz.geometry.poses import quat_wxyz_from_matrix
 from egtviz.servo.frames import ServoFrames
 
-from .palette import hex_to_rgb, point_colour
+from ..render.palette import hex_to_rgb, point_colour
 
 __all__ = ["add_common_nodes", "draw_path_and_rays", "look_from", "pose_node"]
 

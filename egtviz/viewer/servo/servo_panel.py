@@ -1,6 +1,6 @@
 """The panel of a servo demo: the image plane and the two charts of a frame, and the frame's read-out.
 
-:class:`ServoPanel` owns a right-hand viser panel with the image plane (SVG, :mod:`egtviz.viewer.servo_svg`) and
+:class:`ServoPanel` owns a right-hand viser panel with the image plane (SVG, :mod:`egtviz.viewer.render.servo_svg`) and
 two uPlot charts (the controls; the errors in % of their start value), revealed up to the frame shown, and the
 read-out line under the playback controls. It formats and sends what the run's
 :class:`~egtviz.servo.frames.ServoFrames` hold for a frame; it computes no geometry. Without the panel
@@ -18,14 +18,14 @@ import viser
 from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames, trail_indices
 
-from .servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
-from .svg import NORMAL, PRESENT
+from ..render.servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
+from ..render.svg import NORMAL, PRESENT
 
 __all__ = ["ERRORS_TOP_PERCENT", "PANEL_INSET_PX", "PANEL_WIDTH", "PLOT_SAMPLES", "PRESENT_PANEL_WIDTH", "ServoPanel",
            "Y_TICK_SPACE"]
 
 PANEL_WIDTH = 470
-#: The panel's width in presentation mode (the image panel is drawn in :data:`egtviz.viewer.svg.PRESENT`).
+#: The panel's width in presentation mode (the image panel is drawn in :data:`egtviz.viewer.render.svg.PRESENT`).
 PRESENT_PANEL_WIDTH = 600
 #: The panel's width less the image's on screen (the panel's padding and scroll bar; measured in Chromium).
 PANEL_INSET_PX = 32
@@ -49,7 +49,7 @@ class ServoPanel:
         size: the image's ``(width, height)``, pixels.
         n_points: how many features the image has.
         rim: the mirror's rim in the image (``None``: no mirror).
-        present: presentation mode (the image in :data:`~egtviz.viewer.svg.PRESENT`, a wider panel).
+        present: presentation mode (the image in :data:`~egtviz.viewer.render.svg.PRESENT`, a wider panel).
         control_title: the controls chart's title.
         control_key: the ``result.controls`` series plotted.
         control_series: ``(label, colour, scale)`` per control component.

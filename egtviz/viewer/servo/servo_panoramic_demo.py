@@ -5,7 +5,7 @@ In 3D: the robot (a disc with an orange heading arrow and a mast carrying the mi
 :data:`MIRROR_DRAW_SCALE` times enlarged so that it can be seen), the target robot (translucent green), the points,
 the rays from the mirror focus and the trajectory on the ground. The image plane shows the mirror rim, the
 bi-conic of each feature pair and the true epipoles ``e``, ``e'`` (:func:`egtviz.servo.frames.panoramic_frames`);
-the caption says which step runs. Only the shared run fields (:class:`~egtviz.viewer.servo_player.ServoPlayer`).
+the caption says which step runs. Only the shared run fields (:class:`~egtviz.viewer.servo.servo_player.ServoPlayer`).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ PHASES = {1: "step 1: rotation", 2: "step 2: translation"}
 
 
 class PanoramicServoDemo(ServoPlayer):
-    """The panoramic demo in one tab; options as :class:`~egtviz.viewer.servo_player.ServoPlayer`."""
+    """The panoramic demo in one tab; options as :class:`~egtviz.viewer.servo.servo_player.ServoPlayer`."""
 
     kind: ClassVar[str] = "panoramic"
     TITLE: ClassVar[str] = "Visual servoing: panoramic camera on a mobile robot"

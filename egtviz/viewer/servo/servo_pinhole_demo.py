@@ -4,7 +4,7 @@ In 3D: the arm (rtb-data's link meshes, placed at the link frames of :class:`~eg
 figure if the meshes are missing), the camera frustum on the end effector (black), the target frustum (green), the
 numbered scene points, the viewing rays and the camera's path. The image plane shows the epipolar line of each
 desired feature in the current image and the epipole (:func:`egtviz.servo.frames.pinhole_frames`). Run fields
-beside the shared ones (:class:`~egtviz.viewer.servo_player.ServoPlayer`): beta and the F estimator.
+beside the shared ones (:class:`~egtviz.viewer.servo.servo_player.ServoPlayer`): beta and the F estimator.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from egtviz.servo.pinhole_arm import (
     puma,
 )
 
-from .fields import NumberRule
+from ..workbench.fields import NumberRule
 from .servo_nodes import pose_node
 from .servo_player import RUN_RULES, Choice, ServoPlayer
 
@@ -73,7 +73,7 @@ class PinholeServoDemo(ServoPlayer):
         client: the viser client (tab) to draw in.
         beta: weight of the translation task (0: rotation only).
         estimator: F from the ``"true"`` poses or estimated (``"linear"``, ``"normalized"``, ``"sampson"``).
-        **options: the shared ones of :class:`~egtviz.viewer.servo_player.ServoPlayer` (seed, noise_px, steps,
+        **options: the shared ones of :class:`~egtviz.viewer.servo.servo_player.ServoPlayer` (seed, noise_px, steps,
             speed, autorun, autoplay, on_back, show_panel, field_delay).
     """
 

@@ -2,19 +2,19 @@
 
 :class:`ServoPlayer` owns everything a demo shows in one viser client (browser tab) except what is particular to
 the demo (its robot in 3D, its extra run fields, its simulation); each demo is a subclass
-(:mod:`egtviz.viewer.servo_pinhole_demo`, :mod:`egtviz.viewer.servo_panoramic_demo`). The player is a small
+(:mod:`egtviz.viewer.servo.servo_pinhole_demo`, :mod:`egtviz.viewer.servo.servo_panoramic_demo`). The player is a small
 coordinator (the tab's lock, the run shown, the 3D nodes) over three parts, each in its own module:
 
-* the run form (:class:`~egtviz.viewer.servo_run_form.ServoRunForm`): a *Run* folder (seed, the demo's own fields,
+* the run form (:class:`~egtviz.viewer.servo.servo_run_form.ServoRunForm`): a *Run* folder (seed, the demo's own fields,
   noise, max steps, Run) and a status line that shows a failed or non-converged run in words; every field is
-  validated (:mod:`egtviz.viewer.fields`): a refused value gets a notification and the field shows the last valid
+  validated (:mod:`egtviz.viewer.workbench.fields`): a refused value gets a notification and the field shows the last valid
   one. *Run* simulates in a background thread, within the server's frame budget
-  (:mod:`egtviz.viewer.servo_budget`), and derives the per-frame geometry (:mod:`egtviz.servo.frames`) there too:
+  (:mod:`egtviz.viewer.servo.servo_budget`), and derives the per-frame geometry (:mod:`egtviz.servo.frames`) there too:
   playback only formats and sends;
-* the playback clock (:class:`~egtviz.viewer.servo_clock.ServoClock`): a *Playback* folder (Play/Pause, step
+* the playback clock (:class:`~egtviz.viewer.servo.servo_clock.ServoClock`): a *Playback* folder (Play/Pause, step
   back/forward, speed, time scrubber) and a playback thread that advances the frame at the chosen speed;
-* the panel (:class:`~egtviz.viewer.servo_panel.ServoPanel`): on the right, the image plane (SVG,
-  :mod:`egtviz.viewer.servo_svg`) and two uPlot charts (controls; errors) revealed up to the current time, and the
+* the panel (:class:`~egtviz.viewer.servo.servo_panel.ServoPanel`): on the right, the image plane (SVG,
+  :mod:`egtviz.viewer.render.servo_svg`) and two uPlot charts (controls; errors) revealed up to the current time, and the
   frame's read-out.
 
 The player draws the 3D nodes under ``/servo/...`` (the scene points with their numbers, the viewing rays and the
@@ -41,9 +41,9 @@ from egtviz.scene.limits import SERVO_DEMO_STEPS
 from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames
 
-from .fields import NumberRule, notify_error, on_event
-from .palette import PRESENT_GUI_CSS
-from .panels import CONTROL_PX
+from ..workbench.fields import NumberRule, notify_error, on_event
+from ..render.palette import PRESENT_GUI_CSS
+from ..render.panels import CONTROL_PX
 from .servo_budget import SERVER_BUDGET, ServoBudget
 from .servo_clock import FPS, ServoClock
 from .servo_nodes import add_common_nodes, draw_path_and_rays, look_from, pose_node
@@ -82,7 +82,7 @@ class ServoPlayer(ABC):
         on_back: if given, a "Back" button calls it (the app uses it to return to the workbench).
         show_panel: add the right-hand panel (image plane and plots).
         field_delay: seconds a run field must stay unchanged before it is judged (0: at once).
-        budget: the server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo_budget`).
+        budget: the server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo.servo_budget`).
         present: presentation mode: large type in the GUI and the image panel (``egtviz serve --present``).
         **params: the demo's own run parameters (its ``RULES`` and ``CHOICES``).
 
@@ -140,7 +140,7 @@ class ServoPlayer(ABC):
         self._closed = threading.Event()
         self._listeners: list[Callable[[ServoResult], None]] = []
         self._on_back = on_back
-        #: The server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo_budget`).
+        #: The server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo.servo_budget`).
         self.budget = SERVER_BUDGET if budget is None else budget
         self.form = ServoRunForm(
             self, client=client, kind=self.kind, rules=self.RULES, choices=self.CHOICES, given=given,

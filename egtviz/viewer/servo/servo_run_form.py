@@ -3,11 +3,11 @@
 :class:`ServoRunForm` holds the last valid value of every run parameter (:attr:`ServoRunForm.values`), the *Run*
 folder (seed, the demo's own fields, noise, max steps, Run and a progress bar), the status line and every run
 field's handle (the *speed* drop-down too, which sits in the *Playback* folder). A field's text is judged once the
-user stopped typing (:class:`~egtviz.viewer.fields.Debouncer`); a refused value gets a notification and the field
+user stopped typing (:class:`~egtviz.viewer.workbench.fields.Debouncer`); a refused value gets a notification and the field
 shows the last valid one.
 
 *Run* simulates in a background thread. The run first reserves its frames from the server-wide budget
-(:mod:`egtviz.viewer.servo_budget`): it may wait in the queue (the status says so) or be refused (a notification);
+(:mod:`egtviz.viewer.servo.servo_budget`): it may wait in the queue (the status says so) or be refused (a notification);
 when it ends, the form hands the result or the error to its player (``land``) under the lock and, once the lock is
 released, tells it a good run is there (``finished``). A run started after another replaces it: the stale thread's
 outcome is dropped.
@@ -27,7 +27,7 @@ from egtviz.scene.limits import SERVO_DEMO_STEPS
 from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames
 
-from .fields import Debouncer, FieldError, NumberRule, format_number, on_event, parse_numbers
+from ..workbench.fields import Debouncer, FieldError, NumberRule, format_number, on_event, parse_numbers
 from .servo_budget import ServoBudget, ServoBusy, notify_busy
 
 __all__ = ["Choice", "ServoRunForm", "status_html"]

@@ -1,4 +1,4 @@
-"""``python -m egtviz.viewer.servo_screenshot [pinhole|panoramic] [OUT.png] [--frac F] [--size WxH]``: a demo mid-run.
+"""``python -m egtviz.viewer.servo.servo_screenshot [pinhole|panoramic] [OUT.png] [--frac F] [--size WxH]``: a demo mid-run.
 
 Starts an in-process server with the demo, opens it in headless Chromium (a window of ``W x H`` CSS pixels,
 default 1366x768), waits for the run, shows the frame at ``F`` of the run (default 0.3) and saves the picture.
@@ -16,8 +16,8 @@ SVG_SELECTOR = 'svg[data-egtviz="servo-image"]'
 def take(kind: str, out: str | Path, *, frac: float = 0.3, width: int = 1366, height: int = 768) -> Path:
     import viser
 
-    from .app import EgtvizApp
-    from .browser import chromium, close_notifications
+    from ..workbench.app import EgtvizApp
+    from ..server.browser import chromium, close_notifications
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
@@ -45,7 +45,7 @@ def take(kind: str, out: str | Path, *, frac: float = 0.3, width: int = 1366, he
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m egtviz.viewer.servo_screenshot")
+    p = argparse.ArgumentParser(prog="python -m egtviz.viewer.servo.servo_screenshot")
     p.add_argument("kind", choices=["pinhole", "panoramic"])
     p.add_argument("out", nargs="?", default=None)
     p.add_argument("--frac", type=float, default=0.3, help="where in the run (0..1)")

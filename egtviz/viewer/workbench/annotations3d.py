@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .palette import hex_to_rgb
+from ..render.palette import hex_to_rgb
 
 __all__ = ["Annotations3D"]
 

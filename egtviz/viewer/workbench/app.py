@@ -9,11 +9,11 @@ Data flow (one direction)::
 Each browser tab has its own model: edits in one tab never reach another.
 A tab's :class:`ClientView` is a small coordinator (the lock, the model
 subscription, the render) over parts with one job each: the control panel and
-scene actions (:mod:`~egtviz.viewer.workbench_controls`), one settings folder per
-camera (:mod:`~egtviz.viewer.camera_settings`), gizmo input
-(:mod:`~egtviz.viewer.drag_input`), the panels (:mod:`~egtviz.viewer.panel_dock`),
-the F/E read-out (:mod:`~egtviz.viewer.readout`), and what a lesson allows
-(:mod:`~egtviz.viewer.lesson_policy`).
+scene actions (:mod:`~egtviz.viewer.workbench.workbench_controls`), one settings folder per
+camera (:mod:`~egtviz.viewer.workbench.camera_settings`), gizmo input
+(:mod:`~egtviz.viewer.workbench.drag_input`), the panels (:mod:`~egtviz.viewer.workbench.panel_dock`),
+the F/E read-out (:mod:`~egtviz.viewer.workbench.readout`), and what a lesson allows
+(:mod:`~egtviz.viewer.workbench.lesson_policy`).
 Every event handler and every render runs under the view's lock, and a render
 always draws the model's *current* scene, so an event that arrives late (viser
 runs callbacks in a thread pool) cannot overwrite a newer state. GUI fields are
@@ -21,10 +21,10 @@ written back under a guard so that the write does not look like a user edit.
 
 Every input is judged on the server. Number fields are text fields whose raw
 text is parsed and range-checked in the field's own units
-(:mod:`egtviz.viewer.fields`, ranges from :mod:`egtviz.scene.limits`), once the
+(:mod:`egtviz.viewer.workbench.fields`, ranges from :mod:`egtviz.scene.limits`), once the
 user stops typing; drop-down values are checked against the options offered,
 since a hand-written client can send any string. Every callback is attached
-through :func:`~egtviz.viewer.fields.on_event`: whatever it raises reaches the
+through :func:`~egtviz.viewer.workbench.fields.on_event`: whatever it raises reaches the
 tab as a notification, and the fields and gizmos go back to the model's values.
 Scene files travel through the browser (download and upload), never by a
 server path.
@@ -43,27 +43,27 @@ from typing import TYPE_CHECKING, Any
 
 import viser
 
-from ..scene import (
+from ...scene import (
     Scene,
     SceneError,
     SceneModel,
     compute_derived,
     default_scene,
 )
-from ..scene.extent import scene_extent
+from ...scene.extent import scene_extent
 from .camera_settings import CameraSettings
 from .drag_input import DragInput
 from .fields import Debouncer, describe_error, notify_error, on_event
 from .lesson_policy import ALLOW_ALL, LessonPolicy
 from .panel_dock import PRESENT_LABEL_SCALE, PanelDock, plot_key
-from .panels import DEFAULT_WINDOW, PanelGrid, WindowSize, framed_camera, plan_grid
+from ..render.panels import DEFAULT_WINDOW, PanelGrid, WindowSize, framed_camera, plan_grid
 from .readout import PairReadout, pair_html
-from .svg import NORMAL, PRESENT, empty_svg
-from .svg import warm_up as svg_warm_up
+from ..render.svg import NORMAL, PRESENT, empty_svg
+from ..render.svg import warm_up as svg_warm_up
 from .workbench_controls import WorkbenchControls
 
 if TYPE_CHECKING:
-    from ..scene.derived import Derived, ImagePlane
+    from ...scene.derived import Derived, ImagePlane
 
 __all__ = ["EgtvizApp", "ClientView", "PRESENT_LABEL_SCALE", "UpdateTiming", "pair_html"]
 
@@ -97,10 +97,10 @@ class ClientView:
 
     It holds the lock every event and render runs under, the model subscription, and the render; the parts it owns
     do the rest: :attr:`controls` (the control panel and scene actions), :attr:`cameras` (one
-    :class:`~egtviz.viewer.camera_settings.CameraSettings` per camera folder), :attr:`drag` (gizmo input),
+    :class:`~egtviz.viewer.workbench.camera_settings.CameraSettings` per camera folder), :attr:`drag` (gizmo input),
     :attr:`dock` (the panels) and :attr:`pair_readout` (the F/E read-out). A lesson view sets :attr:`policy`.
 
-    Every callback is attached through :func:`egtviz.viewer.fields.on_event`:
+    Every callback is attached through :func:`egtviz.viewer.workbench.fields.on_event`:
     whatever it raises reaches this tab as a notification, and the fields and
     gizmos go back to the model's values.
 
@@ -114,7 +114,7 @@ class ClientView:
         model: the tab's own :class:`SceneModel`.
         open_demo: ``open_demo(kind)`` opens a visual-servoing demo in this tab; None: no such folder.
         field_delay: seconds a text field must stay unchanged before it is judged (0: at once).
-        present: start in presentation mode (large type, thick lines: see :data:`egtviz.viewer.svg.PRESENT`).
+        present: start in presentation mode (large type, thick lines: see :data:`egtviz.viewer.render.svg.PRESENT`).
         window: the tab's window and device pixel ratio as a previous workbench measured them (None: ask the tab).
     """
 
@@ -198,7 +198,7 @@ class ClientView:
 
     @property
     def png(self) -> Any:
-        """The panels' PNG downloads (:class:`~egtviz.viewer.png_worker.PngDownloads`)."""
+        """The panels' PNG downloads (:class:`~egtviz.viewer.render.png_worker.PngDownloads`)."""
         return self.dock.png
 
     @png.setter
@@ -482,7 +482,7 @@ class EgtvizApp:
         demo: open this servo demo (``"pinhole"`` or ``"panoramic"``) in every new tab instead of the workbench.
         field_delay: seconds a text field must stay unchanged before it is judged (tests use 0: at once).
         present: every new tab starts in presentation mode (``egtviz --present``).
-        course: every new tab starts on the course's start page (:mod:`egtviz.viewer.start_page`): the lessons,
+        course: every new tab starts on the course's start page (:mod:`egtviz.viewer.course.start_page`): the lessons,
             the learner's name, and the workbench one click away.
         lesson: every new tab opens this lesson (``egtviz lesson NAME``), with the course one click away.
         progress: where learners' progress is kept (a :class:`~egtviz.lessons.ProgressStore`; default: the
@@ -506,7 +506,7 @@ class EgtvizApp:
         #: New tabs start in presentation mode.
         self.present = bool(present)
         self.views: dict[int, ClientView] = {}
-        #: The servo demo shown in a tab (``egtviz.viewer.servo_demo.ServoDemo``), by client id.
+        #: The servo demo shown in a tab (``egtviz.viewer.servo.servo_demo.ServoDemo``), by client id.
         self.demos: dict[int, Any] = {}
         self._models: dict[int, SceneModel] = {}
         #: Each tab's window as its last workbench estimated it (a servo demo narrows the canvas it reports).
@@ -516,7 +516,7 @@ class EgtvizApp:
         #: The course (start page, lessons) that new tabs open in; None: the workbench or ``demo``.
         self.course: Any = None
         if course or lesson is not None:
-            from .start_page import Course
+            from ..course.start_page import Course
 
             self.course = Course(self, lesson=lesson, progress=progress)  # LessonError: no such lesson
         self._frame_view(self.initial_scene)
@@ -614,12 +614,12 @@ class EgtvizApp:
         if self.course is not None:
             self.course.forget(client.client_id)
 
-    # -- visual-servoing demos (egtviz.viewer.servo_demo) ---------------------------------
+    # -- visual-servoing demos (egtviz.viewer.servo.servo_demo) ---------------------------------
 
     def open_demo(self, client: viser.ClientHandle, kind: str, **options: Any) -> Any:
         """Replace the tab's workbench by a servo demo (its scene is kept for the way back); ``options``: the
         demo's run fields (``seed``, ``beta``, ...: ``make_servo_demo``)."""
-        from .servo_demo import make_servo_demo
+        from ..servo.servo_demo import make_servo_demo
 
         cid = client.client_id
         with self._lock:

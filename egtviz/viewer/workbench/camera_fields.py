@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..geometry.camera_model import ParameterSpec
+from ...geometry.camera_model import ParameterSpec
 from .fields import NumberRule
 
 __all__ = ["PRESENTATIONS", "CameraField", "camera_fields", "field_of_spec"]

@@ -1,8 +1,8 @@
 """One camera's settings folder in the workbench: its pose, its model's choices and parameters, its Remove button.
 
-Every field is judged on the server in the field's own units (:mod:`egtviz.viewer.fields`, ranges from
+Every field is judged on the server in the field's own units (:mod:`egtviz.viewer.workbench.fields`, ranges from
 :mod:`egtviz.scene.limits` and the model's parameter specs); a lesson's narrower ranges are asked of the tab's
-:class:`~egtviz.viewer.lesson_policy.LessonPolicy` before a value is committed.
+:class:`~egtviz.viewer.workbench.lesson_policy.LessonPolicy` before a value is committed.
 """
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ from collections.abc import Sequence
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
-from ..geometry.camera_model import CAMERA_MODELS
-from ..scene import SceneError, limits
-from ..scene.specs import OutOfRangeError, model_choices
+from ...geometry.camera_model import CAMERA_MODELS
+from ...scene import SceneError, limits
+from ...scene.specs import OutOfRangeError, model_choices
 from .camera_fields import CameraField, camera_fields
 from .fields import FieldError, NumberRule, format_number, format_numbers, parse_numbers
 from .models import SHORT_LABELS
@@ -38,7 +38,7 @@ FIELD_RULES: dict[str, tuple[NumberRule, ...]] = {
     "ypr": _rules("angle", "deg", limits.ANGLE_DEG, axes=("yaw", "pitch", "roll")),
 }
 """The pose fields every camera has; a model's own fields take their rules from its parameters
-(:mod:`egtviz.viewer.camera_fields`)."""
+(:mod:`egtviz.viewer.workbench.camera_fields`)."""
 
 #: Spec fields (as :class:`OutOfRangeError` names them) in the words and units of the GUI: label, unit, scale.
 _SPEC_TERMS = {

@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..geometry import GeometryError
-from ..geometry.poses import matrix_from_quat_wxyz
-from ..scene import SceneError
+from ...geometry import GeometryError
+from ...geometry.poses import matrix_from_quat_wxyz
+from ...scene import SceneError
 
 if TYPE_CHECKING:
     from .app import ClientView

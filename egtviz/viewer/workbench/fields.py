@@ -26,8 +26,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..scene import SceneError
-from ..scene.shown_numbers import shown_components
+from ...scene import SceneError
+from ...scene.shown_numbers import shown_components
 
 __all__ = [
     "FieldError",
@@ -217,7 +217,7 @@ def describe_error(exc: BaseException) -> tuple[str, str]:
     the tab gets its type only, since its text can hold server paths; the
     details go to the server's log.
     """
-    from ..scene import SceneFileError
+    from ...scene import SceneFileError
 
     if isinstance(exc, SceneFileError):
         return "Could not load the scene", _short(str(exc))

@@ -14,13 +14,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..lessons.display import PanelDisplay, thin_lines
-from ..scene import Scene
-from .panel_view import ViewBox
-from .panels import PanelView
+from ...lessons.display import PanelDisplay, thin_lines
+from ...scene import Scene
+from ..render.panel_view import ViewBox
+from ..render.panels import PanelView
 
 if TYPE_CHECKING:
-    from ..scene.derived import Derived
+    from ...scene.derived import Derived
 
 __all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter", "PoseGuard"]
 

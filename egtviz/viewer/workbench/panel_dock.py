@@ -1,20 +1,20 @@
 """The image-plane panels of a workbench tab: their grid and dock, each panel's view, downloads, presentation mode.
 
-The grid follows the tab's window (:func:`~egtviz.viewer.panels.plan_grid`); each panel keeps its own view (zoom,
-pan, fit: :class:`~egtviz.viewer.panels.PanelView`), and an SVG whose inputs did not change is not drawn again.
+The grid follows the tab's window (:func:`~egtviz.viewer.render.panels.plan_grid`); each panel keeps its own view (zoom,
+pan, fit: :class:`~egtviz.viewer.render.panels.PanelView`), and an SVG whose inputs did not change is not drawn again.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..scene import Scene, SceneError
-from ..scene.extent import scene_extent
+from ...scene import Scene, SceneError
+from ...scene.extent import scene_extent
 from .fields import FieldError
-from .figure_export import panel_svg_of
+from ..render.figure_export import panel_svg_of
 from .gui_text import plain
-from .palette import PRESENT_GUI_CSS
-from .panels import (
+from ..render.palette import PRESENT_GUI_CSS
+from ..render.panels import (
     DEFAULT_WINDOW,
     DIVIDER_PX,
     VIEW_ACTIONS,
@@ -27,12 +27,12 @@ from .panels import (
     plan_grid,
     window_from_canvas,
 )
-from .plot_svg import plot_svg
-from .png_worker import PngDownloads
-from .svg import NORMAL, PRESENT, empty_svg, image_plane_svg
+from ..render.plot_svg import plot_svg
+from ..render.png_worker import PngDownloads
+from ..render.svg import NORMAL, PRESENT, empty_svg, image_plane_svg
 
 if TYPE_CHECKING:
-    from ..scene.derived import ImagePlane
+    from ...scene.derived import ImagePlane
     from .app import ClientView
 
 __all__ = ["DOWNLOAD_FORMATS", "PLOT_KEY", "PanelDock", "VIEW_BUTTONS", "plot_key"]
@@ -73,7 +73,7 @@ class PanelDock:
         # A tab coming back from a servo demo reports the demo's narrowed canvas: the app passes the window
         # its previous workbench had measured instead.
         self.window, self.pixel_ratio = window if window is not None else self._client_window()
-        #: Where the panels are (see :func:`egtviz.viewer.panels.plan_grid`); None before the first layout.
+        #: Where the panels are (see :func:`egtviz.viewer.render.panels.plan_grid`); None before the first layout.
         self.grid: PanelGrid | None = None
         self._grid_key: tuple | None = None
         self._width_pending: PanelGrid | None = None
@@ -95,7 +95,7 @@ class PanelDock:
 
     @property
     def style(self) -> Any:
-        """The panels' style (:data:`~egtviz.viewer.svg.PRESENT` in presentation mode)."""
+        """The panels' style (:data:`~egtviz.viewer.render.svg.PRESENT` in presentation mode)."""
         return PRESENT if self.present else NORMAL
 
     # -- the "Panels" folder and each camera's panel buttons ------------------------------------------
@@ -134,7 +134,7 @@ class PanelDock:
         self.buttons[name] = groups
 
     def view_action(self, name: str, action: Any) -> None:
-        """Apply a view button (one of :data:`~egtviz.viewer.panels.VIEW_ACTIONS`) to panel ``name`` and redraw it."""
+        """Apply a view button (one of :data:`~egtviz.viewer.render.panels.VIEW_ACTIONS`) to panel ``name`` and redraw it."""
         if action not in VIEW_ACTIONS:  # a raw client can send any string
             raise FieldError(f"{name}: no view button {plain(repr(action), 40)}")
         plane = self.view.model.derived.image_planes.get(name)
@@ -360,7 +360,7 @@ class PanelDock:
         return "marked" if labels == "selected" else True
 
     def plot_panel_svg(self, key: str, plot: Any, *, revision: int) -> str:
-        """A figure's plot panel (:func:`egtviz.viewer.plot_svg.plot_svg`), drawn again only when the plot, the
+        """A figure's plot panel (:func:`egtviz.viewer.render.plot_svg.plot_svg`), drawn again only when the plot, the
         style or the panel's size changed (a drag leaves a plot alone)."""
         panel_px, max_height = self._sizes(key)
         inputs = (self.style, panel_px, max_height)

@@ -7,12 +7,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..scene.derived import shown_value
-from ..scene.shown_numbers import format_value, format_vector
+from ...scene.derived import shown_value
+from ...scene.shown_numbers import format_value, format_vector
 from .models import SHORT_LABELS
 
 if TYPE_CHECKING:
-    from ..scene.derived import Derived
+    from ...scene.derived import Derived
 
 __all__ = ["PairReadout", "pair_html"]
 

@@ -23,7 +23,7 @@ What is drawn, and what is skipped, to keep a frame cheap:
 * above :data:`MAX_LABELLED_POINTS` points only the selected and highlighted points keep their 3D numbers, as
   the panels do.
 
-Each camera's body is drawn by its model's drawing module (``egtviz.viewer.models``: a frustum, a mirror over its
+Each camera's body is drawn by its model's drawing module (``egtviz.viewer.workbench.models``: a frustum, a mirror over its
 CCD, a sphere); this module knows no camera kind. Writes to viser's private handle internals are all in
 ``viser_adapter``.
 
@@ -57,13 +57,13 @@ from .models.common import EMPTY_SEG as _EMPTY_SEG
 from .models.common import colours as _colours
 from .models.common import pair_colours as _pair_colours
 from .models.common import segments as _segments
-from .palette import BASELINE_COLOUR, CAMERA_COLOURS, hex_to_rgb, point_rgb
-from .svg import MAX_NUMBERED_POINTS
-from .viser_adapter import assign as _put
-from .viser_adapter import assign_array as _put_array
+from ..render.palette import BASELINE_COLOUR, CAMERA_COLOURS, hex_to_rgb, point_rgb
+from ..render.svg import MAX_NUMBERED_POINTS
+from ..server.viser_adapter import assign as _put
+from ..server.viser_adapter import assign_array as _put_array
 
 if TYPE_CHECKING:
-    from ..scene.derived import Derived
+    from ...scene.derived import Derived
 
 #: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
 MAX_POINT_GIZMOS = 16

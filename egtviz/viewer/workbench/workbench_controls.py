@@ -11,10 +11,10 @@ import itertools
 from html import escape
 from typing import TYPE_CHECKING, Any, Literal
 
-from ..geometry import PinholeCamera
-from ..geometry.camera_model import CAMERA_MODELS
-from ..geometry.catadioptric import HYPERBOLIC
-from ..scene import (
+from ...geometry import PinholeCamera
+from ...geometry.camera_model import CAMERA_MODELS
+from ...geometry.catadioptric import HYPERBOLIC
+from ...scene import (
     SCENES,
     Scene,
     SceneError,
@@ -27,7 +27,7 @@ from ..scene import (
 )
 from .fields import FieldError, NumberRule, parse_numbers
 from .gui_text import plain, set_value
-from .panels import CONTROL_PX
+from ..render.panels import CONTROL_PX
 
 if TYPE_CHECKING:
     from .app import ClientView

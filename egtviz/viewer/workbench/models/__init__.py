@@ -19,12 +19,12 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
 
-from ...geometry.camera_model import CAMERA_MODELS
-from ...scene.specs import SPEC_CLASSES
+from ....geometry.camera_model import CAMERA_MODELS
+from ....scene.specs import SPEC_CLASSES
 
 if TYPE_CHECKING:
-    from ...geometry.camera_model import CameraModel
-    from ...scene.derived import ImagePlane
+    from ....geometry.camera_model import CameraModel
+    from ....scene.derived import ImagePlane
 
 __all__ = ["DRAWINGS", "SHORT_LABELS", "CameraDrawing", "DrawContext", "drawing_class"]
 

@@ -12,12 +12,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import trimesh
 
-from ..viser_adapter import assign
+from ...server.viser_adapter import assign
 from . import CameraDrawing, DrawContext
 
 if TYPE_CHECKING:
-    from ...geometry.catadioptric import CatadioptricCamera
-    from ...scene.derived import ImagePlane
+    from ....geometry.catadioptric import CatadioptricCamera
+    from ....scene.derived import ImagePlane
 
 #: Samples of the mirror mesh (radial, angular).
 MIRROR_MESH = (16, 48)

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..palette import POINT_COLOURS, hex_to_rgb
+from ...render.palette import POINT_COLOURS, hex_to_rgb
 
 _POINT_RGB = np.array([hex_to_rgb(c) for c in POINT_COLOURS], dtype=np.uint8)
 EMPTY_SEG = np.zeros((1, 2, 3), np.float32)

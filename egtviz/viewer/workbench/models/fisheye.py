@@ -14,8 +14,8 @@ import numpy as np
 from . import CameraDrawing, DrawContext
 
 if TYPE_CHECKING:
-    from ...geometry.fisheye import FisheyeCamera
-    from ...scene.derived import ImagePlane
+    from ....geometry.fisheye import FisheyeCamera
+    from ....scene.derived import ImagePlane
 
 #: Radius of the drawn lens, scene units (metres).
 LENS_RADIUS = 0.25

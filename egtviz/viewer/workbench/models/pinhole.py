@@ -7,13 +7,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..viser_adapter import assign, assign_array
+from ...server.viser_adapter import assign, assign_array
 from . import CameraDrawing, DrawContext
 from .common import EMPTY_PTS, EMPTY_SEG, colours, pair_colours, segments
 
 if TYPE_CHECKING:
-    from ...geometry.pinhole import PinholeCamera
-    from ...scene.derived import ImagePlane
+    from ....geometry.pinhole import PinholeCamera
+    from ....scene.derived import ImagePlane
 
 #: Depth of the drawn image plane in front of the centre, scene units.
 IMAGE_PLANE_DEPTH = 0.6

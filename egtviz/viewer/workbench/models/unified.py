@@ -11,13 +11,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..viser_adapter import assign, assign_array
+from ...server.viser_adapter import assign, assign_array
 from . import CameraDrawing, DrawContext
 from .common import EMPTY_SEG
 
 if TYPE_CHECKING:
-    from ...geometry.unified import UnifiedCamera
-    from ...scene.derived import ImagePlane
+    from ....geometry.unified import UnifiedCamera
+    from ....scene.derived import ImagePlane
 
 #: Radius of the drawn sphere, scene units (metres).
 SPHERE_RADIUS = 0.5
