@@ -249,12 +249,14 @@ def test_essential_from_rays_exact(seed: int, n: int) -> None:
     s = np.linalg.svd(E, compute_uv=False)
     np.testing.assert_allclose(s, [np.sqrt(0.5), np.sqrt(0.5), 0.0], atol=1e-12)
     assert E.flat[np.argmax(np.abs(E))] > 0
-    assert f_distance(E, E_true) < 1e-8
     u1 = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
     u2 = d2 / np.linalg.norm(d2, axis=1, keepdims=True)
     # Exact to rounding: the linear solution's error grows with the design matrix's condition number
-    # (near 1e4 for a few unlucky 8-ray sets, e.g. seed 2000, where the residual reaches 3e-10).
+    # (near 1e4 for a few unlucky 8-ray sets, e.g. seed 2000, where the residual reaches 3e-10). E itself comes
+    # from the 9x9 normal matrix, whose condition number is the square of it: 8 rays of seed 60429 (condition
+    # 1.3e5) give E to 2.8e-7; a wrong E is O(1) away.
     sv = np.linalg.svd(np.einsum("ni,nj->nij", u2, u1).reshape(n, 9), compute_uv=False)
+    assert f_distance(E, E_true) < 1e-8 + 1e-15 * (sv[0] / sv[7]) ** 2
     assert np.abs(np.einsum("ni,ij,nj->n", u2, E, u1)).max() < 1e-12 * sv[0] / sv[7]
 
 

@@ -87,6 +87,8 @@ class _SampsonProblem:
         self.h2 = np.ascontiguousarray(At[2::3])  # m2 as rows (3, N)
         self.q1, self.q2 = s1 * s1, s2 * s2
         self._key: bytes | None = None
+        self._jkey: bytes | None = None
+        self._jac = np.empty((0, 7))
 
     def F(self, p: np.ndarray) -> np.ndarray:
         return self._eval(p)[0]
@@ -116,7 +118,7 @@ class _SampsonProblem:
     def jacobian(self, p: np.ndarray) -> np.ndarray:
         # leastsq evaluates the Jacobian at the start once to check its shape, then again to iterate.
         key = p.tobytes()
-        if key == getattr(self, "_jkey", None):
+        if key == self._jkey:
             return self._jac
         _, l1, l2, e, den, L, Rt, J1, J2 = self._eval(p)
         dF = np.empty((7, 3, 3))
