@@ -97,7 +97,6 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
     """Median wall times (ms) of our estimators and OpenCV's, one row per case."""
     from ..geometry.fundamental import fundamental_normalized_8point
     from ..geometry.robust import fundamental_lmeds, fundamental_ransac
-    from ..geometry.triangulation import triangulate_linear
 
     cv2: ModuleType | None = None
     try:
@@ -164,13 +163,18 @@ def run_estimation_bench(repeats: int = 20) -> list[dict]:
             note += "; target ratio <= 1.5, accuracy no worse"
         row(f"{name}, N={n}, 30% outliers (vs {flag})", ours, theirs, note + f" (mean of {len(scenes)} scenes)" + _missing(cv2))
 
-    # Linear triangulation.
-    s = clean
-    ours = median_ms(lambda: triangulate_linear(s["P1"], s["P2"], s["U1"], s["U2"]), repeats)
-    theirs = None
-    if cv2 is not None:
-        a, b = s["U1"].T.copy(), s["U2"].T.copy()
-        # The same P's: both compute the DLT of the matrices as given, so the same points.
-        theirs = median_ms(lambda: cv2.triangulatePoints(s["P1"], s["P2"], a, b), repeats)
-    row(f"linear triangulation, N={n} (vs triangulatePoints)", ours, theirs, "DLT (SVD per point), same solution" + _missing(cv2))
+    row(f"linear triangulation, N={n} (vs triangulatePoints)", *_triangulation_ms(cv2, clean, repeats),
+        "DLT (SVD per point), same solution" + _missing(cv2))
     return rows
+
+
+def _triangulation_ms(cv2: ModuleType | None, s: dict, repeats: int) -> tuple[float, float | None]:
+    """Median ms of our linear triangulation of scene ``s`` and of OpenCV's (None without OpenCV)."""
+    from ..geometry.triangulation import triangulate_linear
+
+    ours = median_ms(lambda: triangulate_linear(s["P1"], s["P2"], s["U1"], s["U2"]), repeats)
+    if cv2 is None:
+        return ours, None
+    a, b = s["U1"].T.copy(), s["U2"].T.copy()
+    # The same P's: both compute the DLT of the matrices as given, so the same points.
+    return ours, median_ms(lambda: cv2.triangulatePoints(s["P1"], s["P2"], a, b), repeats)
