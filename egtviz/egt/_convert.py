@@ -72,7 +72,8 @@ def _plainly_in_range(X: object) -> bool:
     if not (X.flags.c_contiguous or X.flags.f_contiguous):
         return False
     flat = X.ravel(order="K")  # a view of a contiguous array
-    return bool(flat @ flat <= _SQUARES_LIMIT)
+    with np.errstate(over="ignore", invalid="ignore"):  # a huge entry overflowing to inf is the answer "no"
+        return bool(flat @ flat <= _SQUARES_LIMIT)
 
 
 def pixels(m: npt.ArrayLike, name: str) -> np.ndarray:
