@@ -32,14 +32,19 @@ import numpy as np
 
 from .palette import EPIPOLE_COLOUR, RIM_COLOUR
 from .panel_view import ViewBox, place_labels
-from .svg import NORMAL, PanelStyle, number_fates, panel_layout
-from .svg import axes_svg as _axes_svg
-from .svg import finite_runs as _finite_runs
-from .svg import label_text as _label_text
-from .svg import points_attr as _points_attr
-from .svg import svg_number as _f
-from .svg import svg_open as _svg_open
-from .svg import text_width_px as _text_px
+from .svg import (
+    NORMAL,
+    PanelStyle,
+    axes_svg,
+    finite_runs,
+    label_text,
+    number_fates,
+    panel_layout,
+    points_attr,
+    svg_number,
+    svg_open,
+    text_width_px,
+)
 
 __all__ = ["ServoImage", "servo_image_svg", "shared_zero_ranges"]
 
@@ -114,7 +119,7 @@ def _wrap_words(text: str, max_px: float, size_px: float) -> list[str]:
     """``text`` broken at spaces into lines no wider than ``max_px`` (a longer word gets a line of its own)."""
     lines: list[str] = []
     for word in text.split():
-        if lines and _text_px(lines[-1] + " " + word, size_px) <= max_px:
+        if lines and text_width_px(lines[-1] + " " + word, size_px) <= max_px:
             lines[-1] += " " + word
         else:
             lines.append(word)
@@ -127,7 +132,7 @@ def _legend_rows(curve: str, max_px: float, size_px: float) -> list[list[tuple[s
     rows: list[list[tuple[str, str, float]]] = [[]]
     used = 0.0
     for sym, text in entries:
-        width = 2.2 * size_px + _text_px(text, size_px) + 0.9 * size_px
+        width = 2.2 * size_px + text_width_px(text, size_px) + 0.9 * size_px
         if rows[-1] and used + width > max_px:
             rows.append([])
             used = 0.0
@@ -160,12 +165,12 @@ def servo_image_svg(img: ServoImage, *, revision: int | None = None, max_height:
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
     attrs = f' data-demo="{escape(img.demo)}" data-frame="{int(img.frame)}"{rev}'
     out = [
-        _svg_open("servo-image", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
-        f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#fff" '
-        f'stroke="{style.ink}" stroke-width="{_f(style.frame_px * k)}"/>',
-        _axes_svg(lay, style),
-        f'<defs><clipPath id="servo-clip-{escape(img.demo)}"><rect x="0" y="0" width="{_f(w)}" '
-        f'height="{_f(h)}"/></clipPath></defs><g clip-path="url(#servo-clip-{escape(img.demo)})">',
+        svg_open("servo-image", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
+        f'<rect data-kind="border" x="0" y="0" width="{svg_number(w)}" height="{svg_number(h)}" fill="#fff" '
+        f'stroke="{style.ink}" stroke-width="{svg_number(style.frame_px * k)}"/>',
+        axes_svg(lay, style),
+        f'<defs><clipPath id="servo-clip-{escape(img.demo)}"><rect x="0" y="0" width="{svg_number(w)}" '
+        f'height="{svg_number(h)}"/></clipPath></defs><g clip-path="url(#servo-clip-{escape(img.demo)})">',
     ]
     out += _curves_svg(img, style, k)
     out += _features_svg(img, style, k)
@@ -187,26 +192,26 @@ def _curves_svg(img: ServoImage, style: PanelStyle, k: float) -> list[str]:
     out = []
     if img.rim is not None and len(img.rim) >= 3:
         R = np.vstack([img.rim, img.rim[:1]])
-        out.append(f'<polyline data-kind="rim" points="{_points_attr(R, integer=integer)}" fill="none" '
-                   f'stroke="{RIM_COLOUR}" stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw * 5)},{_f(lw * 3)}"/>')
+        out.append(f'<polyline data-kind="rim" points="{points_attr(R, integer=integer)}" fill="none" '
+                   f'stroke="{RIM_COLOUR}" stroke-width="{svg_number(lw)}" stroke-dasharray="{svg_number(lw * 5)},{svg_number(lw * 3)}"/>')
     if img.lines is not None:
         for i, seg in enumerate(np.asarray(img.lines, float)):
             if not np.all(np.isfinite(seg)):
                 continue
-            out.append(f'<line data-kind="epipolar-line" data-index="{i}" x1="{_f(seg[0, 0])}" y1="{_f(seg[0, 1])}" '
-                       f'x2="{_f(seg[1, 0])}" y2="{_f(seg[1, 1])}" stroke="{colours[i % nc]}" '
-                       f'stroke-width="{_f(lw * 0.8)}" stroke-opacity="0.75"/>')
+            out.append(f'<line data-kind="epipolar-line" data-index="{i}" x1="{svg_number(seg[0, 0])}" y1="{svg_number(seg[0, 1])}" '
+                       f'x2="{svg_number(seg[1, 0])}" y2="{svg_number(seg[1, 1])}" stroke="{colours[i % nc]}" '
+                       f'stroke-width="{svg_number(lw * 0.8)}" stroke-opacity="0.75"/>')
     for i, arcs in enumerate(img.conics):
         for arc in arcs:
-            for run in _finite_runs(arc):
+            for run in finite_runs(arc):
                 out.append(f'<polyline data-kind="epipolar-conic" data-index="{i}" '
-                           f'points="{_points_attr(run, integer=integer)}" fill="none" stroke="{colours[i % nc]}" '
-                           f'stroke-width="{_f(lw * 0.8)}" stroke-opacity="0.75"/>')
+                           f'points="{points_attr(run, integer=integer)}" fill="none" stroke="{colours[i % nc]}" '
+                           f'stroke-width="{svg_number(lw * 0.8)}" stroke-opacity="0.75"/>')
     T = np.asarray(img.trails, float)
     for i in range(len(img.desired)):
-        for run in _finite_runs(T[:, i, :]) if len(T) else []:
-            out.append(f'<polyline data-kind="trail" data-index="{i}" points="{_points_attr(run, integer=False)}" '
-                       f'fill="none" stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}" '
+        for run in finite_runs(T[:, i, :]) if len(T) else []:
+            out.append(f'<polyline data-kind="trail" data-index="{i}" points="{points_attr(run, integer=False)}" '
+                       f'fill="none" stroke="{colours[i % nc]}" stroke-width="{svg_number(lw * 1.5)}" '
                        f'stroke-linejoin="round" stroke-opacity="0.9"/>')
     return out
 
@@ -228,8 +233,8 @@ def _label_boxes(C: np.ndarray, D: np.ndarray, eps: list[tuple[str, np.ndarray]]
     obstacles += [(e[0] - a_ep, e[1] - a_ep, e[0] + a_ep, e[1] + a_ep) for _, e in eps]
     anchors = [tuple(e) for _, e in eps] + [tuple(C[i]) for i in cur]
     radii = [a_ep] * len(eps) + [r_pt] * len(cur)
-    sizes = [(_text_px(lab, style.label_px) * k + halo, 0.95 * size + halo) for lab, _ in eps]
-    sizes += [(_text_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in cur]
+    sizes = [(text_width_px(lab, style.label_px) * k + halo, 0.95 * size + halo) for lab, _ in eps]
+    sizes += [(text_width_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in cur]
     boxes = place_labels(anchors, radii, sizes, obstacles, bounds, gap=0.3 * size) if anchors else np.zeros((0, 4))
     keep, far = number_fates(boxes, len(eps), np.asarray(anchors, float).reshape(-1, 2),
                              np.asarray(radii, float) + 0.3 * size, np.asarray(obstacles, float).reshape(-1, 4),
@@ -248,15 +253,15 @@ def _features_svg(img: ServoImage, style: PanelStyle, k: float) -> list[str]:
     size = style.label_px * k
     D = np.asarray(img.desired, float).reshape(-1, 2)
     C = np.asarray(img.current, float).reshape(-1, 2)
-    out = [f'<rect data-kind="desired" data-index="{i}" x="{_f(p[0] - a_sq)}" y="{_f(p[1] - a_sq)}" '
-           f'width="{_f(2 * a_sq)}" height="{_f(2 * a_sq)}" fill="#fff" fill-opacity="0.6" '
-           f'stroke="{colours[i % nc]}" stroke-width="{_f(lw * 1.5)}"/>'
+    out = [f'<rect data-kind="desired" data-index="{i}" x="{svg_number(p[0] - a_sq)}" y="{svg_number(p[1] - a_sq)}" '
+           f'width="{svg_number(2 * a_sq)}" height="{svg_number(2 * a_sq)}" fill="#fff" fill-opacity="0.6" '
+           f'stroke="{colours[i % nc]}" stroke-width="{svg_number(lw * 1.5)}"/>'
            for i, p in enumerate(D) if np.all(np.isfinite(p))]
     eps = [(str(lab), np.asarray(e, float)) for lab, e in img.epipoles]
     eps = [(lab, e) for lab, e in eps if np.all(np.isfinite(e))]
     cur = [i for i in range(len(C)) if np.all(np.isfinite(C[i]))]
     boxes, keep, far = _label_boxes(C, D, eps, cur, style, k, (0.0, 0.0, float(img.width), float(img.height)))
-    halo_attr = f' stroke="#fff" stroke-width="{_f(0.25 * style.label_px * k)}" paint-order="stroke"'
+    halo_attr = f' stroke="#fff" stroke-width="{svg_number(0.25 * style.label_px * k)}" paint-order="stroke"'
     # As in the panels, a number is next to its feature or joined to it by a leader line; one that found no free
     # place is drawn too, with its line (a dozen features: the frame has no row to count hidden ones in).
     for i, box, free, near_miss in zip(cur, boxes[len(eps):], keep, far):
@@ -264,19 +269,19 @@ def _features_svg(img: ServoImage, style: PanelStyle, k: float) -> list[str]:
         line = ""
         if near_miss or not free:
             lx, ly = min(max(p[0], box[0]), box[2]), min(max(p[1], box[1]), box[3])
-            line = (f'<line data-kind="label-leader" data-index="{i}" x1="{_f(lx)}" y1="{_f(ly)}" x2="{_f(p[0])}" '
-                    f'y2="{_f(p[1])}" stroke="{style.ink}" stroke-width="{_f(lw * 0.6)}"/>')
-        text = _label_text(box, size, str(i + 1),
-                           f' font-size="{_f(size)}" fill="{style.ink}" font-weight="bold"{halo_attr}', p[0])
-        out.append(f'{line}<circle data-kind="point" data-index="{i}" cx="{_f(p[0])}" cy="{_f(p[1])}" '
-                   f'r="{_f(r_pt)}" fill="{colours[i % nc]}" stroke="#fff" stroke-width="{_f(lw * 0.6)}"/>' + text)
+            line = (f'<line data-kind="label-leader" data-index="{i}" x1="{svg_number(lx)}" y1="{svg_number(ly)}" x2="{svg_number(p[0])}" '
+                    f'y2="{svg_number(p[1])}" stroke="{style.ink}" stroke-width="{svg_number(lw * 0.6)}"/>')
+        text = label_text(box, size, str(i + 1),
+                           f' font-size="{svg_number(size)}" fill="{style.ink}" font-weight="bold"{halo_attr}', p[0])
+        out.append(f'{line}<circle data-kind="point" data-index="{i}" cx="{svg_number(p[0])}" cy="{svg_number(p[1])}" '
+                   f'r="{svg_number(r_pt)}" fill="{colours[i % nc]}" stroke="#fff" stroke-width="{svg_number(lw * 0.6)}"/>' + text)
     for (lab, e), box in zip(eps, boxes[: len(eps)]):
         out.append(f'<g data-kind="epipole" data-label="{escape(lab)}">'
-                   f'<path d="M{_f(e[0] - a_ep)} {_f(e[1] - a_ep)}L{_f(e[0] + a_ep)} {_f(e[1] + a_ep)}'
-                   f'M{_f(e[0] - a_ep)} {_f(e[1] + a_ep)}L{_f(e[0] + a_ep)} {_f(e[1] - a_ep)}" '
-                   f'stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 1.6)}"/>'
-                   + _label_text(box, size, escape(lab),
-                                 f' font-size="{_f(size)}" font-style="italic" fill="{EPIPOLE_COLOUR}"{halo_attr}',
+                   f'<path d="M{svg_number(e[0] - a_ep)} {svg_number(e[1] - a_ep)}L{svg_number(e[0] + a_ep)} {svg_number(e[1] + a_ep)}'
+                   f'M{svg_number(e[0] - a_ep)} {svg_number(e[1] + a_ep)}L{svg_number(e[0] + a_ep)} {svg_number(e[1] - a_ep)}" '
+                   f'stroke="{EPIPOLE_COLOUR}" stroke-width="{svg_number(lw * 1.6)}"/>'
+                   + label_text(box, size, escape(lab),
+                                 f' font-size="{svg_number(size)}" font-style="italic" fill="{EPIPOLE_COLOUR}"{halo_attr}',
                                  e[0])
                    + "</g>")
     return out
@@ -297,22 +302,22 @@ def _legend_svg(legend: list[list[tuple[str, str, float]]], rows: Iterator[float
         for sym, text, width in entries:
             cy = y - 0.35 * st
             if sym == "disc":
-                items.append(f'<circle cx="{_f(x + 0.5 * st)}" cy="{_f(cy)}" r="{_f(0.4 * st)}" fill="{grey}"/>')
+                items.append(f'<circle cx="{svg_number(x + 0.5 * st)}" cy="{svg_number(cy)}" r="{svg_number(0.4 * st)}" fill="{grey}"/>')
             elif sym == "square":
-                items.append(f'<rect x="{_f(x + 0.1 * st)}" y="{_f(cy - 0.4 * st)}" width="{_f(0.8 * st)}" '
-                             f'height="{_f(0.8 * st)}" fill="none" stroke="{grey}" stroke-width="{_f(lw * 1.5)}"/>')
+                items.append(f'<rect x="{svg_number(x + 0.1 * st)}" y="{svg_number(cy - 0.4 * st)}" width="{svg_number(0.8 * st)}" '
+                             f'height="{svg_number(0.8 * st)}" fill="none" stroke="{grey}" stroke-width="{svg_number(lw * 1.5)}"/>')
             elif sym == "cross":
-                items.append(f'<path d="M{_f(x + 0.1 * st)} {_f(cy - 0.4 * st)}l{_f(0.8 * st)} {_f(0.8 * st)}'
-                             f'm0 {_f(-0.8 * st)}l{_f(-0.8 * st)} {_f(0.8 * st)}" stroke="{EPIPOLE_COLOUR}" '
-                             f'stroke-width="{_f(lw * 1.6)}"/>')
+                items.append(f'<path d="M{svg_number(x + 0.1 * st)} {svg_number(cy - 0.4 * st)}l{svg_number(0.8 * st)} {svg_number(0.8 * st)}'
+                             f'm0 {svg_number(-0.8 * st)}l{svg_number(-0.8 * st)} {svg_number(0.8 * st)}" stroke="{EPIPOLE_COLOUR}" '
+                             f'stroke-width="{svg_number(lw * 1.6)}"/>')
             else:
                 op = ' stroke-opacity="0.75"' if sym == "curve" else ""
                 wd = lw * (0.8 if sym == "curve" else 1.5)
-                items.append(f'<line x1="{_f(x)}" y1="{_f(cy)}" x2="{_f(x + 1.6 * st)}" y2="{_f(cy)}" '
-                             f'stroke="{grey}" stroke-width="{_f(wd)}"{op}/>')
-            items.append(f'<text x="{_f(x + 2.2 * st)}" y="{_f(y)}">{text}</text>')
+                items.append(f'<line x1="{svg_number(x)}" y1="{svg_number(cy)}" x2="{svg_number(x + 1.6 * st)}" y2="{svg_number(cy)}" '
+                             f'stroke="{grey}" stroke-width="{svg_number(wd)}"{op}/>')
+            items.append(f'<text x="{svg_number(x + 2.2 * st)}" y="{svg_number(y)}">{text}</text>')
             x += width * k
-        out.append(f'<g data-kind="legend" font-size="{_f(st)}" fill="{style.ink}">{"".join(items)}</g>')
+        out.append(f'<g data-kind="legend" font-size="{svg_number(st)}" fill="{style.ink}">{"".join(items)}</g>')
     return out
 
 
@@ -326,6 +331,6 @@ def _texts_svg(img: ServoImage, caption: list[str], message: list[str], rows: It
         if lines:
             ys = [next(rows) for _ in lines]
             body = (escape(lines[0]) if len(lines) == 1 else
-                    "".join(f'<tspan x="0" y="{_f(y)}">{escape(t)}</tspan>' for t, y in zip(lines, ys)))
-            out.append(f'<text data-kind="{kind}" x="0" y="{_f(ys[0])}" font-size="{_f(st)}" {attrs}>{body}</text>')
+                    "".join(f'<tspan x="0" y="{svg_number(y)}">{escape(t)}</tspan>' for t, y in zip(lines, ys)))
+            out.append(f'<text data-kind="{kind}" x="0" y="{svg_number(ys[0])}" font-size="{svg_number(st)}" {attrs}>{body}</text>')
     return out

@@ -138,7 +138,6 @@ def svg_number(x: float) -> str:
     return f"{x:.5g}"
 
 
-_f = svg_number  # the short name the drawing code here uses
 
 
 @lru_cache(maxsize=4096)
@@ -147,7 +146,6 @@ def text_width_px(text: str, size_px: float) -> float:
     return sum(_NARROW_EM.get(ch, _LOWER_EM if ch.islower() else CHAR_EM) for ch in text) * size_px
 
 
-_text_px = text_width_px  # the short name the drawing code here uses
 
 
 @dataclass(frozen=True)
@@ -198,14 +196,14 @@ def panel_layout(view: ViewBox, style: PanelStyle, panel_px: float, n_rows: int)
         plot_w = max(panel_px - left - right, 0.35 * panel_px)
         s = plot_w / view.width
         ends = _tick_labels(np.array([view.u0, view.u1, view.v0, view.v1]), decimals)
-        u_gap = max(_text_px(e, t) for e in ends) + 1.2 * t
+        u_gap = max(text_width_px(e, t) for e in ends) + 1.2 * t
         u_ticks, du = tick_values(view.u0, view.u1, s, u_gap)
         v_ticks, dv = tick_values(view.v0, view.v1, s, 2.0 * t)
         decimals = max(du, dv)
         v_labels = _tick_labels(v_ticks, decimals) or ["0"]
         u_labels = _tick_labels(u_ticks, decimals) or ["0"]
-        left = max(_text_px(x, t) for x in v_labels) + tick_len + gap + 0.3 * t
-        last_right = (u_ticks[-1] - view.u1) * s + _text_px(u_labels[-1], t) / 2 if len(u_ticks) else 0.0
+        left = max(text_width_px(x, t) for x in v_labels) + tick_len + gap + 0.3 * t
+        last_right = (u_ticks[-1] - view.u1) * s + text_width_px(u_labels[-1], t) / 2 if len(u_ticks) else 0.0
         right = max(last_right, 0.0) + gap + 1.4 * t
     plot_w = max(panel_px - left - right, 0.35 * panel_px)
     s = plot_w / view.width
@@ -227,28 +225,27 @@ def axes_svg(lay: PanelLayout, style: PanelStyle) -> str:
     """The view's frame with ticks: u along the top edge, v along the left edge (v grows downwards)."""
     v, k, t = lay.view, lay.k, style.tick_px
     tick, gap, lw = 0.45 * t * k, 0.35 * t * k, style.frame_px * k
-    parts = [f'<rect data-kind="frame" x="{_f(v.u0)}" y="{_f(v.v0)}" width="{_f(v.width)}" height="{_f(v.height)}" '
-             f'fill="none" stroke="{style.ink}" stroke-width="{_f(lw)}"/>']
+    parts = [f'<rect data-kind="frame" x="{svg_number(v.u0)}" y="{svg_number(v.v0)}" width="{svg_number(v.width)}" height="{svg_number(v.height)}" '
+             f'fill="none" stroke="{style.ink}" stroke-width="{svg_number(lw)}"/>']
     path = []
     texts = []
     for val, lab in zip(lay.u_ticks, _tick_labels(lay.u_ticks, lay.decimals)):
-        path.append(f"M{_f(val)} {_f(v.v0)}v{_f(-tick)}")
-        texts.append(f'<text x="{_f(val)}" y="{_f(v.v0 - tick - gap)}" text-anchor="middle">{lab}</text>')
+        path.append(f"M{svg_number(val)} {svg_number(v.v0)}v{svg_number(-tick)}")
+        texts.append(f'<text x="{svg_number(val)}" y="{svg_number(v.v0 - tick - gap)}" text-anchor="middle">{lab}</text>')
     for val, lab in zip(lay.v_ticks, _tick_labels(lay.v_ticks, lay.decimals)):
-        path.append(f"M{_f(v.u0)} {_f(val)}h{_f(-tick)}")
-        texts.append(f'<text x="{_f(v.u0 - tick - gap)}" y="{_f(val + 0.35 * t * k)}" text-anchor="end">{lab}</text>')
+        path.append(f"M{svg_number(v.u0)} {svg_number(val)}h{svg_number(-tick)}")
+        texts.append(f'<text x="{svg_number(v.u0 - tick - gap)}" y="{svg_number(val + 0.35 * t * k)}" text-anchor="end">{lab}</text>')
     last = _tick_labels(lay.u_ticks[-1:], lay.decimals)
-    u_x = max(v.u1, (lay.u_ticks[-1] + _text_px(last[0], t) * k / 2) if last else v.u1) + gap
-    parts.append(f'<path d="{"".join(path)}" stroke="{style.ink}" stroke-width="{_f(lw)}"/>')
+    u_x = max(v.u1, (lay.u_ticks[-1] + text_width_px(last[0], t) * k / 2) if last else v.u1) + gap
+    parts.append(f'<path d="{"".join(path)}" stroke="{style.ink}" stroke-width="{svg_number(lw)}"/>')
     parts.append(
-        f'<g font-size="{_f(t * k)}" fill="{style.ink}">{"".join(texts)}'
-        f'<text x="{_f(u_x)}" y="{_f(v.v0 - tick - gap)}" font-style="italic">u</text>'
-        f'<text x="{_f(v.u0 - tick - gap)}" y="{_f(lay.rows_y[0])}" font-style="italic" text-anchor="end">v</text></g>'
+        f'<g font-size="{svg_number(t * k)}" fill="{style.ink}">{"".join(texts)}'
+        f'<text x="{svg_number(u_x)}" y="{svg_number(v.v0 - tick - gap)}" font-style="italic">u</text>'
+        f'<text x="{svg_number(v.u0 - tick - gap)}" y="{svg_number(lay.rows_y[0])}" font-style="italic" text-anchor="end">v</text></g>'
     )
     return f'<g data-kind="axes">{"".join(parts)}</g>'
 
 
-_axes_svg = axes_svg  # the short name the drawing code here uses
 
 
 def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixed_size: bool,
@@ -256,16 +253,15 @@ def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixe
     """The root ``<svg>`` tag and a background covering the whole view box."""
     x, y, w, h = lay.viewbox
     mh = "" if max_height is None else f";max-height:{escape(max_height)}"
-    size = (f'width="{_f(lay.panel_px)}" height="{_f(lay.height_px)}"' if fixed_size else 'width="100%"')
+    size = (f'width="{svg_number(lay.panel_px)}" height="{svg_number(lay.height_px)}"' if fixed_size else 'width="100%"')
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" data-egtviz="{kind}"{attrs} data-style="{style.name}" '
-        f'viewBox="{_f(x)} {_f(y)} {_f(w)} {_f(h)}" {size} '
+        f'viewBox="{svg_number(x)} {svg_number(y)} {svg_number(w)} {svg_number(h)}" {size} '
         f'style="display:block;font-family:sans-serif;background:{style.background}{mh}">'
-        f'<rect x="{_f(x)}" y="{_f(y)}" width="{_f(w)}" height="{_f(h)}" fill="{style.background}"/>'
+        f'<rect x="{svg_number(x)}" y="{svg_number(y)}" width="{svg_number(w)}" height="{svg_number(h)}" fill="{style.background}"/>'
     )
 
 
-_svg_open = svg_open  # the short name the drawing code here uses
 
 
 def _border_exit(view: ViewBox, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
@@ -299,9 +295,9 @@ def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: fl
     P = np.array([tail, tip, p1, p2])
     box = np.r_[P.min(axis=0) - width, P.max(axis=0) + width]
     svg = (
-        f'<line x1="{_f(tail[0])}" y1="{_f(tail[1])}" x2="{_f(tip[0])}" y2="{_f(tip[1])}" '
-        f'stroke="{colour}" stroke-width="{_f(width)}"/>'
-        f'<polygon points="{_f(tip[0])},{_f(tip[1])} {_f(p1[0])},{_f(p1[1])} {_f(p2[0])},{_f(p2[1])}" '
+        f'<line x1="{svg_number(tail[0])}" y1="{svg_number(tail[1])}" x2="{svg_number(tip[0])}" y2="{svg_number(tip[1])}" '
+        f'stroke="{colour}" stroke-width="{svg_number(width)}"/>'
+        f'<polygon points="{svg_number(tip[0])},{svg_number(tip[1])} {svg_number(p1[0])},{svg_number(p1[1])} {svg_number(p2[0])},{svg_number(p2[1])}" '
         f'fill="{colour}"/>'
     )
     return svg, box
@@ -317,7 +313,6 @@ def points_attr(P: np.ndarray, *, integer: bool) -> str:
     return (("%.5g,%.5g " * len(P)) % tuple(np.asarray(P, float).ravel().tolist()))[:-1]
 
 
-_points_attr = points_attr  # the short name the drawing code here uses
 
 
 #: Whole numbers in ``[_INT_LO, _INT_HI)`` are written from lookup tables (a panel's pixels nearly always are).
@@ -396,7 +391,6 @@ def finite_runs(P: np.ndarray) -> list[np.ndarray]:
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
-_finite_runs = finite_runs  # the short name the drawing code here uses
 
 
 def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: bool, colours: tuple[str, ...]) -> str:
@@ -413,7 +407,7 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
         return ""
     V = np.concatenate(runs).astype(float, copy=False)
     if not np.isfinite(V).all():  # rare: split the arcs with NaN vertices into their finite runs
-        pairs = [(i, run) for i, piece in zip(idx, runs) for run in _finite_runs(piece)]
+        pairs = [(i, run) for i, piece in zip(idx, runs) for run in finite_runs(piece)]
         if not pairs:
             return ""
         idx, runs = [i for i, _ in pairs], [r for _, r in pairs]
@@ -427,11 +421,11 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
         keep = (local % stride == 0) | (local == np.repeat(lengths - 1, lengths))
         V = V[keep]
         lengths = np.add.reduceat(keep, ends - lengths)
-    prefixes, suffixes = _conic_tags(tuple(idx), selected_point, f' stroke-width="{_f(lw * 3.0)}"', colours)
+    prefixes, suffixes = _conic_tags(tuple(idx), selected_point, f' stroke-width="{svg_number(lw * 3.0)}"', colours)
     Q = np.rint(V).astype(np.int64) if integer else None
     if Q is None or Q.min() < _INT_LO or Q.max() >= _INT_HI:
         ends = np.cumsum(lengths)
-        return "".join(p + _points_attr(V[e - k:e], integer=Q is not None) + q
+        return "".join(p + points_attr(V[e - k:e], integer=Q is not None) + q
                        for p, q, e, k in zip(prefixes, suffixes, ends.tolist(), lengths.tolist()))
     # One token stream: per run [prefix, "x,", "y ", ..., "x,", "y", suffix].
     comma, space, bare = _int_tables()
@@ -497,11 +491,10 @@ def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> s
         x, anchor = x0, "start"
     else:
         x, anchor = (x0 + x1) / 2, "middle"
-    return (f'<text x="{_f(x)}" y="{_f(y1 - 0.17 * size)}" text-anchor="{anchor}" '
-            f'data-box="{_f(x0)} {_f(y0)} {_f(x1)} {_f(y1)}"{attrs}>{text}</text>')
+    return (f'<text x="{svg_number(x)}" y="{svg_number(y1 - 0.17 * size)}" text-anchor="{anchor}" '
+            f'data-box="{svg_number(x0)} {svg_number(y0)} {svg_number(x1)} {svg_number(y1)}"{attrs}>{text}</text>')
 
 
-_label_text = label_text  # the short name the drawing code here uses
 
 
 def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
@@ -601,8 +594,8 @@ def _place_numbers(P: np.ndarray, in_image: np.ndarray, in_view: np.ndarray, mar
     O = np.concatenate(obstacles) if obstacles else np.zeros((0, 4))
     anchors = [e.anchor for e in epipoles] + [tuple(P[i]) for i in numbered]
     radii = [e.radius for e in epipoles] + [ring_r if i in marked else r_pt for i in numbered]
-    sizes = ([(_text_px(e.text, style.label_px) * k + halo, 0.95 * size + halo) for e in epipoles]
-             + [(_text_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in numbered])
+    sizes = ([(text_width_px(e.text, style.label_px) * k + halo, 0.95 * size + halo) for e in epipoles]
+             + [(text_width_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in numbered])
     gap = 0.3 * size
     boxes = place_labels(anchors, radii, sizes, O, bounds, gap=gap) if anchors else np.zeros((0, 4))
     ep_boxes = tuple(tuple(b) for b in boxes[: len(epipoles)])
@@ -625,21 +618,21 @@ def _point_group(i: int, kind: str, xy: np.ndarray, *, ring: bool, selected: boo
     col = style.point_colours[i % len(style.point_colours)]
     hollow = kind == "point-outside"
     fill = "#fff" if hollow else col
-    stroke = f' stroke="{col}" stroke-width="{_f(lw * 1.6)}"' if hollow else ""
+    stroke = f' stroke="{col}" stroke-width="{svg_number(lw * 1.6)}"' if hollow else ""
     ring_svg = label = leader = ""
     if ring:
-        ring_svg = (f'<circle cx="{c % x}" cy="{c % y}" r="{_f(r_pt * 2.0)}" fill="none" stroke="{style.ink}" '
-                    f'stroke-width="{_f(lw * 1.5)}" data-selected="{"true" if selected else "false"}"/>')
+        ring_svg = (f'<circle cx="{c % x}" cy="{c % y}" r="{svg_number(r_pt * 2.0)}" fill="none" stroke="{style.ink}" '
+                    f'stroke-width="{svg_number(lw * 1.5)}" data-selected="{"true" if selected else "false"}"/>')
     if label_box is not None:
-        label = _label_text(label_box, size, str(i + 1), f' stroke="#fff" stroke-width="{_f(halo)}"', x)
+        label = label_text(label_box, size, str(i + 1), f' stroke="#fff" stroke-width="{svg_number(halo)}"', x)
     if leader_box is not None:
         # From the box's nearest point to the disc's centre, under the disc: it ends at the point.
         x0, y0, x1, y1 = (float(b) for b in leader_box)
         lx, ly = min(max(x, x0), x1), min(max(y, y0), y1)
-        leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{_f(lx)}" y1="{_f(ly)}" x2="{c % x}" '
-                  f'y2="{c % y}" stroke="{style.ink}" stroke-width="{_f(lw * 0.6)}"/>')
+        leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{svg_number(lx)}" y1="{svg_number(ly)}" x2="{c % x}" '
+                  f'y2="{c % y}" stroke="{style.ink}" stroke-width="{svg_number(lw * 0.6)}"/>')
     return (f'<g data-kind="{kind}" data-index="{i}">{leader}{ring_svg}<circle cx="{c % x}" cy="{c % y}" '
-            f'r="{_f(r_pt)}" fill="{fill}"{stroke}/>{label}</g>')
+            f'r="{svg_number(r_pt)}" fill="{fill}"{stroke}/>{label}</g>')
 
 
 @lru_cache(maxsize=16)
@@ -670,8 +663,8 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
         group = _point_group(i, kind, P[i], ring=i in marked, selected=i == selected_point,
                              label_box=label_of.get(i), leader_box=leader_of.get(i), style=style, k=k, dp=dp)
         rows[row] = (group, "", "", "", "", "", "")
-    body = (f'<g stroke="{style.ink}" stroke-width="{_f(style.line_px * k * 0.5)}" '
-            f'font-size="{_f(style.label_px * k)}" font-weight="bold" fill="{style.ink}" paint-order="stroke">'
+    body = (f'<g stroke="{style.ink}" stroke-width="{svg_number(style.line_px * k * 0.5)}" '
+            f'font-size="{svg_number(style.label_px * k)}" font-weight="bold" fill="{style.ink}" paint-order="stroke">'
             f'{"".join(rows.ravel().tolist())}</g>')
     return body, ep_boxes, n_unnumbered
 
@@ -697,11 +690,11 @@ def _plain_point_rows(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: byte
     n_in = len(inside)
     rows[:n_in, 0], rows[:n_in, 5], rows[:n_in, 6] = head_in[inside], fill_in[inside], ""
     rows[n_in:, 0], rows[n_in:, 5] = head_out[outside], fill_out[outside]
-    rows[n_in:, 6] = f' stroke-width="{_f(style.line_px * k * 1.6)}"/>'
+    rows[n_in:, 6] = f' stroke-width="{svg_number(style.line_px * k * 1.6)}"/>'
     rows[:, 1] = xy[:, 0]
     rows[:, 2] = '" cy="'
     rows[:, 3] = xy[:, 1]
-    rows[:, 4] = f'" r="{_f(style.mark_px * k)}" fill="'
+    rows[:, 4] = f'" r="{svg_number(style.mark_px * k)}" fill="'
     rows.setflags(write=False)
     return rows
 
@@ -735,7 +728,7 @@ def _wrap(clauses: list[str], max_px: float, size_px: float) -> list[str]:
     """Join clauses with ``"; "`` into lines no wider than ``max_px`` (a clause longer than that gets a line)."""
     lines: list[str] = []
     for cl in clauses:
-        if lines and _text_px(lines[-1] + "; " + cl, size_px) <= max_px:
+        if lines and text_width_px(lines[-1] + "; " + cl, size_px) <= max_px:
             lines[-1] += "; " + cl
         else:
             lines.append(cl)
@@ -839,8 +832,8 @@ def image_plane_svg(
     k = lay.k
     rev = "" if revision is None else f' data-rev="{int(revision)}"'
     attrs = (f' data-camera="{escape(str(plane.camera))}"{rev} '
-             f'data-view="{_f(view.u0)} {_f(view.v0)} {_f(view.width)} {_f(view.height)}"')
-    out = [_svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
+             f'data-view="{svg_number(view.u0)} {svg_number(view.v0)} {svg_number(view.width)} {svg_number(view.height)}"')
+    out = [svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height),
            *_frame_svg(plane, view, lay, style)]
     # Decimals: a quarter of a CSS pixel; whole image pixels once one is at most a CSS pixel wide.
     dp = int(min(6, max(0, math.ceil(math.log10(4.0 / k)))))
@@ -848,7 +841,7 @@ def image_plane_svg(
         out.append(_lines_svg(plane, view, image, selected_point, style, k, dp))
     if plane.conics is not None:
         lw = style.line_px * k
-        out.append(f'<g fill="none" stroke-width="{_f(lw)}">'
+        out.append(f'<g fill="none" stroke-width="{svg_number(lw)}">'
                    f'{_conics_svg(plane.conics, selected_point, lw, k >= 1.0, style.point_colours)}</g>')
     row = iter(lay.rows_y)  # the epipoles at infinity take the first status rows
     ep_marks, ep_labels = _epipole_marks(epipoles, view, style, k, row)
@@ -858,7 +851,7 @@ def image_plane_svg(
                                                 (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
     if n_unnumbered:  # one more status row (the scale, and so every size drawn so far, does not depend on the rows)
         lay = panel_layout(view, style, panel_px, len(lay.rows_y) + 1)
-        out[0] = _svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height)
+        out[0] = svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height)
     out += [points_svg, "</g>"]  # the points end the clipped group
     out.extend(_epipole_groups(ep_marks, ep_labels, ep_boxes, style, k))
     out.extend(_notes_svg(plane, view, style, k, row, status_lines, numbering_note, n_unnumbered,
@@ -887,26 +880,26 @@ def _frame_svg(plane: ImagePlane, view: ViewBox, lay: PanelLayout, style: PanelS
     k = lay.k
     lw = style.line_px * k
     out = [
-        f'<rect data-kind="border" x="0" y="0" width="{_f(w)}" height="{_f(h)}" fill="#ffffff" '
-        f'stroke="{style.ink}" stroke-width="{_f(style.frame_px * k)}"/>',
-        _axes_svg(lay, style),
+        f'<rect data-kind="border" x="0" y="0" width="{svg_number(w)}" height="{svg_number(h)}" fill="#ffffff" '
+        f'stroke="{style.ink}" stroke-width="{svg_number(style.frame_px * k)}"/>',
+        axes_svg(lay, style),
     ]
     # Clip everything drawn on the image plane to the view.
     clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in str(plane.camera))
     clip_id += f"-{zlib.crc32(str(plane.camera).encode()):08x}"  # "a b" and "a_b" stay distinct
-    out.append(f'<defs><clipPath id="{clip_id}"><rect x="{_f(view.u0)}" y="{_f(view.v0)}" width="{_f(view.width)}" '
-               f'height="{_f(view.height)}"/></clipPath></defs><g clip-path="url(#{clip_id})">')
+    out.append(f'<defs><clipPath id="{clip_id}"><rect x="{svg_number(view.u0)}" y="{svg_number(view.v0)}" width="{svg_number(view.width)}" '
+               f'height="{svg_number(view.height)}"/></clipPath></defs><g clip-path="url(#{clip_id})">')
     if plane.rim is not None:
-        for run in _finite_runs(plane.rim):
+        for run in finite_runs(plane.rim):
             out.append(
-                f'<polygon data-kind="rim" points="{_points_attr(run, integer=False)}" fill="none" '
+                f'<polygon data-kind="rim" points="{points_attr(run, integer=False)}" fill="none" '
                 f'stroke="{RIM_COLOUR}" '
-                f'stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw * 5)} {_f(lw * 3)}"/>'
+                f'stroke-width="{svg_number(lw)}" stroke-dasharray="{svg_number(lw * 5)} {svg_number(lw * 3)}"/>'
             )
     for arc in plane.horizon:
         out.append(
-            f'<polyline data-kind="horizon" points="{_points_attr(np.asarray(arc, float), integer=False)}" '
-            f'fill="none" stroke="{RIM_COLOUR}" stroke-width="{_f(lw)}" stroke-dasharray="{_f(lw)} {_f(lw * 3)}"/>'
+            f'<polyline data-kind="horizon" points="{points_attr(np.asarray(arc, float), integer=False)}" '
+            f'fill="none" stroke="{RIM_COLOUR}" stroke-width="{svg_number(lw)}" stroke-dasharray="{svg_number(lw)} {svg_number(lw * 3)}"/>'
         )
     return out
 
@@ -915,7 +908,7 @@ def _lines_svg(plane: ImagePlane, view: ViewBox, image: ViewBox, selected_point:
                k: float, dp: int) -> str:
     """The epipolar lines: clipped to the image, or across the whole view when it is not the image rectangle."""
     lw = style.line_px * k
-    thick = f' stroke-width="{_f(lw * 2.5)}"'
+    thick = f' stroke-width="{svg_number(lw * 2.5)}"'
     L = np.asarray(plane.lines, float).reshape(-1, 4)
     if view != image:
         L = _extend_segments(_segments_of_lines(L, plane.line_coefficients, view), view)
@@ -925,7 +918,7 @@ def _lines_svg(plane: ImagePlane, view: ViewBox, image: ViewBox, selected_point:
     if len(idx):
         table[:, 0::2] = _line_tags(idx.tobytes(), selected_point, thick, style.point_colours)
         table[:, 1:9:2] = _fixed_strs(L[ok], max(dp, 1))
-    return f'<g stroke-width="{_f(lw)}">{"".join(table.ravel().tolist())}</g>'
+    return f'<g stroke-width="{svg_number(lw)}">{"".join(table.ravel().tolist())}</g>'
 
 
 def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, k: float, row: Iterator[float]
@@ -951,14 +944,14 @@ def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, 
             d = np.asarray(ep.direction, float) if ep.direction is not None else np.array([1.0, 0.0])
             tip, dd = _border_exit(view, np.array(view.centre) + d * 1e6 * max(view.width, view.height), 0.3 * a)
             svg, _ = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
-            text = (f'<text x="{_f(view.u0)}" y="{_f(next(row))}" font-size="{_f(st)}" fill="{EPIPOLE_COLOUR}">'
+            text = (f'<text x="{svg_number(view.u0)}" y="{svg_number(next(row))}" font-size="{svg_number(st)}" fill="{EPIPOLE_COLOUR}">'
                     f"{escape(label)} at infinity, direction ({format_vector(d[:2], '.2f')})</text>")
             ep_marks.append((ep, "infinity", "arrow", f'<g data-kind="epipole-arrow">{svg}</g>{text}'))
             continue
         x, y = (float(v) for v in ep.xy)
         if view.contains([x, y])[0]:
-            svg = (f'<path d="M{_f(x - a)} {_f(y - a)}L{_f(x + a)} {_f(y + a)}M{_f(x - a)} {_f(y + a)}'
-                   f'L{_f(x + a)} {_f(y - a)}" stroke="{EPIPOLE_COLOUR}" stroke-width="{_f(lw * 1.8)}"/>')
+            svg = (f'<path d="M{svg_number(x - a)} {svg_number(y - a)}L{svg_number(x + a)} {svg_number(y + a)}M{svg_number(x - a)} {svg_number(y + a)}'
+                   f'L{svg_number(x + a)} {svg_number(y - a)}" stroke="{EPIPOLE_COLOUR}" stroke-width="{svg_number(lw * 1.8)}"/>')
             text = label if ep.inside else f"{label} ({format_vector((x, y))})"
             ep_labels.append(_EpipoleLabel(text, (x, y), a, (x - a, y - a, x + a, y + a)))
             ep_marks.append((ep, where, "mark", svg))
@@ -984,9 +977,9 @@ def _epipole_groups(ep_marks: list[tuple[Any, str, str, str]], ep_labels: list[_
         text = ""
         if where != "infinity":
             lab, box = next(placed)
-            text = _label_text(box, size, escape(lab.text),
-                               f' data-kind="epipole-label" font-size="{_f(size)}" fill="{EPIPOLE_COLOUR}" '
-                               f'font-style="italic" paint-order="stroke" stroke="#fff" stroke-width="{_f(halo)}"',
+            text = label_text(box, size, escape(lab.text),
+                               f' data-kind="epipole-label" font-size="{svg_number(size)}" fill="{EPIPOLE_COLOUR}" '
+                               f'font-style="italic" paint-order="stroke" stroke="#fff" stroke-width="{svg_number(halo)}"',
                                lab.anchor[0])
         xy = "" if ep.xy is None else f' data-x="{float(ep.xy[0]):.5g}" data-y="{float(ep.xy[1]):.5g}"'
         out.append(f'<g data-kind="epipole" data-label="{label}" data-where="{where}" data-drawn="{drawn}"{xy}>'
@@ -1002,27 +995,27 @@ def _notes_svg(plane: ImagePlane, view: ViewBox, style: PanelStyle, k: float, ro
     halo = 0.25 * style.label_px * k
     ys = [next(row) for _ in status_lines]
     spans = (escape(status_lines[0]) if len(status_lines) == 1 else
-             "".join(f'<tspan x="{_f(view.u1)}" y="{_f(y)}">{escape(s)}</tspan>' for s, y in zip(status_lines, ys)))
-    out = [f'<text data-kind="hidden-count" data-hidden="{int(plane.n_hidden)}" x="{_f(view.u1)}" y="{_f(ys[0])}" '
-           f'text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">{spans}</text>']
+             "".join(f'<tspan x="{svg_number(view.u1)}" y="{svg_number(y)}">{escape(s)}</tspan>' for s, y in zip(status_lines, ys)))
+    out = [f'<text data-kind="hidden-count" data-hidden="{int(plane.n_hidden)}" x="{svg_number(view.u1)}" y="{svg_number(ys[0])}" '
+           f'text-anchor="end" font-size="{svg_number(st)}" fill="{style.ink}">{spans}</text>']
     if numbering_note:
         out.append(
-            f'<text data-kind="numbering-note" x="{_f(view.u1)}" y="{_f(next(row))}" text-anchor="end" '
-            f'font-size="{_f(st)}" fill="{style.ink}">numbers: selected point only '
+            f'<text data-kind="numbering-note" x="{svg_number(view.u1)}" y="{svg_number(next(row))}" text-anchor="end" '
+            f'font-size="{svg_number(st)}" fill="{style.ink}">numbers: selected point only '
             f"(over {MAX_NUMBERED_POINTS} points)</text>"
         )
     if n_unnumbered:
         what = "number" if n_unnumbered == 1 else "numbers"
         out.append(
-            f'<text data-kind="crowded-note" data-unnumbered="{n_unnumbered}" x="{_f(view.u1)}" '
-            f'y="{_f(crowded_y)}" text-anchor="end" font-size="{_f(st)}" fill="{style.ink}">'
+            f'<text data-kind="crowded-note" data-unnumbered="{n_unnumbered}" x="{svg_number(view.u1)}" '
+            f'y="{svg_number(crowded_y)}" text-anchor="end" font-size="{svg_number(st)}" fill="{style.ink}">'
             f"{n_unnumbered} point {what} not shown (no room beside their points)</text>"
         )
     if plane.message:
         cu, cv = view.centre
         out.append(
-            f'<text data-kind="message" x="{_f(cu)}" y="{_f(cv)}" text-anchor="middle" font-size="{_f(st)}" '
-            f'fill="#a00" paint-order="stroke" stroke="#fff" stroke-width="{_f(halo)}">'
+            f'<text data-kind="message" x="{svg_number(cu)}" y="{svg_number(cv)}" text-anchor="middle" font-size="{svg_number(st)}" '
+            f'fill="#a00" paint-order="stroke" stroke="#fff" stroke-width="{svg_number(halo)}">'
             f"{escape(str(plane.message))}</text>"
         )
     return out
