@@ -94,7 +94,7 @@ def test_what_every_panel_shows_redraws_every_panel(four_cameras, change):
 def _disc_rows_by_hand(P, in_image, in_view, style, k, dp):
     """The discs as the panel wrote them point by point: ``"%.{dp}f" % x`` for each coordinate."""
     c = f"%.{dp}f"
-    r = svg._f(style.mark_px * k)
+    r = svg.svg_number(style.mark_px * k)
     rows = []
     for i in np.flatnonzero(in_image).tolist():
         col = style.point_colours[i % len(style.point_colours)]
@@ -103,7 +103,7 @@ def _disc_rows_by_hand(P, in_image, in_view, style, k, dp):
     for i in np.flatnonzero(in_view & ~in_image).tolist():
         col = style.point_colours[i % len(style.point_colours)]
         rows.append(f'<circle data-kind="point-outside" data-index="{i}" cx="{c % P[i, 0]}" cy="{c % P[i, 1]}" '
-                    f'r="{r}" fill="#fff" stroke="{col}" stroke-width="{svg._f(style.line_px * k * 1.6)}"/>')
+                    f'r="{r}" fill="#fff" stroke="{col}" stroke-width="{svg.svg_number(style.line_px * k * 1.6)}"/>')
     return tuple(rows)
 
 

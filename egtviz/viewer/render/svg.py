@@ -138,14 +138,10 @@ def svg_number(x: float) -> str:
     return f"{x:.5g}"
 
 
-
-
 @lru_cache(maxsize=4096)
 def text_width_px(text: str, size_px: float) -> float:
     """Upper bound of a one-line text's width in CSS pixels (``CHAR_EM`` per character, less for narrow ones)."""
     return sum(_NARROW_EM.get(ch, _LOWER_EM if ch.islower() else CHAR_EM) for ch in text) * size_px
-
-
 
 
 @dataclass(frozen=True)
@@ -246,8 +242,6 @@ def axes_svg(lay: PanelLayout, style: PanelStyle) -> str:
     return f'<g data-kind="axes">{"".join(parts)}</g>'
 
 
-
-
 def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixed_size: bool,
              max_height: str | None) -> str:
     """The root ``<svg>`` tag and a background covering the whole view box."""
@@ -260,8 +254,6 @@ def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixe
         f'style="display:block;font-family:sans-serif;background:{style.background}{mh}">'
         f'<rect x="{svg_number(x)}" y="{svg_number(y)}" width="{svg_number(w)}" height="{svg_number(h)}" fill="{style.background}"/>'
     )
-
-
 
 
 def _border_exit(view: ViewBox, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
@@ -391,8 +383,6 @@ def finite_runs(P: np.ndarray) -> list[np.ndarray]:
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
-
-
 def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: bool, colours: tuple[str, ...]) -> str:
     """The ``epipolar-conic`` polylines of a panel, in index order, formatted in bulk.
 
@@ -493,8 +483,6 @@ def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> s
         x, anchor = (x0 + x1) / 2, "middle"
     return (f'<text x="{svg_number(x)}" y="{svg_number(y1 - 0.17 * size)}" text-anchor="{anchor}" '
             f'data-box="{svg_number(x0)} {svg_number(y0)} {svg_number(x1)} {svg_number(y1)}"{attrs}>{text}</text>')
-
-
 
 
 def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
