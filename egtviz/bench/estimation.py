@@ -32,8 +32,6 @@ def _missing(cv2: object) -> str:
     return "; OpenCV MISSING, no ratio" if cv2 is None else ""
 
 
-
-
 def _rotvec(w: np.ndarray) -> np.ndarray:
     th = float(np.linalg.norm(w))
     k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]) / th

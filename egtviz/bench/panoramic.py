@@ -17,8 +17,6 @@ from egtviz.geometry.panoramic_epipolar import epipolar_conics
 from egtviz.geometry.poses import Pose, rotz
 
 
-
-
 def bench_conics(n: int = 1000, *, n_project: int = 100_000, repeats: int = 20, seed: int = 0) -> list[dict]:
     """Median timings (ms) of ``epipolar_conics`` for ``n`` points and of projecting ``n_project`` points.
 

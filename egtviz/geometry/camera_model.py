@@ -421,7 +421,6 @@ def unchecked_normals(normals_world: np.ndarray) -> np.ndarray:
         return normals_world / np.maximum.reduce(np.abs(normals_world), axis=1, keepdims=True)
 
 
-
 IMAGE_SIZE_PARAMETERS = (
     ParameterSpec("width", "width", "px", 1, 8192, 640, integer=True),
     ParameterSpec("height", "height", "px", 1, 8192, 480, integer=True),

@@ -120,7 +120,6 @@ def _sample(rng: np.random.Generator, n: int, k: int, size: int = 7) -> np.ndarr
     return np.concatenate(out)[:k]
 
 
-
 class _Scorer:
     """Cost and inlier rule: truncated quadratic (RANSAC's MSAC cost, MAPSAC) or LMedS's order statistic."""
 

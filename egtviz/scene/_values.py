@@ -144,8 +144,6 @@ def has_control_characters(text: str) -> bool:
 _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
 
 
-
-
 def required_fields(cls: type) -> tuple[str, ...]:
     """The fields of the dataclass ``cls`` that have no default (an entry of a scene file must give them: the
     constructor would raise a ``TypeError`` instead of an error naming the entry)."""

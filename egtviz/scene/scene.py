@@ -272,7 +272,6 @@ def _points_tuple(points: Any) -> _Points:
     return _Points.trusted(checked, np.array(checked, dtype=np.float64).reshape(-1, 3))
 
 
-
 def scene_to_dict(scene: Scene) -> dict[str, Any]:
     """The scene as plain JSON data (the file format, version ``FILE_VERSION``)."""
     return {

@@ -79,7 +79,6 @@ def _check_name(name: Any) -> str:
     return name
 
 
-
 def _parameter(value: Any, kind: str, parameter: str, field: str, camera: str) -> float:
     """``value`` checked against the range of ``parameter`` of the registered model ``kind`` (a SceneError naming
     ``field``: the spec's own name for it)."""

@@ -415,7 +415,6 @@ def _draw_start_q(
     return None
 
 
-
 # ---------------------------------------------------------------- simulation: settings, scene, control law
 @dataclass(frozen=True)
 class PinholeSettings(NoiseDefaults):

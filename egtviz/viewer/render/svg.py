@@ -305,8 +305,6 @@ def points_attr(P: np.ndarray, *, integer: bool) -> str:
     return (("%.5g,%.5g " * len(P)) % tuple(np.asarray(P, float).ravel().tolist()))[:-1]
 
 
-
-
 #: Whole numbers in ``[_INT_LO, _INT_HI)`` are written from lookup tables (a panel's pixels nearly always are).
 _INT_LO, _INT_HI = -8192, 16384
 _INT_TABLES: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
