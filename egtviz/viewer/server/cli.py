@@ -95,6 +95,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "Without --scene, --demo or --lesson every new tab opens the course's start page")
     p.add_argument("--present", action="store_true",
                    help="presentation mode in every new tab: large type, thick lines, high contrast (a projector)")
+    p.add_argument("--allow-host", metavar="NAME", action="append", default=[], type=_allow_host,
+                   help="a name the page is reached under through a proxy (a JupyterHub's, e.g. hub.example.edu), "
+                   "whose pages may then connect; repeatable; EGTVIZ_ALLOWED_HOSTS adds comma-separated names")
+
+
+def _allow_host(text: str) -> str:
+    """argparse type of ``--allow-host``: a DNS name or an IP literal."""
+    from .guard import allowed_host
+
+    try:
+        return allowed_host(text, what="--allow-host")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--allow-host: ")) from None
 
 
 def _resolve(host: str, port: int, timeout: float) -> list[tuple]:
@@ -203,10 +216,13 @@ def reachable_urls(host: str, port: int) -> list[str]:
 
 
 def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None, *, verbose: bool = False,
-          demo: str | None = None, present: bool = False, lesson: str | None = None, course: bool = False):
+          demo: str | None = None, present: bool = False, lesson: str | None = None, course: bool = False,
+          allow_hosts: tuple[str, ...] = ()):
     """Start a server and the app without blocking; returns ``(server, app)``.
 
     ``course``: every new tab opens the course's start page; ``lesson``: every new tab opens that lesson.
+    ``allow_hosts``: names a proxy reaches the page under, with those of ``EGTVIZ_ALLOWED_HOSTS``
+    (:func:`egtviz.viewer.server.guard.allowed_hosts`; a bad name raises ``ValueError``).
 
     The server gets the guards of :func:`egtviz.viewer.server.guard.install_guards` before any tab connects.
 
@@ -219,8 +235,9 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     import viser
 
     from ..workbench.app import EgtvizApp
-    from .guard import install_guards
+    from .guard import GuardLimits, allowed_hosts, install_guards
 
+    limits = GuardLimits(allowed_hosts=allowed_hosts(allow_hosts))
     scene = scene_from_argument(str(scene_path)) if scene_path is not None else None
     if lesson is not None:
         from ...lessons import load
@@ -229,7 +246,7 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     check_bind(host, port)
     server = viser.ViserServer(host=host, port=port, verbose=verbose)
     try:
-        install_guards(server)
+        install_guards(server, limits)
         app = EgtvizApp(server, scene, demo=demo, present=present, course=course, lesson=lesson)
     except BaseException:
         server.stop()
@@ -239,12 +256,19 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
 
 def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None,
           *, stop_event: threading.Event | None = None, demo: str | None = None, present: bool = False,
-          lesson: str | None = None, course: bool = False) -> int:
+          lesson: str | None = None, course: bool = False, allow_hosts: tuple[str, ...] = ()) -> int:
     """Serve until Ctrl-C (or until ``stop_event`` is set); returns the exit status.
 
-    Exit status 2 for a scene file that cannot be read or a lesson that does not exist, 1 for an address
-    that cannot be used; either is reported in one line on stderr.
+    Exit status 2 for a scene file that cannot be read, a lesson that does not exist or a bad name in
+    ``EGTVIZ_ALLOWED_HOSTS``, 1 for an address that cannot be used; either is reported in one line on stderr.
     """
+    from .guard import allowed_hosts
+
+    try:
+        allow_hosts = allowed_hosts(allow_hosts)
+    except ValueError as exc:
+        print(f"egtviz: cannot use {exc}", file=sys.stderr)
+        return 2
     from ...lessons import LessonError
     from ...scene import SceneFileError
 
@@ -252,7 +276,8 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
         bind = check_bind(host, port)
         if bind.port_busy:
             print(f"egtviz: port {port} is busy on {host}; using the next free one", file=sys.stderr, flush=True)
-        server, _app = start(host, port, scene_path, demo=demo, present=present, lesson=lesson, course=course)
+        server, _app = start(host, port, scene_path, demo=demo, present=present, lesson=lesson, course=course,
+                             allow_hosts=allow_hosts)
     except SceneFileError as exc:
         print(f"egtviz: cannot read the scene file: {exc}", file=sys.stderr)
         return 2
@@ -283,7 +308,7 @@ def run(args: argparse.Namespace) -> int:
     # Nothing chosen to open: the course's start page, from which the workbench is one click away.
     course = args.scene is None and demo is None and lesson is None
     return serve(args.host, args.port, args.scene, demo=demo, present=bool(getattr(args, "present", False)),
-                 lesson=lesson, course=course)
+                 lesson=lesson, course=course, allow_hosts=tuple(getattr(args, "allow_host", None) or ()))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -6,7 +6,8 @@ in :func:`egtviz.viewer.server.cli.start`). It adds three things, all described 
 * **Origin.** A websocket handshake whose ``Origin`` header is not the page's own origin is answered
   with HTTP 403: a page on another site (or a DNS-rebinding name) cannot drive the app. A handshake
   without ``Origin`` is accepted: browsers always send it, so only non-browser programs omit it, and
-  those could forge any value anyway.
+  those could forge any value anyway. Names a proxy reaches the app under (a JupyterHub's) are
+  allowed by :func:`allowed_hosts` (``egtviz serve --allow-host NAME``, ``EGTVIZ_ALLOWED_HOSTS``).
 * **Uploads.** viser's file-transfer messages are checked before viser buffers them: a transfer
   declaring more than ``max_upload_bytes``, an implausible number of parts, more transfers in flight
   than ``max_uploads_in_flight`` per tab, parts beyond the declared size and any message over
@@ -30,8 +31,11 @@ import inspect
 import ipaddress
 import logging
 import math
+import os
+import re
 import socket
 import threading
+from collections.abc import Iterable, Mapping
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Callable, TypeGuard
 from urllib.parse import urlsplit
@@ -40,10 +44,15 @@ import msgspec.msgpack
 import viser
 import websockets.asyncio.server
 
+from ...files import printable
+
 __all__ = [
+    "ALLOWED_HOSTS_ENV",
     "GuardLimits",
     "GuardStats",
     "Guards",
+    "allowed_host",
+    "allowed_hosts",
     "check_viser_internals",
     "install_guards",
     "origin_allowed",
@@ -100,6 +109,8 @@ class GuardLimits:
                 raise ValueError(f"{name}: expected a positive integer, got {value!r}")
         if not isinstance(self.allowed_hosts, tuple) or not all(isinstance(h, str) for h in self.allowed_hosts):
             raise ValueError(f"allowed_hosts: expected a tuple of host names, got {self.allowed_hosts!r}")
+        for host in self.allowed_hosts:
+            allowed_host(host, what="allowed_hosts")  # a wildcard or an origin-like "https://x" would open the app
 
 
 @dataclasses.dataclass
@@ -273,6 +284,51 @@ def origin_allowed(origin: str | None, host_header: str | None, *, allowed_hosts
     return host_name in names or host_name in {h.lower().rstrip(".") for h in allowed_hosts}
 
 
+#: Host names (comma-separated) under which the page may be reached besides this machine's own: a proxy's.
+ALLOWED_HOSTS_ENV = "EGTVIZ_ALLOWED_HOSTS"
+_DNS_LABEL = re.compile(r"[a-z0-9_](?:[a-z0-9_-]{0,61}[a-z0-9_])?\Z")
+
+
+def allowed_host(text: str, *, what: str = "host") -> str:
+    """One name under which the page may be reached, as :func:`origin_allowed` compares it (lower case, no final dot).
+
+    A DNS name (``hub.example.edu``; an international name in its ``xn--`` form) or an IP literal. Whatever
+    else could be meant as a pattern or an origin is refused, since a wildcard would open the app to any page.
+
+    Args:
+        text: the name as given.
+        what: where it came from, for the message (``--allow-host``, ``EGTVIZ_ALLOWED_HOSTS``).
+
+    Raises:
+        ValueError: a scheme, port, path, wildcard, space or empty name; one line naming it.
+    """
+    name = text.strip().lower().rstrip(".") if isinstance(text, str) else ""
+    try:
+        return str(ipaddress.ip_address(name[1:-1] if name.startswith("[") and name.endswith("]") else name))
+    except ValueError:
+        pass
+    if not name or len(name) > 253 or not all(_DNS_LABEL.match(label) for label in name.split(".")):
+        raise ValueError(f"{what}: {printable(text)!r} is not a host name (expected a name such as hub.example.edu, "
+                         "without scheme, port, path or wildcard)")
+    return name
+
+
+def allowed_hosts(names: Iterable[str] = (), environ: Mapping[str, str] | None = None) -> tuple[str, ...]:
+    """The names of ``--allow-host`` and of ``EGTVIZ_ALLOWED_HOSTS`` (comma-separated), checked, each once, in order.
+
+    Args:
+        names: names given on the command line (or by a caller such as the JupyterHub entry point).
+        environ: the environment (default: this process's).
+
+    Raises:
+        ValueError: a name that :func:`allowed_host` refuses, naming where it came from.
+    """
+    env = os.environ if environ is None else environ
+    out = [allowed_host(n, what="--allow-host") for n in names]
+    out += [allowed_host(n, what=ALLOWED_HOSTS_ENV) for n in env.get(ALLOWED_HOSTS_ENV, "").split(",") if n.strip()]
+    return tuple(dict.fromkeys(out))
+
+
 def _origin_checker(original: Callable | None, limits: GuardLimits, stats: GuardStats) -> Callable:
     own = _own_names()
 
@@ -282,7 +338,9 @@ def _origin_checker(original: Callable | None, limits: GuardLimits, stats: Guard
             headers.get("Origin"), headers.get("Host"), allowed_hosts=limits.allowed_hosts, own_names=own
         ):
             stats.refused_origins += 1
-            _log.warning("refused a websocket connection from origin %.80r", headers.get("Origin"))
+            # Names are printed, never the whole header: a proxy's name is what the operator needs to allow.
+            _log.warning("refused a websocket connection from origin %.80r to host %.80r (if this is a proxy's "
+                         "name: egtviz serve --allow-host NAME)", headers.get("Origin"), headers.get("Host"))
             return connection.respond(http.HTTPStatus.FORBIDDEN, "egtviz: this page's origin may not connect.\n")
         return original(connection, request) if original is not None else None
 
