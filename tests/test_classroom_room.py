@@ -240,3 +240,16 @@ def test_bad_state_is_refused_with_a_reason():
     text = Classroom().to_json().replace('"mode":"follow"', '"mode":"dance"')
     with pytest.raises(ClassroomError, match="dance"):
         Classroom.from_json(text)
+
+
+def test_followers_and_student_tabs():
+    room, _ = _room()
+    room.instructor_join(0)
+    room.join(1, "Ada")
+    room.join(2, "Ben")
+    room.join(3, "Ada")
+    room.follow(2, False)
+    assert room.followers() == [1, 3]
+    assert room.student_tabs() == {1: "Ada", 2: "Ben", 3: "Ada"}
+    room.leave(1)
+    assert room.followers() == [3]

@@ -101,3 +101,27 @@ def test_classroom_token_methods():
     assert room.check_token(TOKEN, "a") and not room.check_token("nope", "a")
     assert room.redact_url(f"http://h/i?token={TOKEN}") == "http://h/i?token=s3cr…"
     assert TOKEN not in repr(room._guard)  # noqa: SLF001
+
+
+def test_redact_url_in_a_log_line_with_several_urls():
+    line = f'"GET /?token={TOKEN}&lesson=2 HTTP/1.1" from http://h/x;token=abcdefgh'
+    assert redact_url(line, TOKEN) == '"GET /?token=s3cr…&lesson=2 HTTP/1.1" from http://h/x;token=abcd…'
+
+
+def test_the_log_filter_shortens_the_token_in_formatted_records(caplog):
+    import logging
+
+    room = Classroom(token=TOKEN)
+    log = logging.getLogger("egtviz.test.access")
+    handler_filter = room.log_filter()
+    caplog.handler.addFilter(handler_filter)
+    try:
+        with caplog.at_level(logging.INFO, logger="egtviz.test.access"):
+            log.info("GET %s 101", f"/ws?token={TOKEN}")
+            log.info("wrong try %s", "/?token=guessedvalue")
+            log.info("plain %d", 5)
+    finally:
+        caplog.handler.removeFilter(handler_filter)
+    assert [r.getMessage() for r in caplog.records] == ["GET /ws?token=s3cr… 101", "wrong try /?token=gues…",
+                                                         "plain 5"]
+    assert TOKEN not in caplog.text

@@ -22,12 +22,13 @@ from .snapshots import Snapshot as Snapshot
 from .state import ClassState as ClassState
 from .state import SharedState as SharedState
 from .text import ClassroomError as ClassroomError
+from .tokens import RedactingFilter as RedactingFilter
 from .tokens import TokenGuard as TokenGuard
 from .tokens import redact as redact
 from .tokens import redact_url as redact_url
 
 __all__ = [
     "AnswersChanged", "CamerasLocked", "ClassState", "Classroom", "ClassroomError", "Event", "FollowChanged",
-    "Histogram", "Mode", "ModeChanged", "PacingChanged", "PauseChanged", "RosterChanged", "RosterRow",
+    "Histogram", "Mode", "ModeChanged", "PacingChanged", "PauseChanged", "RedactingFilter", "RosterChanged", "RosterRow",
     "SharedChanged", "SharedState", "Snapshot", "SnapshotShown", "TokenGuard", "redact", "redact_url",
 ]

@@ -4,10 +4,13 @@ the :class:`~egtviz.classroom.room.Classroom`)."""
 from __future__ import annotations
 
 import enum
+import logging
+import threading
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 __all__ = [
-    "AnswersChanged", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "PacingChanged",
+    "AnswersChanged", "Broadcaster", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "PacingChanged",
     "PauseChanged", "RosterChanged", "SharedChanged", "SnapshotShown",
 ]
 
@@ -80,3 +83,45 @@ class SnapshotShown:
 
 Event = (SharedChanged | ModeChanged | CamerasLocked | PauseChanged | PacingChanged | FollowChanged
          | RosterChanged | AnswersChanged | SnapshotShown)
+
+Listener = Callable[[Event], None]
+_log = logging.getLogger("egtviz.classroom")
+
+
+class Broadcaster:
+    """Listeners, and events sent to them outside the owner's lock (a listener may call back into the owner).
+
+    Args:
+        lock: the owner's lock, held only while the list of listeners is read or changed.
+    """
+
+    def __init__(self, lock: threading.RLock) -> None:
+        self._listeners_lock = lock
+        self._listeners: list[Listener] = []
+
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener`` with every event from now on; returns a function that unsubscribes it."""
+        with self._listeners_lock:
+            self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            with self._listeners_lock:
+                if listener in self._listeners:
+                    self._listeners.remove(listener)
+
+        return unsubscribe
+
+    def _emit(self, events: Iterable[Event]) -> None:
+        """Send ``events`` in order to every listener; call it with the owner's lock released. A listener that
+        raises is logged and the others still hear."""
+        events = list(events)
+        if not events:
+            return
+        with self._listeners_lock:
+            listeners = list(self._listeners)
+        for event in events:
+            for listener in listeners:
+                try:
+                    listener(event)
+                except Exception:  # one broken panel must not stop the others from hearing
+                    _log.exception("egtviz classroom: a listener failed on %s", type(event).__name__)

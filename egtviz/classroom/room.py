@@ -7,7 +7,6 @@ listeners are called after the lock is released, in the calling thread.
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -17,14 +16,14 @@ from ..lessons.progress import ProgressStore, learner_key
 from ..scene import Scene
 from .answers import Histogram
 from .events import (
-    AnswersChanged, CamerasLocked, Event, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged,
+    AnswersChanged, Broadcaster, CamerasLocked, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged,
     RosterChanged, SharedChanged, SnapshotShown,
 )
 from .roster import RosterRow, StudentPlace, build_roster, roster_csv, shipped_task_count
 from .snapshots import Snapshot, anonymise, label_for
 from .state import ClassState, SharedState, TabState
 from .text import ClassroomError, plain_text
-from .tokens import TokenGuard
+from .tokens import RedactingFilter, TokenGuard
 
 __all__ = ["MAX_PAUSE_MESSAGE", "MAX_STUDENTS", "Classroom"]
 
@@ -33,9 +32,6 @@ MAX_STUDENTS = 1000
 MAX_PAUSE_MESSAGE = 200
 MAX_LESSON_NAME = 120
 DEFAULT_PAUSE = "The class is paused."
-_log = logging.getLogger(__name__)
-
-Listener = Callable[[Event], None]
 
 
 def _tab_id(tab: object) -> int:
@@ -56,7 +52,7 @@ def _lesson(lesson: object) -> str:
     return plain_text(lesson, "lesson", MAX_LESSON_NAME)
 
 
-class Classroom:
+class Classroom(Broadcaster):
     """The state of one class and the instructor's controls over it.
 
     Args:
@@ -71,12 +67,12 @@ class Classroom:
                  clock: Callable[[], float] = time.monotonic, task_count: Callable[[str], int] | None = None,
                  state: ClassState | None = None) -> None:
         self._lock = threading.RLock()
+        super().__init__(self._lock)
         self._progress = progress
         self._clock = clock
         self._guard = TokenGuard(token, clock=clock)
         self._task_count = task_count or shipped_task_count
         self._state = state if state is not None else ClassState()
-        self._listeners: list[Listener] = []
 
     # -- tokens ------------------------------------------------------------------------------------------
 
@@ -96,32 +92,9 @@ class Classroom:
         """``url`` with the token (or any ``token=`` value) shortened, for a log."""
         return self._guard.redact_url(url)
 
-    # -- events ------------------------------------------------------------------------------------------
-
-    def subscribe(self, listener: Listener) -> Callable[[], None]:
-        """Call ``listener`` with every event from now on; returns a function that unsubscribes it."""
-        with self._lock:
-            self._listeners.append(listener)
-
-        def unsubscribe() -> None:
-            with self._lock:
-                if listener in self._listeners:
-                    self._listeners.remove(listener)
-
-        return unsubscribe
-
-    def _emit(self, events: Iterable[Event]) -> None:
-        events = list(events)
-        if not events:
-            return
-        with self._lock:
-            listeners = list(self._listeners)
-        for event in events:
-            for listener in listeners:
-                try:
-                    listener(event)
-                except Exception:  # one broken panel must not stop the others from hearing
-                    _log.exception("egtviz classroom: a listener failed on %s", type(event).__name__)
+    def log_filter(self) -> RedactingFilter:
+        """A logging filter that shortens the token in every record (install it on the server's handlers)."""
+        return self._guard.log_filter()
 
     # -- who is here -------------------------------------------------------------------------------------
 
@@ -251,6 +224,16 @@ class Classroom:
         with self._lock:
             t = self._state.tabs.get(_tab_id(tab))
             return t is not None and t.following
+
+    def followers(self) -> list[int]:
+        """The student tabs that follow the instructor (the ones a new shared scene is sent to), in join order."""
+        with self._lock:
+            return [tab for tab, t in self._state.tabs.items() if t.following]
+
+    def student_tabs(self) -> dict[int, str]:
+        """Every open student tab and the student on it."""
+        with self._lock:
+            return {tab: t.name for tab, t in self._state.tabs.items() if t.name is not None}
 
     # -- modes, pause, pacing ----------------------------------------------------------------------------
 

@@ -8,14 +8,17 @@ guessed at the speed of a network. Asking with no token at all (a student's URL)
 from __future__ import annotations
 
 import hmac
+import logging
+import re
 import secrets
 import threading
 import time
 from collections import OrderedDict, deque
 from collections.abc import Callable
-from urllib.parse import parse_qsl, urlsplit
 
-__all__ = ["LOCKOUT_S", "MAX_FAILURES", "MAX_PEERS", "WINDOW_S", "TokenGuard", "redact", "redact_url"]
+__all__ = [
+    "LOCKOUT_S", "MAX_FAILURES", "MAX_PEERS", "WINDOW_S", "RedactingFilter", "TokenGuard", "redact", "redact_url",
+]
 
 MAX_FAILURES = 5
 """Wrong tries a peer may make within :data:`WINDOW_S` before it is locked out."""
@@ -25,6 +28,7 @@ MAX_PEERS = 4096
 """Peers whose wrong tries are remembered (the oldest is forgotten first), so a flood of peers cannot fill memory."""
 MIN_TOKEN_LENGTH = 16
 _SHOWN = 4
+_TOKEN_PARAMETER = re.compile(r"([?&;]token=)([^&#\s\"'<>]+)")
 
 
 def redact(text: str, token: str) -> str:
@@ -35,17 +39,34 @@ def redact(text: str, token: str) -> str:
 
 
 def redact_url(url: str, token: str) -> str:
-    """``url`` as a log may show it: ``token`` shortened wherever it occurs, and the value of a ``token``
-    query parameter shortened even when it is not ``token`` (a wrong guess is not logged either)."""
-    shown = redact(url, token)
-    try:
-        query = urlsplit(shown).query
-    except ValueError:
-        return shown
-    for key, value in parse_qsl(query, keep_blank_values=True):
-        if key == "token" and len(value) > _SHOWN:
-            shown = shown.replace(value, value[:_SHOWN] + "…")
-    return shown
+    """``url`` (or a log line holding URLs) as a log may show it: ``token`` shortened wherever it occurs, and
+    the value of every ``token=`` parameter shortened even when it is not ``token`` (a guess is not logged
+    either)."""
+    return _TOKEN_PARAMETER.sub(_shorten_parameter, redact(url, token))
+
+
+def _shorten_parameter(match: re.Match[str]) -> str:
+    value = match.group(2)
+    return match.group(1) + (value if len(value) <= _SHOWN + 1 and value.endswith("…") else value[:_SHOWN] + "…")
+
+
+class RedactingFilter(logging.Filter):
+    """A logging filter that writes every record's message with the token shortened (:func:`redact_url`);
+    install it on the handlers of a server that logs request URLs."""
+
+    def __init__(self, token: str) -> None:
+        super().__init__()
+        self._token = token
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        try:
+            message = record.getMessage()
+        except Exception:  # a record whose arguments do not format: leave it to the handler to report
+            return True
+        shown = redact_url(message, self._token)
+        if shown != message:
+            record.msg, record.args = shown, None
+        return True
 
 
 class TokenGuard:
@@ -128,3 +149,7 @@ class TokenGuard:
     def redact_url(self, url: str) -> str:
         """:func:`redact_url` with this token."""
         return redact_url(url, self._token)
+
+    def log_filter(self) -> RedactingFilter:
+        """A :class:`RedactingFilter` for this token."""
+        return RedactingFilter(self._token)
