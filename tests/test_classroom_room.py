@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from egtviz.classroom import (
-    CamerasLocked, Classroom, ClassroomError, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged,
+    CamerasLocked, Classroom, ClassroomError, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged, PauseChanged,
     RosterChanged, SharedChanged,
 )
 from egtviz.lessons.progress import LearnerNameError
@@ -214,6 +214,7 @@ def test_state_goes_through_json_and_back():
     room.set_mode(Mode.EXPLORE)
     room.follow(2, True)
     room.pause("wait")
+    room.show_names(True)
     room.pace("03-intrinsics", 1)
     room.allow_lessons(["03-intrinsics"])
     room.record_answer(1, "f?", 800.0)
@@ -230,6 +231,7 @@ def test_state_goes_through_json_and_back():
     assert again.own_scene("Ada") == room.own_scene("Ada")
     assert again.histogram("f?").categories == (("big", 1),)
     assert again.shown_snapshot() == shot
+    assert again.names_shown()
 
 
 def test_bad_state_is_refused_with_a_reason():
@@ -253,3 +255,12 @@ def test_followers_and_student_tabs():
     assert room.student_tabs() == {1: "Ada", 2: "Ben", 3: "Ada"}
     room.leave(1)
     assert room.followers() == [3]
+
+
+def test_names_are_hidden_until_the_instructor_shows_them():
+    room, events = _room()
+    assert room.names_shown() is False
+    room.show_names(True)
+    room.show_names(True)
+    room.show_names(False)
+    assert events == [NamesShown(True), NamesShown(False)]

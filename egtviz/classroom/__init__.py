@@ -11,6 +11,7 @@ from .events import Event as Event
 from .events import FollowChanged as FollowChanged
 from .events import Mode as Mode
 from .events import ModeChanged as ModeChanged
+from .events import NamesShown as NamesShown
 from .events import PacingChanged as PacingChanged
 from .events import PauseChanged as PauseChanged
 from .events import RosterChanged as RosterChanged
@@ -29,6 +30,6 @@ from .tokens import redact_url as redact_url
 
 __all__ = [
     "AnswersChanged", "CamerasLocked", "ClassState", "Classroom", "ClassroomError", "Event", "FollowChanged",
-    "Histogram", "Mode", "ModeChanged", "PacingChanged", "PauseChanged", "RedactingFilter", "RosterChanged", "RosterRow",
+    "Histogram", "Mode", "ModeChanged", "NamesShown", "PacingChanged", "PauseChanged", "RedactingFilter", "RosterChanged", "RosterRow",
     "SharedChanged", "SharedState", "Snapshot", "SnapshotShown", "TokenGuard", "redact", "redact_url",
 ]

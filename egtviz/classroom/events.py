@@ -10,7 +10,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 __all__ = [
-    "AnswersChanged", "Broadcaster", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "PacingChanged",
+    "AnswersChanged", "Broadcaster", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "NamesShown", "PacingChanged",
     "PauseChanged", "RosterChanged", "SharedChanged", "SnapshotShown",
 ]
 
@@ -50,6 +50,13 @@ class PauseChanged:
 
 
 @dataclass(frozen=True)
+class NamesShown:
+    """Students' names are shown beside their answers and snapshots on the projector (True) or hidden."""
+
+    shown: bool
+
+
+@dataclass(frozen=True)
 class PacingChanged:
     """The lessons and steps students may open changed (ask :meth:`Classroom.may_open`)."""
 
@@ -82,7 +89,7 @@ class SnapshotShown:
 
 
 Event = (SharedChanged | ModeChanged | CamerasLocked | PauseChanged | PacingChanged | FollowChanged
-         | RosterChanged | AnswersChanged | SnapshotShown)
+         | RosterChanged | AnswersChanged | SnapshotShown | NamesShown)
 
 Listener = Callable[[Event], None]
 _log = logging.getLogger("egtviz.classroom")

@@ -16,8 +16,8 @@ from ..lessons.progress import ProgressStore, learner_key
 from ..scene import Scene
 from .answers import Histogram
 from .events import (
-    AnswersChanged, Broadcaster, CamerasLocked, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged,
-    RosterChanged, SharedChanged, SnapshotShown,
+    AnswersChanged, Broadcaster, CamerasLocked, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged,
+    PauseChanged, RosterChanged, SharedChanged, SnapshotShown,
 )
 from .roster import RosterRow, StudentPlace, build_roster, roster_csv, shipped_task_count
 from .snapshots import Snapshot, anonymise, label_for
@@ -406,6 +406,19 @@ class Classroom(Broadcaster):
     def shown_snapshot(self) -> Snapshot | None:
         with self._lock:
             return self._state.shown
+
+    def show_names(self, shown: bool) -> None:
+        """Show students' names on the projector (True) or hide them (the default)."""
+        shown = bool(shown)
+        with self._lock:
+            if self._state.names_shown == shown:
+                return
+            self._state.names_shown = shown
+        self._emit([NamesShown(shown)])
+
+    def names_shown(self) -> bool:
+        with self._lock:
+            return self._state.names_shown
 
     # -- sharing between processes -----------------------------------------------------------------------
 

@@ -11,7 +11,6 @@ import csv
 import io
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from functools import lru_cache
 
 from ..lessons.catalog import load
 from ..lessons.errors import LessonError
@@ -55,13 +54,21 @@ class StudentPlace:
     step: int | None
 
 
-@lru_cache(maxsize=64)
+_TASK_COUNTS: dict[str, int] = {}
+
+
 def shipped_task_count(lesson: str) -> int:
-    """Tasks in the shipped lesson ``lesson``; 0 if there is no such lesson."""
-    try:
-        return load(lesson).task_count
-    except LessonError:
-        return 0
+    """Tasks in the shipped lesson ``lesson``; 0 if there is no such lesson (not remembered, so a lesson that
+    appears later is counted then)."""
+    count = _TASK_COUNTS.get(lesson)
+    if count is None:
+        try:
+            count = load(lesson).task_count
+        except LessonError:
+            return 0
+        if len(_TASK_COUNTS) < 256:
+            _TASK_COUNTS[lesson] = count
+    return count
 
 
 def build_roster(places: Iterable[StudentPlace], progress: ProgressStore | None,

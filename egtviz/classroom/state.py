@@ -72,6 +72,8 @@ class ClassState:
     """Each student's snapshot label (``Student A``...), by learner key."""
     snapshots_taken: int = 0
     shown: Snapshot | None = None
+    names_shown: bool = False
+    """Whether the projector shows students' names (hidden until the instructor shows them)."""
 
     def to_dict(self) -> dict[str, Any]:
         """The state as plain JSON data."""
@@ -87,6 +89,7 @@ class ClassState:
             "mode": self.mode.value, "cameras_locked": self.cameras_locked, "pause": self.pause,
             "paced": dict(self.paced), "allowed": None if self.allowed is None else sorted(self.allowed),
             "answers": self.answers.to_dict(), "labels": dict(self.labels), "snapshots_taken": self.snapshots_taken,
+            "names_shown": self.names_shown,
             "shown": None if shown is None else {"label": shown.label, "number": shown.number,
                                                  "scene": scene_to_dict(shown.scene)},
         }
@@ -130,7 +133,7 @@ class ClassState:
             allowed=None if allowed is None else frozenset(str(a) for a in allowed),
             answers=AnswerBook.from_dict(data["answers"]),
             labels={learner_key(k): str(v) for k, v in data["labels"].items()},
-            snapshots_taken=int(data["snapshots_taken"]),
+            snapshots_taken=int(data["snapshots_taken"]), names_shown=bool(data["names_shown"]),
             shown=None if shown is None else Snapshot(str(shown["label"]), scene_from_dict(shown["scene"], "state"),
                                                       int(shown["number"])),
         )
