@@ -54,7 +54,8 @@ def test_roster_without_a_progress_store_uses_live_state():
     room.join(1, "zoe")
     room.join(2, "Adam")
     room.report_step(2, "L", 4)
-    assert room.roster() == [RosterRow("Adam", True, True, "L", 4, 0, 7), RosterRow("zoe", True, True, None, None, 0, 0)]
+    assert room.roster() == [RosterRow("Adam", True, True, "L", 4, 0, 7),
+                             RosterRow("zoe", True, True, None, None, 0, 0)]
 
 
 def test_two_tabs_of_one_student_are_one_row(tmp_path):
@@ -68,7 +69,8 @@ def test_two_tabs_of_one_student_are_one_row(tmp_path):
 
 def test_csv_escapes_formulas_and_keeps_odd_names_as_text(tmp_path):
     store, room = _room(tmp_path)
-    names = ["=HYPERLINK(\"http://x\")", "+1", "-2", "@SUM(A1)", 'Quote "me", please', "Zoë 👩‍👩‍👧", "<b>bold</b>"]
+    names = ["=HYPERLINK(\"http://x\")", "+1", "-2", "@SUM(A1)", 'Quote "me", please', "Zoë 👩‍👩‍👧",
+             "<b>bold</b>"]
     for tab, name in enumerate(names, start=1):
         room.join(tab, name)
     store.record_attempt("+1", LESSON, 0, "t0", True)

@@ -30,6 +30,7 @@ from .tokens import redact_url as redact_url
 
 __all__ = [
     "AnswersChanged", "CamerasLocked", "ClassState", "Classroom", "ClassroomError", "Event", "FollowChanged",
-    "Histogram", "Mode", "ModeChanged", "NamesShown", "PacingChanged", "PauseChanged", "RedactingFilter", "RosterChanged", "RosterRow",
-    "SharedChanged", "SharedState", "Snapshot", "SnapshotShown", "TokenGuard", "redact", "redact_url",
+    "Histogram", "Mode", "ModeChanged", "NamesShown", "PacingChanged", "PauseChanged", "RedactingFilter",
+    "RosterChanged", "RosterRow", "SharedChanged", "SharedState", "Snapshot", "SnapshotShown", "TokenGuard",
+    "redact", "redact_url",
 ]

@@ -10,8 +10,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 __all__ = [
-    "AnswersChanged", "Broadcaster", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "NamesShown", "PacingChanged",
-    "PauseChanged", "RosterChanged", "SharedChanged", "SnapshotShown",
+    "AnswersChanged", "Broadcaster", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "NamesShown",
+    "PacingChanged", "PauseChanged", "RosterChanged", "SharedChanged", "SnapshotShown",
 ]
 
 
