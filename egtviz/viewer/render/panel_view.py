@@ -238,11 +238,11 @@ def tick_values(lo: float, hi: float, px_per_unit: float, min_gap_px: float) -> 
 #: unit offsets (dx, dy) of the label's box from the mark, v downwards.
 _DIRECTIONS = ((1, -1), (1, 0), (1, 1), (-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1))
 #: Distances of the candidate rings, in units of (mark radius + gap).
-_RINGS = (1.0, 2.0, 3.5)
+PLACEMENT_RINGS = (1.0, 2.0, 3.5)
 
 
 def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: tuple[float, float, float, float],
-                 gap: float) -> np.ndarray:
+                 gap: float, placed: Any = ()) -> np.ndarray:
     """Greedy, deterministic label placement: each label next to its mark, clear of marks and earlier labels.
 
     Label ``i`` (in the given order, most important first) tries boxes of
@@ -259,6 +259,8 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
         obstacles: (m, 4) boxes ``(x0, y0, x1, y1)`` to keep clear (the marks, arrows).
         bounds: ``(x0, y0, x1, y1)`` the labels should stay inside.
         gap: space between a mark and its label.
+        placed: (p, 4) boxes of labels placed before these (by an earlier call with the same obstacles): the
+            result is then the last n rows of one call for all p + n labels.
 
     Returns:
         (n, 4) the chosen label boxes ``(x0, y0, x1, y1)``.
@@ -274,7 +276,8 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
     # up a candidate's cost once it cannot beat the best so far (costs only grow), and stops at the first free box.
     near_boxes, reach_x, reach_y = _near_obstacles(A, R, S, O, gap)
     box_bounds = tuple(float(b) for b in bounds)
-    placed: list[tuple[float, float, float, float]] = []
+    earlier: list[tuple[float, float, float, float]] = [tuple(b) for b in np.asarray(placed, float).reshape(-1, 4).tolist()]
+    placed = earlier[:]
     for (ax, ay), r, (w, h), others, rx, ry in zip(A.tolist(), R.tolist(), S.tolist(), near_boxes,
                                                   reach_x.tolist(), reach_y.tolist()):
         lo_x, hi_x, lo_y, hi_y = ax - rx, ax + rx, ay - ry, ay + ry
@@ -282,9 +285,9 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
         boxes = others + [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
         box = _best_box(ax, ay, r + gap, w, h, boxes, box_bounds)
         if box is None:  # every cost compared false: a NaN anchor, radius or size
-            raise ValueError(f"place_labels: label {len(placed)} has no finite box")
+            raise ValueError(f"place_labels: label {len(placed) - len(earlier)} has no finite box")
         placed.append(box)
-    return np.array(placed)
+    return np.array(placed[len(earlier):])
 
 
 def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, gap: float
@@ -298,7 +301,7 @@ def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, 
         ``(near_boxes, reach_x, reach_y)``: per label the near obstacles as lists ``[x0, y0, x1, y1]`` in the
         given order, and the reach of its candidates along x and y.
     """
-    far = (R + gap) * _RINGS[-1]
+    far = (R + gap) * PLACEMENT_RINGS[-1]
     reach_x, reach_y = far + S[:, 0], far + S[:, 1]
     if not len(O):
         return [[] for _ in range(len(A))], reach_x, reach_y
@@ -325,7 +328,7 @@ def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: lis
     area = w * h
     tiny = 1e-6 * area  # rounding, not an overlap
     # Conditional expressions, not min()/max(): here the builtin calls cost more than the comparisons.
-    for ring in _RINGS:
+    for ring in PLACEMENT_RINGS:
         d = reach * ring
         # The boxes overlapping each column of candidates (a ring's candidates share three columns, left,
         # centred and right), with their overlap width, in the given order: a candidate then tests only its

@@ -68,7 +68,7 @@ import numpy as np
 
 from ...scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
-from .panel_view import ViewBox, image_view, place_labels, tick_values
+from .panel_view import PLACEMENT_RINGS, ViewBox, image_view, place_labels, tick_values
 
 if TYPE_CHECKING:
     from ...scene.derived import ImagePlane
@@ -256,40 +256,42 @@ def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixe
     )
 
 
-def _border_exit(view: ViewBox, target: np.ndarray, inset: float) -> tuple[np.ndarray, np.ndarray]:
+def _border_exit(view: ViewBox, target: Any, inset: float) -> tuple[tuple[float, float], tuple[float, float]]:
     """Where the ray from the view's centre towards ``target`` leaves the view (``inset`` inside it), and its direction.
 
     Used only to place an arrow marker (layout, not geometry): the epipole
-    itself comes from the scene layer.
+    itself comes from the scene layer. Plain floats: two coordinates do not pay numpy's fixed cost per call.
     """
-    c = np.array(view.centre)
-    d = np.asarray(target, float) - c
-    n = float(np.hypot(*d))
-    if n == 0.0 or not np.isfinite(n):
-        return c, np.array([1.0, 0.0])
-    d = d / n
+    cu, cv = view.centre
+    du, dv = float(target[0]) - cu, float(target[1]) - cv
+    n = float(np.hypot(du, dv))
+    if n == 0.0 or not math.isfinite(n):
+        return (cu, cv), (1.0, 0.0)
+    du, dv = du / n, dv / n
     ts = []
-    if abs(d[0]) > 1e-12:
-        ts.append((view.width / 2.0 - inset) / abs(d[0]))
-    if abs(d[1]) > 1e-12:
-        ts.append((view.height / 2.0 - inset) / abs(d[1]))
+    if abs(du) > 1e-12:
+        ts.append((view.width / 2.0 - inset) / abs(du))
+    if abs(dv) > 1e-12:
+        ts.append((view.height / 2.0 - inset) / abs(dv))
     t = min(ts) if ts else 0.0
-    return c + t * d, d
+    return (cu + t * du, cv + t * dv), (du, dv)
 
 
-def _arrow(tip: np.ndarray, d: np.ndarray, length: float, colour: str, width: float) -> tuple[str, np.ndarray]:
+def _arrow(tip: tuple[float, float], d: tuple[float, float], length: float, colour: str, width: float
+           ) -> tuple[str, tuple[float, float, float, float]]:
     """An arrow whose head is at ``tip`` pointing along ``d``, and its bounding box ``(x0, y0, x1, y1)``."""
-    tail = tip - d * length
+    (tx, ty), (dx, dy) = tip, d
+    ax, ay = tx - dx * length, ty - dy * length
     head = length * 0.38
-    nrm = np.array([-d[1], d[0]])
-    p1 = tip - d * head + nrm * head * 0.5
-    p2 = tip - d * head - nrm * head * 0.5
-    P = np.array([tail, tip, p1, p2])
-    box = np.r_[P.min(axis=0) - width, P.max(axis=0) + width]
+    nx, ny = -dy, dx
+    p1x, p1y = tx - dx * head + nx * head * 0.5, ty - dy * head + ny * head * 0.5
+    p2x, p2y = tx - dx * head - nx * head * 0.5, ty - dy * head - ny * head * 0.5
+    box = (min(ax, tx, p1x, p2x) - width, min(ay, ty, p1y, p2y) - width,
+           max(ax, tx, p1x, p2x) + width, max(ay, ty, p1y, p2y) + width)
     svg = (
-        f'<line x1="{svg_number(tail[0])}" y1="{svg_number(tail[1])}" x2="{svg_number(tip[0])}" y2="{svg_number(tip[1])}" '
+        f'<line x1="{svg_number(ax)}" y1="{svg_number(ay)}" x2="{svg_number(tx)}" y2="{svg_number(ty)}" '
         f'stroke="{colour}" stroke-width="{svg_number(width)}"/>'
-        f'<polygon points="{svg_number(tip[0])},{svg_number(tip[1])} {svg_number(p1[0])},{svg_number(p1[1])} {svg_number(p2[0])},{svg_number(p2[1])}" '
+        f'<polygon points="{svg_number(tx)},{svg_number(ty)} {svg_number(p1x)},{svg_number(p1y)} {svg_number(p2x)},{svg_number(p2y)}" '
         f'fill="{colour}"/>'
     )
     return svg, box
@@ -327,6 +329,8 @@ def _int_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 #: ``rint(x * 10**dp)`` in ``[_FIX_LO, _FIX_HI)`` is written from a lookup table (``"%.{dp}f"``).
 _FIX_LO, _FIX_HI = -32768, 65536
 _FIX_TABLES: dict[int, np.ndarray] = {}
+#: Up to this many numbers are formatted one by one (the same text, without the table's dozen numpy calls).
+_FIX_SMALL = 48
 
 
 def _fixed_strs(X: Any, dp: int) -> np.ndarray:
@@ -338,6 +342,11 @@ def _fixed_strs(X: Any, dp: int) -> np.ndarray:
     range, non-finite) are formatted by ``%`` itself, so the text is identical.
     """
     X = np.asarray(X, float)
+    if X.size <= _FIX_SMALL:  # a few numbers: numpy's fixed cost per call exceeds the formatting itself
+        out = np.empty(X.shape, dtype=object)
+        fmt = f"%.{dp}f"
+        out.ravel()[:] = [fmt % v for v in X.ravel().tolist()]
+        return out
     table = _FIX_TABLES.get(dp)
     if table is None:
         sc = 10**dp
@@ -389,8 +398,14 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
     run's last). On a large image (whole pixels) all runs are rounded in one
     numpy pass and written as one stream of table strings (``integer``).
     """
-    idx = [i for i, arcs in enumerate(conics) for piece in arcs if len(piece) >= 2]
-    runs = [piece for arcs in conics for piece in arcs if len(piece) >= 2]
+    idx, runs, counts = [], [], []
+    for i, arcs in enumerate(conics):  # one pass: 200 conics are some 400 arcs
+        for piece in arcs:
+            n = len(piece)
+            if n >= 2:
+                idx.append(i)
+                runs.append(piece)
+                counts.append(n)
     if not runs:
         return ""
     V = np.concatenate(runs).astype(float, copy=False)
@@ -399,8 +414,9 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
         if not pairs:
             return ""
         idx, runs = [i for i, _ in pairs], [r for _, r in pairs]
+        counts = [len(r) for r in runs]
         V = np.concatenate(runs)
-    lengths = np.array([len(r) for r in runs])
+    lengths = np.array(counts)
     stride = max(1, math.ceil(int(lengths.sum()) / CONIC_VERTEX_BUDGET))
     if stride > 1:
         # Keep every stride-th sample of each run, and its last.
@@ -513,22 +529,25 @@ def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np
     else:
         blocked = [False] * len(B)
     drawn = [tuple(b) for b in boxes[:n_first].tolist()]
-    for j, (x0, y0, x1, y1), t, hit in zip(range(n_first, len(boxes)), B.tolist(), tiny.tolist(), blocked):
+    for (x0, y0, x1, y1), t, hit in zip(B.tolist(), tiny.tolist(), blocked):
         hit = hit or any((w := min(x1, o[2]) - max(x0, o[0])) > 0 and (h := min(y1, o[3]) - max(y0, o[1])) > 0
                          and w * h > t for o in drawn)
         keep.append(not hit)
-        if hit:
+        if not hit:
+            drawn.append((x0, y0, x1, y1))
+    # A number's distance to every drawn point does not depend on the others' fates: all at once.
+    A = anchors[n_first:]
+    sx, sy = shown[None, :, 0], shown[None, :, 1]
+    dx = np.maximum(np.maximum(B[:, 0, None] - sx, sx - B[:, 2, None]), 0.0)
+    dy = np.maximum(np.maximum(B[:, 1, None] - sy, sy - B[:, 3, None]), 0.0)
+    others = (sx != A[:, 0, None]) | (sy != A[:, 1, None])
+    nearest = np.where(others, np.hypot(dx, dy), np.inf).min(axis=1, initial=np.inf).tolist()
+    for (x0, y0, x1, y1), (ax, ay), r, ok, d in zip(B.tolist(), A.tolist(), reach[n_first:].tolist(), keep, nearest):
+        if not ok:
             far.append(False)
             continue
-        drawn.append((x0, y0, x1, y1))
-        ax, ay = anchors[j].tolist()
         own = math.hypot(max(x0 - ax, 0.0, ax - x1), max(y0 - ay, 0.0, ay - y1))
-        dx = np.maximum(np.maximum(x0 - shown[:, 0], shown[:, 0] - x1), 0.0)
-        dy = np.maximum(np.maximum(y0 - shown[:, 1], shown[:, 1] - y1), 0.0)
-        d = np.hypot(dx, dy)
-        others = d[(shown[:, 0] != ax) | (shown[:, 1] != ay)]
-        far.append(own > NUMBER_NEAR * float(reach[j])
-                   or bool(len(others)) and float(others.min()) < NUMBER_CLEAR * own)
+        far.append(own > NUMBER_NEAR * float(r) or d < NUMBER_CLEAR * own)
     return keep, far
 
 
@@ -548,16 +567,37 @@ def _marked_points(P: np.ndarray, drawn: np.ndarray, selected_point: int | None,
     return {int(i) for i in candidates if isinstance(i, (int, np.integer)) and 0 <= i < len(P) and drawn[i]}
 
 
-def _place_numbers(P: np.ndarray, in_image: np.ndarray, in_view: np.ndarray, marked: set[int],
-                   selected_point: int | None, show_labels: bool | str, style: PanelStyle, k: float,
-                   bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]
-                   ) -> tuple[dict[int, Any], dict[int, Any], tuple, int]:
-    """Where the epipole labels and the point numbers go, clear of the marks and of each other.
+@dataclass(frozen=True)
+class _NumberPlan:
+    """The point numbers of a panel to place, and the marks they keep clear of (the same while the points stay put).
 
-    Returns:
-        ``(label_of, leader_of, ep_boxes, n_unnumbered)``: the box of each drawn number by point, the boxes of the
-        numbers that need a leader line, the epipole labels' boxes, and how many numbers found no free box.
+    Attributes:
+        numbered: the numbered points, in placement order (the selected, the highlighted, the others by index).
+        marked: the points with a ring.
+        obstacles: (m, 4) the discs' and rings' boxes.
+        anchors, radii, sizes: each number's mark centre, mark radius and box size (``place_labels``'s arguments).
+        reach: (n, 4) the box within which each number's candidate boxes lie (what can sway its placement).
+        shown: (k, 2) every drawn point.
     """
+
+    numbered: tuple[int, ...]
+    marked: frozenset[int]
+    obstacles: np.ndarray
+    anchors: np.ndarray
+    radii: np.ndarray
+    sizes: np.ndarray
+    reach: np.ndarray
+    shown: np.ndarray
+
+
+@lru_cache(maxsize=16)
+def _number_plan(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
+                 highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float) -> _NumberPlan:
+    """What :func:`_place_numbers` places (cached: a panel whose points stay put keeps it while its epipoles move)."""
+    P = np.frombuffer(P_bytes).reshape(-1, 2)
+    in_image = np.frombuffer(in_image_bytes, dtype=bool)
+    in_view = np.frombuffer(in_view_bytes, dtype=bool)
+    marked = _marked_points(P, in_image | in_view, selected_point, highlighted)
     r_pt = style.mark_px * k
     ring_r = r_pt * 2.0
     lw = style.line_px * k
@@ -576,83 +616,175 @@ def _place_numbers(P: np.ndarray, in_image: np.ndarray, in_view: np.ndarray, mar
     if marked:
         M = P[sorted(marked)]
         obstacles.append(np.column_stack([M - ring_r - lw, M + ring_r + lw]))
-    obstacles.extend(np.array([e.obstacle]) for e in epipoles)
     O = np.concatenate(obstacles) if obstacles else np.zeros((0, 4))
-    anchors = [e.anchor for e in epipoles] + [tuple(P[i]) for i in numbered]
-    radii = [e.radius for e in epipoles] + [ring_r if i in marked else r_pt for i in numbered]
-    sizes = ([(text_width_px(e.text, style.label_px) * k + halo, 0.95 * size + halo) for e in epipoles]
-             + [(text_width_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in numbered])
-    gap = 0.3 * size
-    boxes = place_labels(anchors, radii, sizes, O, bounds, gap=gap) if anchors else np.zeros((0, 4))
-    ep_boxes = tuple(tuple(b) for b in boxes[: len(epipoles)])
-    keep, far = number_fates(boxes, len(epipoles), np.asarray(anchors, float).reshape(-1, 2),
-                              np.asarray(radii, float) + gap, O, shown)
-    label_of = {i: b for i, b, ok in zip(numbered, boxes[len(epipoles):], keep) if ok}
-    leader_of = {i: b for i, b, ok, f in zip(numbered, boxes[len(epipoles):], keep, far) if ok and f}
-    return label_of, leader_of, ep_boxes, len(numbered) - len(label_of)
+    anchors = np.array([P[i] for i in numbered], float).reshape(-1, 2)
+    radii = np.array([ring_r if i in marked else r_pt for i in numbered], float)
+    sizes = np.array([(text_width_px(str(i + 1), style.label_px) * k + halo, 0.95 * size + halo) for i in numbered],
+                     float).reshape(-1, 2)
+    # As place_labels bounds a label's candidates (the last ring's distance plus the box's size).
+    far = (radii + 0.3 * size) * PLACEMENT_RINGS[-1]
+    rx, ry = far + sizes[:, 0], far + sizes[:, 1]
+    reach = np.column_stack([anchors[:, 0] - rx, anchors[:, 1] - ry, anchors[:, 0] + rx, anchors[:, 1] + ry])
+    for a in (O, anchors, radii, sizes, reach, shown):
+        a.setflags(write=False)
+    return _NumberPlan(tuple(numbered), frozenset(marked), O, anchors, radii, sizes, reach, shown)
 
 
-def _point_group(i: int, kind: str, xy: np.ndarray, *, ring: bool, selected: bool, label_box: Any, leader_box: Any,
-                 style: PanelStyle, k: float, dp: int) -> str:
-    """Point ``i``'s ``<g>``: its disc with (if any) its ring, its number and the number's leader line."""
-    c = f"%.{dp}f"
-    r_pt = style.mark_px * k
-    lw = style.line_px * k
+def _epipole_obstacles(plan: _NumberPlan, epipoles: tuple[_EpipoleLabel, ...]) -> np.ndarray:
+    """The marks' boxes, then the epipoles' (the order :func:`place_labels` adds up their overlaps in)."""
+    if not epipoles:
+        return plan.obstacles
+    return np.concatenate([plan.obstacles, np.array([e.obstacle for e in epipoles], float).reshape(-1, 4)])
+
+
+def _epipole_boxes(plan: _NumberPlan, epipoles: tuple[_EpipoleLabel, ...], style: PanelStyle, k: float,
+                   bounds: tuple[float, float, float, float]) -> np.ndarray:
+    """The epipole labels' boxes: placed first, so the point numbers never move them."""
+    if not epipoles:
+        return np.zeros((0, 4))
     size = style.label_px * k
     halo = 0.25 * style.label_px * k
+    sizes = [(text_width_px(e.text, style.label_px) * k + halo, 0.95 * size + halo) for e in epipoles]
+    return place_labels([e.anchor for e in epipoles], [e.radius for e in epipoles], sizes,
+                        _epipole_obstacles(plan, epipoles), bounds, gap=0.3 * size)
+
+
+def _clear_of_numbers(plan: _NumberPlan, boxes: np.ndarray) -> bool:
+    """Whether ``boxes`` (the epipoles' marks and labels) lie outside every number's reach, with a margin.
+
+    Then they cannot sway a number's placement nor its fate: :func:`place_labels` adds up only the boxes within
+    a label's reach, and a number's box lies inside its reach. The margin (far above rounding) keeps this true
+    whatever the last bit of a reach's sum.
+    """
+    R = plan.reach
+    if not len(R) or not len(boxes):
+        return True
+    if not np.isfinite(boxes).all():
+        return False
+    margin = 1e-9 * (1.0 + max(np.abs(R).max(), np.abs(boxes).max()))
+    lo, hi = R[:, :2] - margin, R[:, 2:] + margin
+    B = boxes[:, None, :]
+    return bool(((B[..., :2] > hi) | (B[..., 2:] < lo)).any(axis=2).all())
+
+
+def _place_numbers(plan: _NumberPlan, style: PanelStyle, k: float, bounds: tuple[float, float, float, float],
+                   epipoles: tuple[_EpipoleLabel, ...], ep_boxes: tuple) -> tuple[dict[int, Any], dict[int, Any], int]:
+    """Where the point numbers go, clear of the marks, of the epipole labels (placed first, in ``ep_boxes``) and of
+    each other.
+
+    Returns:
+        ``(label_of, leader_of, n_unnumbered)``: the box of each drawn number by point, the boxes of the numbers
+        that need a leader line, and how many numbers found no free box.
+    """
+    if not plan.numbered:
+        return {}, {}, 0
+    gap = 0.3 * style.label_px * k
+    O = _epipole_obstacles(plan, epipoles)
+    first = np.array(ep_boxes, float).reshape(-1, 4)
+    placed = place_labels(plan.anchors, plan.radii, plan.sizes, O, bounds, gap=gap, placed=first)
+    boxes = np.concatenate([first, placed.reshape(-1, 4)])
+    anchors = np.concatenate([np.array([e.anchor for e in epipoles], float).reshape(-1, 2), plan.anchors])
+    radii = np.concatenate([np.array([e.radius for e in epipoles], float), plan.radii])
+    keep, far = number_fates(boxes, len(epipoles), anchors, radii + gap, O, plan.shown)
+    numbered = plan.numbered
+    placed = placed.tolist()
+    label_of = {i: tuple(b) for i, b, ok in zip(numbered, placed, keep) if ok}
+    leader_of = {i: tuple(b) for i, b, ok, f in zip(numbered, placed, keep, far) if ok and f}
+    return label_of, leader_of, len(numbered) - len(label_of)
+
+
+@lru_cache(maxsize=64)
+def _group_constants(style: PanelStyle, k: float) -> tuple[str, str, str, str, str, float, str]:
+    """The sizes a point's group writes, as text: disc radius, outline width, ring radius, ring width, leader width,
+    the number's size, and its halo's attributes."""
+    r_pt, lw = style.mark_px * k, style.line_px * k
+    halo = 0.25 * style.label_px * k
+    return (svg_number(r_pt), svg_number(lw * 1.6), svg_number(r_pt * 2.0), svg_number(lw * 1.5),
+            svg_number(lw * 0.6), style.label_px * k, f' stroke="#fff" stroke-width="{svg_number(halo)}"')
+
+
+@lru_cache(maxsize=256)
+def _point_group(i: int, kind: str, xy: tuple[float, float], *, ring: bool, selected: bool, label_box: Any,
+                 leader_box: Any, style: PanelStyle, k: float, dp: int) -> str:
+    """Point ``i``'s ``<g>``: its disc with (if any) its ring, its number and the number's leader line.
+
+    Cached: the panel of the camera that does not move draws the same groups from one drag step to the next.
+    """
+    c = f"%.{dp}f"
+    r_text, outline, ring_r, ring_w, leader_w, size, halo = _group_constants(style, k)
     x, y = xy
+    cx, cy = c % x, c % y
     col = style.point_colours[i % len(style.point_colours)]
     hollow = kind == "point-outside"
     fill = "#fff" if hollow else col
-    stroke = f' stroke="{col}" stroke-width="{svg_number(lw * 1.6)}"' if hollow else ""
+    stroke = f' stroke="{col}" stroke-width="{outline}"' if hollow else ""
     ring_svg = label = leader = ""
     if ring:
-        ring_svg = (f'<circle cx="{c % x}" cy="{c % y}" r="{svg_number(r_pt * 2.0)}" fill="none" stroke="{style.ink}" '
-                    f'stroke-width="{svg_number(lw * 1.5)}" data-selected="{"true" if selected else "false"}"/>')
+        ring_svg = (f'<circle cx="{cx}" cy="{cy}" r="{ring_r}" fill="none" stroke="{style.ink}" '
+                    f'stroke-width="{ring_w}" data-selected="{"true" if selected else "false"}"/>')
     if label_box is not None:
-        label = label_text(label_box, size, str(i + 1), f' stroke="#fff" stroke-width="{svg_number(halo)}"', x)
+        label = label_text(label_box, size, str(i + 1), halo, x)
     if leader_box is not None:
         # From the box's nearest point to the disc's centre, under the disc: it ends at the point.
-        x0, y0, x1, y1 = (float(b) for b in leader_box)
+        x0, y0, x1, y1 = leader_box
         lx, ly = min(max(x, x0), x1), min(max(y, y0), y1)
-        leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{svg_number(lx)}" y1="{svg_number(ly)}" x2="{c % x}" '
-                  f'y2="{c % y}" stroke="{style.ink}" stroke-width="{svg_number(lw * 0.6)}"/>')
-    return (f'<g data-kind="{kind}" data-index="{i}">{leader}{ring_svg}<circle cx="{c % x}" cy="{c % y}" '
-            f'r="{svg_number(r_pt)}" fill="{fill}"{stroke}/>{label}</g>')
+        leader = (f'<line data-kind="label-leader" data-index="{i}" x1="{svg_number(lx)}" y1="{svg_number(ly)}" x2="{cx}" '
+                  f'y2="{cy}" stroke="{style.ink}" stroke-width="{leader_w}"/>')
+    return (f'<g data-kind="{kind}" data-index="{i}">{leader}{ring_svg}<circle cx="{cx}" cy="{cy}" '
+            f'r="{r_text}" fill="{fill}"{stroke}/>{label}</g>')
 
 
-@lru_cache(maxsize=16)
 def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
            highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float, dp: int,
            bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple, int]:
     """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
 
-    Cached: during a drag the panel of the camera that does not move keeps its
-    pixels, and often its epipoles.
+    During a drag the panel of the camera that does not move keeps its pixels while its epipoles move: when the
+    epipoles' marks and labels stay out of every number's reach (:func:`_clear_of_numbers`), the numbers are where
+    they would be without them, and the points' text drawn for that case is reused.
     """
+    plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k)
+    ep_boxes = _epipole_boxes(plan, epipoles, style, k, bounds)
+    boxes = tuple(tuple(b) for b in ep_boxes.tolist())
+    near = epipoles if plan.numbered else ()
+    if near and _clear_of_numbers(plan, np.concatenate([ep_boxes, [e.obstacle for e in epipoles]])):
+        near = ()
+    body, n_unnumbered = _point_marks(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels,
+                                      style, k, dp, bounds, near, boxes if near else ())
+    return body, boxes, n_unnumbered
+
+
+@lru_cache(maxsize=16)
+def _point_marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
+                 highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float, dp: int,
+                 bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...],
+                 ep_boxes: tuple) -> tuple[str, int]:
+    """The points' text with their numbers placed clear of ``epipoles`` and their labels (``ep_boxes``) too, and how
+    many numbers found no room."""
     P = np.frombuffer(P_bytes).reshape(-1, 2)
     in_image = np.frombuffer(in_image_bytes, dtype=bool)
     in_view = np.frombuffer(in_view_bytes, dtype=bool)
     idx, outside = np.flatnonzero(in_image).tolist(), np.flatnonzero(in_view & ~in_image).tolist()
-    marked = _marked_points(P, in_image | in_view, selected_point, highlighted)
-    label_of, leader_of, ep_boxes, n_unnumbered = _place_numbers(P, in_image, in_view, marked, selected_point,
-                                                                 show_labels, style, k, bounds, epipoles)
+    plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k)
+    marked = plan.marked
+    label_of, leader_of, n_unnumbered = _place_numbers(plan, style, k, bounds, epipoles, ep_boxes)
     rows = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
     special = sorted(set(label_of) | marked)
     if special:
         rows = rows.copy()
+        xy = [tuple(p) for p in P.tolist()]
     for i in special:  # a ring or a number: the disc's row becomes its group
         if in_image[i]:
             kind, row = "point", bisect_left(idx, i)
         else:
             kind, row = "point-outside", len(idx) + bisect_left(outside, i)
-        group = _point_group(i, kind, P[i], ring=i in marked, selected=i == selected_point,
+        group = _point_group(i, kind, xy[i], ring=i in marked, selected=i == selected_point,
                              label_box=label_of.get(i), leader_box=leader_of.get(i), style=style, k=k, dp=dp)
         rows[row] = (group, "", "", "", "", "", "")
     body = (f'<g stroke="{style.ink}" stroke-width="{svg_number(style.line_px * k * 0.5)}" '
             f'font-size="{svg_number(style.label_px * k)}" font-weight="bold" fill="{style.ink}" paint-order="stroke">'
             f'{"".join(rows.ravel().tolist())}</g>')
-    return body, ep_boxes, n_unnumbered
+    return body, n_unnumbered
 
 
 @lru_cache(maxsize=16)
@@ -928,25 +1060,25 @@ def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, 
         where = "inside" if ep.inside else "outside"
         if ep.at_infinity or ep.xy is None:
             d = np.asarray(ep.direction, float) if ep.direction is not None else np.array([1.0, 0.0])
-            tip, dd = _border_exit(view, np.array(view.centre) + d * 1e6 * max(view.width, view.height), 0.3 * a)
+            tip, dd = _border_exit(view, (np.array(view.centre) + d * 1e6 * max(view.width, view.height)).tolist(),
+                                   0.3 * a)
             svg, _ = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
             text = (f'<text x="{svg_number(view.u0)}" y="{svg_number(next(row))}" font-size="{svg_number(st)}" fill="{EPIPOLE_COLOUR}">'
                     f"{escape(label)} at infinity, direction ({format_vector(d[:2], '.2f')})</text>")
             ep_marks.append((ep, "infinity", "arrow", f'<g data-kind="epipole-arrow">{svg}</g>{text}'))
             continue
         x, y = (float(v) for v in ep.xy)
-        if view.contains([x, y])[0]:
+        if view.u0 <= x <= view.u1 and view.v0 <= y <= view.v1:  # as ViewBox.contains (NaN: outside)
             svg = (f'<path d="M{svg_number(x - a)} {svg_number(y - a)}L{svg_number(x + a)} {svg_number(y + a)}M{svg_number(x - a)} {svg_number(y + a)}'
                    f'L{svg_number(x + a)} {svg_number(y - a)}" stroke="{EPIPOLE_COLOUR}" stroke-width="{svg_number(lw * 1.8)}"/>')
             text = label if ep.inside else f"{label} ({format_vector((x, y))})"
             ep_labels.append(_EpipoleLabel(text, (x, y), a, (x - a, y - a, x + a, y + a)))
             ep_marks.append((ep, where, "mark", svg))
         else:
-            tip, dd = _border_exit(view, np.array([x, y]), 0.3 * a)
+            tip, dd = _border_exit(view, (x, y), 0.3 * a)
             svg, box = _arrow(tip, dd, arrow_len, EPIPOLE_COLOUR, lw * 1.8)
-            tail = tip - dd * arrow_len
-            ep_labels.append(_EpipoleLabel(f"{label} ({format_vector((x, y))})", (float(tail[0]), float(tail[1])),
-                                           0.2 * size, (float(box[0]), float(box[1]), float(box[2]), float(box[3]))))
+            tail = (tip[0] - dd[0] * arrow_len, tip[1] - dd[1] * arrow_len)
+            ep_labels.append(_EpipoleLabel(f"{label} ({format_vector((x, y))})", tail, 0.2 * size, box))
             ep_marks.append((ep, where, "arrow", f'<g data-kind="epipole-arrow">{svg}</g>'))
     return ep_marks, ep_labels
 

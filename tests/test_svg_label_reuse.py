@@ -1,0 +1,90 @@
+"""A panel's point numbers placed once for its points serve while its epipoles stay out of their reach.
+
+The drag path places the epipole labels first and reuses the numbers placed without them when no epipole mark or
+label comes within any number's reach (``svg._clear_of_numbers``); otherwise it places the numbers after the epipole
+labels (``place_labels(..., placed=...)``). Either way the SVG must be the one the single placement of every label
+gives: the tests compare it with the route that never reuses.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from egtviz.scene import SceneModel, compute_derived, default_scene, panoramic_scene
+from egtviz.viewer.render import svg
+from egtviz.viewer.render.panel_view import place_labels
+
+
+@settings(max_examples=150, deadline=None)
+@given(n=st.integers(1, 12), split=st.integers(0, 12), seed=st.integers(0, 2**32 - 1))
+def test_labels_placed_after_earlier_ones_are_one_placement(n, split, seed):
+    rng = np.random.default_rng(seed)
+    split = min(split, n)
+    anchors = rng.uniform(0, 100, (n, 2))
+    radii = rng.uniform(1, 4, n)
+    sizes = rng.uniform(4, 20, (n, 2))
+    centres = rng.uniform(0, 100, (15, 2))
+    obstacles = np.column_stack([centres - 3, centres + 3])
+    bounds = (0.0, 0.0, 100.0, 100.0)
+    whole = place_labels(anchors, radii, sizes, obstacles, bounds, gap=2.0)
+    first = place_labels(anchors[:split], radii[:split], sizes[:split], obstacles, bounds, gap=2.0)
+    rest = place_labels(anchors[split:], radii[split:], sizes[split:], obstacles, bounds, gap=2.0, placed=first)
+    assert np.array_equal(np.concatenate([first.reshape(-1, 4), rest.reshape(-1, 4)]), whole)
+
+
+def _drag_planes(scene, n_points: int, seed: int, steps: int):
+    """The image planes of a drag of the first camera (each step a new place), on a scene with random points."""
+    model = SceneModel(scene)
+    X = model.scene.points_array()
+    model.randomize_points(n_points, seed=seed, center=tuple(X.mean(axis=0)), extent=2.0)
+    spec = model.scene.cameras[0]
+    pose = spec.camera().pose
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(steps):
+        position = np.asarray(pose.t, float) + rng.normal(0.0, 0.15, 3)
+        model.set_camera_pose(spec.name, tuple(position), pose.R)
+        out.extend(compute_derived(model.scene).image_planes.values())
+    return out
+
+
+@pytest.mark.parametrize(("make", "n_points", "reused"), [(default_scene, 3, True), (default_scene, 8, True),
+                                                          (default_scene, 30, False), (default_scene, 200, True),
+                                                          (panoramic_scene, 8, False)])
+def test_reused_numbers_give_the_svg_of_one_placement(monkeypatch, make, n_points, reused):
+    planes = _drag_planes(make(), n_points, seed=n_points, steps=12)
+    verdicts = []
+    clear = svg._clear_of_numbers
+
+    def spy(plan, boxes):
+        verdicts.append(clear(plan, boxes))
+        return verdicts[-1]
+
+    monkeypatch.setattr(svg, "_clear_of_numbers", spy)
+    kinds = [dict(), dict(selected_point=1), dict(selected_point=0, highlighted={2}), dict(style=svg.PRESENT)]
+    drawn = [svg.image_plane_svg(p, revision=1, **kw) for p in planes for kw in kinds]
+    monkeypatch.setattr(svg, "_clear_of_numbers", lambda plan, boxes: False)
+    for cache in (svg._point_marks, svg._number_plan, svg._point_group):
+        cache.cache_clear()
+    fresh = [svg.image_plane_svg(p, revision=1, **kw) for p in planes for kw in kinds]
+    assert drawn == fresh
+    # Both routes were taken where the seeds make them occur (a crowd of numbers is never clear).
+    assert any(verdicts) == reused and not all(verdicts)
+
+
+def test_epipoles_in_reach_are_not_clear():
+    planes = _drag_planes(default_scene(), 8, seed=1, steps=1)
+    plane = planes[0]
+    P = np.ascontiguousarray(np.asarray(plane.points, float).reshape(-1, 2))
+    in_image = np.ascontiguousarray(np.asarray(plane.in_image, bool))
+    plan = svg._number_plan(P.tobytes(), in_image.tobytes(), in_image.tobytes(), None, frozenset(), True,
+                            svg.NORMAL, 1.0)
+    assert len(plan.numbered) == int(in_image.sum()) > 0
+    x0, y0, x1, y1 = plan.reach[0]
+    assert not svg._clear_of_numbers(plan, np.array([[x1 - 1.0, y1 - 1.0, x1 + 5.0, y1 + 5.0]]))
+    assert not svg._clear_of_numbers(plan, np.array([[x1, y0, x1 + 5.0, y0 + 5.0]]))  # touching is near
+    assert svg._clear_of_numbers(plan, np.array([[1e6, 1e6, 1e6 + 1.0, 1e6 + 1.0]]))
+    assert not svg._clear_of_numbers(plan, np.array([[np.nan, 0.0, 1.0, 1.0]]))  # NaN: never clear
