@@ -1,14 +1,25 @@
-"""The local egtviz server that shows the current figure, and the notebook check for inline display."""
+"""The local egtviz server that shows the current figure, and the notebook check for inline display.
+
+In a notebook the figure shows inline, in a frame. Its page is served on the kernel's machine at
+``127.0.0.1``, which only a browser on that machine can reach; a Jupyter server with jupyter-server-proxy
+(a JupyterHub's, say) forwards ``<base_url>/proxy/<port>/`` to that port, so there the frame uses that
+path (:func:`notebook_url`), which the browser reaches wherever it runs.
+"""
 
 from __future__ import annotations
 
+import importlib.util
+import json
 import os
 import sys
 import threading
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
-__all__ = ["FigureServer", "figures_enabled", "in_jupyter", "on_cell_end", "show_inline"]
+__all__ = ["FigureServer", "figures_enabled", "in_jupyter", "jupyter_base_url", "notebook_url", "on_cell_end",
+           "show_inline"]
 
 #: The first port tried; the server takes the next free one above it when it is busy.
 FIRST_PORT = 8080
@@ -41,10 +52,66 @@ def in_jupyter(modules: Mapping[str, Any] = sys.modules) -> bool:
     return shell is not None and getattr(shell, "kernel", None) is not None
 
 
-def show_inline(url: str, modules: Mapping[str, Any] = sys.modules) -> Any:
-    """Display the figure's page in the notebook cell (an ``IPython.display.IFrame``); returns the frame."""
+def _running_servers(environ: Mapping[str, str]) -> list[dict[str, Any]]:
+    """What the Jupyter servers of this user wrote to their runtime folder (``jpserver-<pid>.json``: pid, port,
+    base_url); the folder is Jupyter's (``JUPYTER_RUNTIME_DIR``), read without importing Jupyter."""
+    try:
+        from jupyter_core.paths import jupyter_runtime_dir
+
+        folder = Path(environ.get("JUPYTER_RUNTIME_DIR") or jupyter_runtime_dir())
+    except ImportError:
+        return []
+    found = []
+    for path in sorted(folder.glob("jpserver-*.json")):
+        try:
+            info = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        if isinstance(info, dict):
+            found.append(info)
+    return found
+
+
+def jupyter_base_url(environ: Mapping[str, str] = os.environ,
+                     servers: Callable[[Mapping[str, str]], list[dict[str, Any]]] = _running_servers) -> str | None:
+    """The base URL (a path, ``/`` or ``/user/name/``) of the Jupyter server this kernel runs under, if that server
+    has jupyter-server-proxy; None otherwise (no Jupyter server, or no proxy in this environment).
+
+    On a JupyterHub it is ``JUPYTERHUB_SERVICE_PREFIX``; elsewhere the server whose process started the kernel
+    (``JPY_PARENT_PID``) is looked up among the running ones.
+    """
+    if importlib.util.find_spec("jupyter_server_proxy") is None:
+        return None
+    prefix = environ.get("JUPYTERHUB_SERVICE_PREFIX", "").strip()
+    if prefix.startswith("/"):
+        return prefix
+    parent = environ.get("JPY_PARENT_PID", "").strip()
+    if not parent.isdigit():
+        return None
+    for info in servers(environ):
+        base = info.get("base_url")
+        if str(info.get("pid")) == parent and isinstance(base, str) and base.startswith("/"):
+            return base
+    return None
+
+
+def notebook_url(url: str, environ: Mapping[str, str] = os.environ,
+                 servers: Callable[[Mapping[str, str]], list[dict[str, Any]]] = _running_servers) -> str:
+    """The address a notebook's frame opens the figure page ``url`` (``http://127.0.0.1:<port>``) at: the
+    kernel's Jupyter server's ``<base_url>/proxy/<port>/`` when it has jupyter-server-proxy (a path on the
+    notebook's own site, which the browser reaches wherever it runs), else ``url`` itself."""
+    port = urlsplit(url).port
+    base = jupyter_base_url(environ, servers)
+    if base is None or port is None:
+        return url
+    return f"{base.rstrip('/')}/proxy/{port}/"
+
+
+def show_inline(url: str, modules: Mapping[str, Any] = sys.modules, environ: Mapping[str, str] = os.environ) -> Any:
+    """Display the figure's page ``url`` in the notebook cell (an ``IPython.display.IFrame`` on
+    :func:`notebook_url`); returns the frame."""
     display = modules["IPython"].display
-    frame = display.IFrame(url, width="100%", height=INLINE_HEIGHT)
+    frame = display.IFrame(notebook_url(url, environ), width="100%", height=INLINE_HEIGHT)
     display.display(frame)
     return frame
 
@@ -74,8 +141,10 @@ class FigureServer:
         started ``(server, app)`` pair instead (tests)."""
         if viewer is None:
             from ..viewer.server.cli import start
+            from ..viewer.server.hub import hub_host_names
 
-            viewer = start("127.0.0.1", FIRST_PORT if port is None else port)
+            # Behind a hub's proxy the page is reached under the hub's name (EGTVIZ_ALLOWED_HOSTS adds others).
+            viewer = start("127.0.0.1", FIRST_PORT if port is None else port, allow_hosts=hub_host_names())
         self.server, self.app = viewer
         self.url = f"http://127.0.0.1:{self.server.get_port()}"
         self._lock = threading.Lock()
