@@ -160,3 +160,26 @@ def test_histogram_counts_each_students_last_answer(answers, bins):
         expected, _ = np.histogram(list(last.values()), bins=len(h.counts), range=(h.edges[0], h.edges[-1]))
         assert h.counts == tuple(int(c) for c in expected)
         assert h.edges[0] <= min(last.values()) and h.edges[-1] >= max(last.values())
+
+
+def test_ask_a_question_and_read_answers_by_name():
+    from egtviz.classroom import QuestionAsked
+
+    room = _room(2)
+    events = []
+    room.subscribe(events.append)
+    assert room.asked() is None
+    room.ask("  Where do the lines meet? ")
+    room.ask("Where do the lines meet?")
+    assert room.asked() == "Where do the lines meet?"
+    room.record_answer(0, "Where do the lines meet?", "At the epipole")
+    room.record_answer(1, "Where do the lines meet?", 3)
+    assert room.answers("Where do the lines meet?") == {"student 0": "at the epipole", "student 1": 3.0}
+    assert room.answers("unknown") == {}
+    room.ask(None)
+    assert room.asked() is None
+    assert [e for e in events if isinstance(e, QuestionAsked)] == [QuestionAsked("Where do the lines meet?"),
+                                                                   QuestionAsked(None)]
+    assert Classroom.from_json(room.to_json()).asked() is None
+    room.ask("again?")
+    assert Classroom.from_json(room.to_json()).asked() == "again?"

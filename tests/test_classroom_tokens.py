@@ -125,3 +125,8 @@ def test_the_log_filter_shortens_the_token_in_formatted_records(caplog):
     assert [r.getMessage() for r in caplog.records] == ["GET /ws?token=s3cr… 101", "wrong try /?token=gues…",
                                                          "plain 5"]
     assert TOKEN not in caplog.text
+
+
+def test_redact_url_shortens_a_token_in_the_instructor_path():
+    assert redact_url(f"http://h:8080/egtviz-instructor/{TOKEN}", TOKEN) == "http://h:8080/egtviz-instructor/s3cr…"
+    assert redact_url("GET /egtviz-instructor/wrongguess12/x?y=1", TOKEN) == "GET /egtviz-instructor/wron…/x?y=1"

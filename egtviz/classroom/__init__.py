@@ -14,6 +14,7 @@ from .events import ModeChanged as ModeChanged
 from .events import NamesShown as NamesShown
 from .events import PacingChanged as PacingChanged
 from .events import PauseChanged as PauseChanged
+from .events import QuestionAsked as QuestionAsked
 from .events import RosterChanged as RosterChanged
 from .events import SharedChanged as SharedChanged
 from .events import SnapshotShown as SnapshotShown
@@ -30,7 +31,7 @@ from .tokens import redact_url as redact_url
 
 __all__ = [
     "AnswersChanged", "CamerasLocked", "ClassState", "Classroom", "ClassroomError", "Event", "FollowChanged",
-    "Histogram", "Mode", "ModeChanged", "NamesShown", "PacingChanged", "PauseChanged", "RedactingFilter",
-    "RosterChanged", "RosterRow", "SharedChanged", "SharedState", "Snapshot", "SnapshotShown", "TokenGuard",
-    "redact", "redact_url",
+    "Histogram", "Mode", "ModeChanged", "NamesShown", "PacingChanged", "PauseChanged", "QuestionAsked",
+    "RedactingFilter", "RosterChanged", "RosterRow", "SharedChanged", "SharedState", "Snapshot", "SnapshotShown",
+    "TokenGuard", "redact", "redact_url",
 ]

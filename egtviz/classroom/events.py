@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 __all__ = [
     "AnswersChanged", "Broadcaster", "CamerasLocked", "Event", "FollowChanged", "Mode", "ModeChanged", "NamesShown",
-    "PacingChanged", "PauseChanged", "RosterChanged", "SharedChanged", "SnapshotShown",
+    "PacingChanged", "PauseChanged", "QuestionAsked", "RosterChanged", "SharedChanged", "SnapshotShown",
 ]
 
 
@@ -82,6 +82,13 @@ class AnswersChanged:
 
 
 @dataclass(frozen=True)
+class QuestionAsked:
+    """The instructor asks every student ``question``; None: no question is asked."""
+
+    question: str | None
+
+
+@dataclass(frozen=True)
 class SnapshotShown:
     """A student's snapshot is shown to the room under ``label``; None: none is shown."""
 
@@ -89,7 +96,7 @@ class SnapshotShown:
 
 
 Event = (SharedChanged | ModeChanged | CamerasLocked | PauseChanged | PacingChanged | FollowChanged
-         | RosterChanged | AnswersChanged | SnapshotShown | NamesShown)
+         | RosterChanged | AnswersChanged | SnapshotShown | NamesShown | QuestionAsked)
 
 Listener = Callable[[Event], None]
 _log = logging.getLogger("egtviz.classroom")

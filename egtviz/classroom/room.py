@@ -7,22 +7,19 @@ listeners are called after the lock is released, in the calling thread.
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
 from ..lessons.progress import ProgressStore, learner_key
 from ..scene import Scene
-from .answers import Histogram
 from .events import (
-    AnswersChanged, Broadcaster, CamerasLocked, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged,
-    PauseChanged, RosterChanged, SharedChanged, SnapshotShown,
+    CamerasLocked, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged, RosterChanged, SharedChanged,
 )
+from .projector import ProjectorControls
 from .roster import RosterRow, StudentPlace, build_roster, roster_csv, shipped_task_count
-from .snapshots import Snapshot, anonymise, label_for
 from .state import ClassState, SharedState, TabState
-from .text import ClassroomError, plain_text
+from .text import ClassroomError, lesson_name, plain_text, step_number, tab_id
 from .tokens import RedactingFilter, TokenGuard
 
 __all__ = ["MAX_PAUSE_MESSAGE", "MAX_STUDENTS", "Classroom"]
@@ -30,29 +27,10 @@ __all__ = ["MAX_PAUSE_MESSAGE", "MAX_STUDENTS", "Classroom"]
 MAX_STUDENTS = 1000
 """Students a class keeps (a join past it is refused)."""
 MAX_PAUSE_MESSAGE = 200
-MAX_LESSON_NAME = 120
 DEFAULT_PAUSE = "The class is paused."
 
 
-def _tab_id(tab: object) -> int:
-    if isinstance(tab, bool) or not isinstance(tab, int) or tab < 0:
-        raise ClassroomError(f"tab: expected a whole number 0 or more, got {tab!r}")
-    return tab
-
-
-def _step(step: object, what: str = "step") -> int | None:
-    if step is None:
-        return None
-    if isinstance(step, bool) or not isinstance(step, int) or not 0 <= step < 10_000:
-        raise ClassroomError(f"{what}: expected a whole number 0 to 9999 or none, got {step!r}")
-    return step
-
-
-def _lesson(lesson: object) -> str:
-    return plain_text(lesson, "lesson", MAX_LESSON_NAME)
-
-
-class Classroom(Broadcaster):
+class Classroom(ProjectorControls):
     """The state of one class and the instructor's controls over it.
 
     Args:
@@ -66,13 +44,10 @@ class Classroom(Broadcaster):
     def __init__(self, progress: ProgressStore | None = None, *, token: str | None = None,
                  clock: Callable[[], float] = time.monotonic, task_count: Callable[[str], int] | None = None,
                  state: ClassState | None = None) -> None:
-        self._lock = threading.RLock()
-        super().__init__(self._lock)
+        super().__init__(state, clock)
         self._progress = progress
-        self._clock = clock
         self._guard = TokenGuard(token, clock=clock)
         self._task_count = task_count or shipped_task_count
-        self._state = state if state is not None else ClassState()
 
     # -- tokens ------------------------------------------------------------------------------------------
 
@@ -105,7 +80,7 @@ class Classroom(Broadcaster):
             LearnerNameError: a name :func:`~egtviz.lessons.progress.learner_key` refuses.
             ClassroomError: the class is full (:data:`MAX_STUDENTS`).
         """
-        tab = _tab_id(tab)
+        tab = tab_id(tab)
         key = learner_key(name)
         with self._lock:
             s = self._state
@@ -119,20 +94,20 @@ class Classroom(Broadcaster):
     def leave(self, tab: int) -> None:
         """``tab`` closed (a student's or an instructor's); their scene and progress are kept."""
         with self._lock:
-            gone = self._state.tabs.pop(_tab_id(tab), None)
+            gone = self._state.tabs.pop(tab_id(tab), None)
         if gone is not None:
             self._emit([RosterChanged()])
 
     def instructor_join(self, tab: int) -> None:
         """``tab`` is the instructor's (its token was checked); the class is as the instructor left it."""
-        tab = _tab_id(tab)
+        tab = tab_id(tab)
         with self._lock:
             self._state.tabs[tab] = TabState(None)
         self._emit([RosterChanged()])
 
     def instructor_leave(self, tab: int) -> None:
         """The instructor's ``tab`` closed; the class (mode, pacing, pause, shared scene) carries on."""
-        tab = _tab_id(tab)
+        tab = tab_id(tab)
         with self._lock:
             t = self._state.tabs.get(tab)
             if t is None or not t.instructor:
@@ -142,7 +117,7 @@ class Classroom(Broadcaster):
 
     def is_instructor(self, tab: int) -> bool:
         with self._lock:
-            t = self._state.tabs.get(_tab_id(tab))
+            t = self._state.tabs.get(tab_id(tab))
             return t is not None and t.instructor
 
     def instructor_present(self) -> bool:
@@ -153,14 +128,8 @@ class Classroom(Broadcaster):
     def name_of(self, tab: int) -> str | None:
         """The student on ``tab`` (None: an instructor's tab or no tab)."""
         with self._lock:
-            t = self._state.tabs.get(_tab_id(tab))
+            t = self._state.tabs.get(tab_id(tab))
             return None if t is None else t.name
-
-    def _student_tab(self, tab: int) -> TabState:
-        t = self._state.tabs.get(_tab_id(tab))
-        if t is None or t.instructor:
-            raise ClassroomError(f"tab {tab}: no student has joined on it")
-        return t
 
     def own_scene(self, name: str) -> Scene | None:
         """The scene the student ``name`` last kept (their own, given back when they reconnect); None if none."""
@@ -180,8 +149,8 @@ class Classroom(Broadcaster):
 
     def report_step(self, tab: int, lesson: str | None, step: int | None) -> None:
         """The student on ``tab`` is at ``step`` of ``lesson`` (None: on no lesson), for the roster."""
-        lesson = None if lesson is None else _lesson(lesson)
-        step = _step(step)
+        lesson = None if lesson is None else lesson_name(lesson)
+        step = step_number(step)
         with self._lock:
             t = self._student_tab(tab)
             if (t.lesson, t.step) == (lesson, step):
@@ -196,8 +165,8 @@ class Classroom(Broadcaster):
         scene object published again with the same lesson and step keeps the version (nothing is sent)."""
         if not isinstance(scene, Scene):
             raise ClassroomError(f"scene: expected a Scene, got {type(scene).__name__}")
-        lesson = None if lesson is None else _lesson(lesson)
-        step = _step(step)
+        lesson = None if lesson is None else lesson_name(lesson)
+        step = step_number(step)
         with self._lock:
             old = self._state.shared
             if old.scene is scene and (old.lesson, old.step) == (lesson, step):
@@ -222,7 +191,7 @@ class Classroom(Broadcaster):
 
     def is_following(self, tab: int) -> bool:
         with self._lock:
-            t = self._state.tabs.get(_tab_id(tab))
+            t = self._state.tabs.get(tab_id(tab))
             return t is not None and t.following
 
     def followers(self) -> list[int]:
@@ -287,8 +256,8 @@ class Classroom(Broadcaster):
 
     def pace(self, lesson: str, max_step: int | None) -> None:
         """Students may open ``lesson`` up to step ``max_step`` (0-based); None: every step."""
-        lesson = _lesson(lesson)
-        max_step = _step(max_step, "max_step")
+        lesson = lesson_name(lesson)
+        max_step = step_number(max_step, "max_step")
         with self._lock:
             paced = self._state.paced
             if paced.get(lesson, None) == max_step and (max_step is not None or lesson not in paced):
@@ -301,7 +270,7 @@ class Classroom(Broadcaster):
 
     def allow_lessons(self, names: Iterable[str] | None) -> None:
         """Students may open only these lessons; None: every lesson."""
-        allowed = None if names is None else frozenset(_lesson(n) for n in names)
+        allowed = None if names is None else frozenset(lesson_name(n) for n in names)
         with self._lock:
             if self._state.allowed == allowed:
                 return
@@ -351,74 +320,6 @@ class Classroom(Broadcaster):
             book = self._state.answers
             answers = {q: book.answers(q) for q in book.questions()}
         return roster_csv(rows, answers)
-
-    def record_answer(self, tab: int, question: str, value: float | str) -> None:
-        """The student on ``tab`` answers ``question`` (their latest answer counts); O(1).
-
-        Raises:
-            ClassroomError: no student on ``tab``, or a question or answer that cannot be kept.
-        """
-        now = self._clock()
-        with self._lock:
-            t = self._student_tab(tab)
-            question, due = self._state.answers.record(t.name or "", question, value, now)
-        if due:
-            self._emit([AnswersChanged(question)])
-
-    def histogram(self, question: str, bins: int = 10) -> Histogram:
-        """The answers to ``question`` counted; no names."""
-        with self._lock:
-            return self._state.answers.histogram(question, bins)
-
-    def questions(self) -> list[str]:
-        with self._lock:
-            return self._state.answers.questions()
-
-    def snapshot(self, tab: int) -> Snapshot:
-        """An anonymised copy of the own scene of the student on ``tab``, labelled ``Student A``, ...
-
-        Raises:
-            ClassroomError: no student on ``tab``, or they have no scene of their own yet.
-        """
-        with self._lock:
-            s = self._state
-            name = self._student_tab(tab).name or ""
-            scene = s.scenes.get(name)
-            if scene is None:
-                raise ClassroomError(f"tab {tab}: that student has no scene of their own yet")
-            label = s.labels.get(name)
-            if label is None:
-                label = s.labels[name] = label_for(len(s.labels))
-            s.snapshots_taken += 1
-            number = s.snapshots_taken
-        return Snapshot(label, anonymise(scene, name, label), number)
-
-    def show_snapshot(self, snapshot: Snapshot | None) -> None:
-        """Show ``snapshot`` to the room beside each student's own scene; None: show none."""
-        if snapshot is not None and not isinstance(snapshot, Snapshot):
-            raise ClassroomError(f"snapshot: expected a Snapshot, got {type(snapshot).__name__}")
-        with self._lock:
-            if self._state.shown is snapshot:
-                return
-            self._state.shown = snapshot
-        self._emit([SnapshotShown(None if snapshot is None else snapshot.label)])
-
-    def shown_snapshot(self) -> Snapshot | None:
-        with self._lock:
-            return self._state.shown
-
-    def show_names(self, shown: bool) -> None:
-        """Show students' names on the projector (True) or hide them (the default)."""
-        shown = bool(shown)
-        with self._lock:
-            if self._state.names_shown == shown:
-                return
-            self._state.names_shown = shown
-        self._emit([NamesShown(shown)])
-
-    def names_shown(self) -> bool:
-        with self._lock:
-            return self._state.names_shown
 
     # -- sharing between processes -----------------------------------------------------------------------
 

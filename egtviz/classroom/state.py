@@ -13,10 +13,10 @@ from typing import Any
 from ..lessons.progress import learner_key
 from ..scene import Scene
 from ..scene.io import scene_from_dict, scene_to_dict
-from .answers import AnswerBook
+from .answers import MAX_QUESTION_LENGTH, AnswerBook
 from .events import Mode
 from .snapshots import Snapshot
-from .text import ClassroomError
+from .text import ClassroomError, plain_text
 
 __all__ = ["STATE_FORMAT", "ClassState", "SharedState", "TabState"]
 
@@ -74,6 +74,8 @@ class ClassState:
     shown: Snapshot | None = None
     names_shown: bool = False
     """Whether the projector shows students' names (hidden until the instructor shows them)."""
+    question: str | None = None
+    """The question the instructor is asking now."""
 
     def to_dict(self) -> dict[str, Any]:
         """The state as plain JSON data."""
@@ -89,7 +91,7 @@ class ClassState:
             "mode": self.mode.value, "cameras_locked": self.cameras_locked, "pause": self.pause,
             "paced": dict(self.paced), "allowed": None if self.allowed is None else sorted(self.allowed),
             "answers": self.answers.to_dict(), "labels": dict(self.labels), "snapshots_taken": self.snapshots_taken,
-            "names_shown": self.names_shown,
+            "names_shown": self.names_shown, "question": self.question,
             "shown": None if shown is None else {"label": shown.label, "number": shown.number,
                                                  "scene": scene_to_dict(shown.scene)},
         }
@@ -134,6 +136,8 @@ class ClassState:
             answers=AnswerBook.from_dict(data["answers"]),
             labels={learner_key(k): str(v) for k, v in data["labels"].items()},
             snapshots_taken=int(data["snapshots_taken"]), names_shown=bool(data["names_shown"]),
+            question=None if data["question"] is None else plain_text(data["question"], "question",
+                                                                      MAX_QUESTION_LENGTH),
             shown=None if shown is None else Snapshot(str(shown["label"]), scene_from_dict(shown["scene"], "state"),
                                                       int(shown["number"])),
         )

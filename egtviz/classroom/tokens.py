@@ -17,7 +17,8 @@ from collections import OrderedDict, deque
 from collections.abc import Callable
 
 __all__ = [
-    "LOCKOUT_S", "MAX_FAILURES", "MAX_PEERS", "WINDOW_S", "RedactingFilter", "TokenGuard", "redact", "redact_url",
+    "INSTRUCTOR_PATH", "LOCKOUT_S", "MAX_FAILURES", "MAX_PEERS", "WINDOW_S", "RedactingFilter", "TokenGuard",
+    "redact", "redact_url",
 ]
 
 MAX_FAILURES = 5
@@ -28,7 +29,10 @@ MAX_PEERS = 4096
 """Peers whose wrong tries are remembered (the oldest is forgotten first), so a flood of peers cannot fill memory."""
 MIN_TOKEN_LENGTH = 16
 _SHOWN = 4
-_TOKEN_PARAMETER = re.compile(r"([?&;]token=)([^&#\s\"'<>]+)")
+INSTRUCTOR_PATH = "/egtviz-instructor/"
+"""The path under which the instructor's page takes its token (``/egtviz-instructor/<token>``): a query would
+not reach the server, because viser's page opens its websocket on the page's URL without the query."""
+_TOKEN_PARAMETER = re.compile(r"([?&;]token=|" + re.escape(INSTRUCTOR_PATH) + r")([^&#/?\s\"'<>]+)")
 
 
 def redact(text: str, token: str) -> str:
@@ -40,8 +44,8 @@ def redact(text: str, token: str) -> str:
 
 def redact_url(url: str, token: str) -> str:
     """``url`` (or a log line holding URLs) as a log may show it: ``token`` shortened wherever it occurs, and
-    the value of every ``token=`` parameter shortened even when it is not ``token`` (a guess is not logged
-    either)."""
+    the value of every ``token=`` parameter and :data:`INSTRUCTOR_PATH` segment shortened even when it is not
+    ``token`` (a guess is not logged either)."""
     return _TOKEN_PARAMETER.sub(_shorten_parameter, redact(url, token))
 
 
