@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import numpy.typing as npt
 
@@ -102,13 +104,14 @@ def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float, *,
     r"""Clip infinite lines :math:`a u + b v + c = 0` (N, 3) to the rectangle ``[0, w] x [0, h]``.
 
     Returns ``(segments (N, 2, 2), hit (N,) bool)``; rows that miss the
-    rectangle are NaN. Vectorised: each line, scaled as by :func:`normalize_lines`,
-    is intersected with the four border lines,
+    rectangle are NaN. Vectorised: each line, divided by its largest absolute entry (defined up to scale), is
+    intersected with the four border lines,
 
     .. math:: v = -\frac{a u + c}{b} \ (u \in \{0, w\}), \qquad u = -\frac{b v + c}{a} \ (v \in \{0, h\}),
 
     and of the candidates inside the rectangle (up to ``eps``) the two extreme
-    ones along the line direction :math:`(-b, a)` are kept.
+    ones along the line direction :math:`(-b, a)` are kept. The line at infinity
+    (:func:`normalize_lines`' NaN) meets no rectangle.
 
     Args:
         lines: (N, 3) line coefficients.
@@ -124,60 +127,83 @@ def clip_lines_to_rect(lines: npt.ArrayLike, width: float, height: float, *,
             ``height`` is not a positive number.
     """
     if not check:
-        # The checked call's arithmetic without its checks: each row divided by its largest entry, then
-        # normalised (a row that is not finite or is zero becomes NaN on the way).
+        # The checked call's arithmetic without its checks: each row divided by its largest entry (a row that is
+        # not finite or is zero becomes NaN on the way).
         lines = np.asarray(lines)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # one context for both steps
-            L = _normalized_lines_quiet(lines / np.maximum.reduce(np.abs(lines), axis=1, initial=0.0)[:, None])
-            return _clip_lines_quiet(np.ascontiguousarray(L.T), float(width), float(height))
-    L = normalize_lines(lines)
-    return _clip_lines(np.ascontiguousarray(L.T), as_positive(width, "width"), as_positive(height, "height"))
+            L = lines / np.maximum.reduce(np.abs(lines), axis=1, initial=0.0)[:, None]
+            return _clip_line_rows_quiet(L, float(width), float(height))
+    L = as_up_to_scale_rows(lines, "lines", 3)
+    width, height = as_positive(width, "width"), as_positive(height, "height")
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return _clip_line_rows_quiet(L, width, height)
 
 
 def _clip_lines(lines_T: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
     """:func:`clip_lines_to_rect` of float64 lines given coordinate-major, ``(a, b, c)`` rows (3, N); unchecked.
 
-    Internal (both images of a pin-hole pair, on every drag): a fixed, small number of numpy calls over
-    contiguous rows ((2, 4, N) candidates: coordinate, border, line). The lines need not be normalised: the
-    candidates, and their order along the line, do not depend on the scale of ``(a, b, c)`` (but it should
-    be moderate, as for image lines of unit plane normals; the public function normalises first).
+    The lines need not be normalised: the candidates, and their order along the line, do not depend on the
+    scale of ``(a, b, c)`` (but it should be moderate, as for image lines of unit plane normals).
     """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        return _clip_lines_quiet(lines_T, width, height)
+        return _clip_line_rows_quiet(lines_T.T, width, height)
 
 
-def _clip_lines_quiet(lines_T: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_clip_lines` under the caller's ``np.errstate`` (division, invalid and overflow ignored)."""
-    n = lines_T.shape[1]
+@lru_cache(maxsize=32)
+def _border_columns(width: float, height: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For the borders ``u = 0``, ``u = w``, ``v = 0``, ``v = h`` (in this order): a stack (4, 3, 4) of matrices
+    whose products with lines ``(a, b, c)`` give, per border, the numerator and the denominator of the
+    candidate's free coordinate (``-(a u + c)`` over ``b``, ``-(b v + c)`` over ``a``), and the coefficient and
+    the constant of its position :math:`s = -b u + a v` along the line's direction; the fixed coordinates (4,);
+    the free coordinates' upper limits (4,), widened by the clip's ``eps``. Read-only."""
+    M = np.zeros((4, 3, 4))
+    M[0, 2] = -1.0  # numerators: -c, -(a w + c), -c, -(b h + c)
+    M[0, 0, 1] = -width
+    M[0, 1, 3] = -height
+    M[1, 1, 0:2] = 1.0  # denominators: b, b, a, a
+    M[1, 0, 2:4] = 1.0
+    M[2, 0, 0:2] = 1.0  # coefficients of the free coordinate in s: a, a, -b, -b
+    M[2, 1, 2:4] = -1.0
+    M[3, 1, 1] = -width  # constants: 0, -b w, 0, a h
+    M[3, 0, 3] = height
+    eps = 1e-9 * max(width, height, 1.0)
+    out = (M, np.array([0.0, width, 0.0, height]), np.array([height, height, width, width]) + eps)
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+def _clip_line_rows_quiet(L: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`clip_lines_to_rect` of float64 (N, 3) lines of moderate scale, under the caller's ``np.errstate``
+    (division, invalid and overflow ignored); unchecked (both images of a pin-hole pair, on every drag).
+
+    One stacked product gives every border's candidate and its position along the line (4 contiguous (N, 4)
+    blocks); then a fixed, small number of numpy calls over the (N, 4) candidates.
+    """
+    n = len(L)
     eps = 1e-9 * max(width, height, 1.0)
     if max(width, height) > 1e9:
         # normalize_lines makes the line at infinity, |(a, b)| <= AT_INFINITY_TOL |(a, b, c)|, NaN. It lies
         # 1 / AT_INFINITY_TOL or more from the origin: only so large a rectangle needs that done here.
-        a, b, c = _normalized_line_rows(lines_T)
-    else:
-        a, b, c = lines_T
-    # Candidates (u, v) on the borders u = 0, u = w (v = -(a u + c) / b) and v = 0, v = h (u = -(b v + c) / a).
-    cand = np.empty((2, 4, n))
-    u, v = cand
-    borders_u, borders_v = np.array([[0.0], [width]]), np.array([[0.0], [height]])
-    u[0:2] = borders_u
-    v[2:4] = borders_v
-    nc = -c
-    np.divide(nc - a * borders_u, b, out=v[0:2])
-    np.divide(nc - b * borders_v, a, out=u[2:4])
+        L = _normalized_lines_quiet(L)
+    M, fixed, upper = _border_columns(width, height)
+    num, den, coef, const = np.matmul(L, M)
+    free = num / den
     # A candidate counts when its computed coordinate is inside (up to eps; NaN and inf are not).
-    ok = np.empty((4, n), dtype=bool)
-    np.greater_equal(v[0:2], -eps, out=ok[0:2])
-    ok[0:2] &= v[0:2] <= height + eps
-    np.greater_equal(u[2:4], -eps, out=ok[2:4])
-    ok[2:4] &= u[2:4] <= width + eps
-    # Parametrise candidates along the line direction (-b, a) and keep the extremes (the first on ties).
-    s = u * -b
-    s += v * a
+    ok = free >= -eps
+    ok &= free <= upper
+    s = free * coef
+    s += const
+    # Keep the extremes along the line (the first on ties).
     ends = np.empty((n, 2), dtype=np.intp)
-    np.where(ok, s, np.inf).argmin(axis=0, out=ends[:, 0])
-    np.where(ok, s, -np.inf).argmax(axis=0, out=ends[:, 1])
-    seg = cand.transpose(2, 1, 0)[np.arange(n)[:, None], ends]  # (line, end, coordinate)
+    np.where(ok, s, np.inf).argmin(axis=1, out=ends[:, 0])
+    np.where(ok, s, -np.inf).argmax(axis=1, out=ends[:, 1])
+    cand = np.empty((n, 4, 2))
+    cand[:, 0:2, 0] = fixed[0:2]
+    cand[:, 0:2, 1] = free[:, 0:2]
+    cand[:, 2:4, 0] = free[:, 2:4]
+    cand[:, 2:4, 1] = fixed[2:4]
+    seg = cand[np.arange(n)[:, None], ends]  # (line, end, coordinate)
     # A line that meets the rectangle in one corner only, or not at all (both ends are then the same
     # candidate, maybe NaN), has no segment: length <= eps, compared squared.
     d = seg[:, 1] - seg[:, 0]
@@ -185,22 +211,5 @@ def _clip_lines_quiet(lines_T: np.ndarray, width: float, height: float) -> tuple
     hit = d[:, 0] + d[:, 1] > eps * eps
     seg[~hit] = np.nan
     np.maximum(seg, 0.0, out=seg)
-    np.minimum(seg[:, :, 0], width, out=seg[:, :, 0])
-    np.minimum(seg[:, :, 1], height, out=seg[:, :, 1])
+    np.minimum(seg, fixed[1::2], out=seg)  # (w, h): each coordinate at most its side
     return seg, hit
-
-
-def _normalized_line_rows(lines_T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``a, b, c`` (each (N,)) of :func:`normalize_lines` of lines given as rows (3, N): NaN at infinity."""
-    a, b, c = lines_T
-    n = np.hypot(a, b)
-    raw_norm = a * a
-    raw_norm += b * b
-    raw_norm += c * c
-    np.sqrt(raw_norm, out=raw_norm)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a, b, c = a / n, b / n, c / n
-    at_inf = n <= AT_INFINITY_TOL * raw_norm
-    if at_inf.any():
-        a[at_inf] = b[at_inf] = c[at_inf] = np.nan
-    return a, b, c
