@@ -264,3 +264,33 @@ def test_names_are_hidden_until_the_instructor_shows_them():
     room.show_names(True)
     room.show_names(False)
     assert events == [NamesShown(True), NamesShown(False)]
+
+
+def test_adopting_another_process_state_tells_listeners_what_changed():
+    from egtviz.classroom import AnswersChanged, ClassState, QuestionAsked, SnapshotShown
+
+    a, _ = _room()
+    b, heard = _room()
+    b.join(1, "Ada")
+    a.join(1, "Ada")
+    a.join(2, "Ben")
+    a.keep_scene("Ada", default_scene())
+    a.set_mode(Mode.EXPLORE)
+    a.publish(default_scene(), lesson="L", step=0)
+    a.pause("wait")
+    a.pace("L", 0)
+    a.ask("q")
+    a.record_answer(2, "q", 1.0)
+    a.show_snapshot(a.snapshot(1))
+    a.show_names(True)
+    heard.clear()
+    b.adopt(ClassState.from_json(a.to_json()))
+    assert b.to_json() == a.to_json()
+    assert heard == [SharedChanged(1), ModeChanged(Mode.EXPLORE), FollowChanged(1, False), FollowChanged(2, False),
+                     PauseChanged("wait"), PacingChanged(), QuestionAsked("q"), AnswersChanged("q"),
+                     SnapshotShown("Student A"), NamesShown(True), RosterChanged()]
+    heard.clear()
+    b.adopt(ClassState.from_json(a.to_json()))
+    assert heard == []  # nothing changed: nothing said
+    with pytest.raises(ClassroomError, match="ClassState"):
+        b.adopt(a.to_json())  # type: ignore[arg-type]

@@ -13,6 +13,7 @@ from typing import Any
 
 from ..lessons.progress import ProgressStore, learner_key
 from ..scene import Scene
+from .changes import changes_between
 from .events import (
     CamerasLocked, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged, RosterChanged, SharedChanged,
 )
@@ -327,6 +328,16 @@ class Classroom(ProjectorControls):
         """The class's state as JSON (no token, no listeners): :meth:`from_json` in another process resumes it."""
         with self._lock:
             return self._state.to_json()
+
+    def adopt(self, state: ClassState) -> None:
+        """Make ``state`` (read from another process's :meth:`to_json`) this class's, and tell the listeners
+        what changed. The state replaces this one whole, tabs included: a process that shares a class with
+        others merges their tabs before it adopts."""
+        if not isinstance(state, ClassState):
+            raise ClassroomError(f"state: expected a ClassState, got {type(state).__name__}")
+        with self._lock:
+            old, self._state = self._state, state
+        self._emit(changes_between(old, state))
 
     @classmethod
     def from_json(cls, text: str | bytes, progress: ProgressStore | None = None, **kwargs: Any) -> Classroom:
