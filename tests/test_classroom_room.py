@@ -294,3 +294,38 @@ def test_adopting_another_process_state_tells_listeners_what_changed():
     assert heard == []  # nothing changed: nothing said
     with pytest.raises(ClassroomError, match="ClassState"):
         b.adopt(a.to_json())  # type: ignore[arg-type]
+
+
+def test_a_tab_that_renames_itself_leaves_no_empty_student_behind():
+    room, events = _room()
+    for i in range(2000):  # more than MAX_STUDENTS: the class would be full if each name stayed
+        room.join(1, f"name {i}")
+    assert [r.name for r in room.roster()] == ["name 1999"]
+    room.keep_scene("name 1999", default_scene())
+    room.join(1, "final")
+    assert [r.name for r in room.roster()] == ["final", "name 1999"]  # kept: they have a scene
+
+
+def test_joining_again_on_the_same_tab_keeps_its_place():
+    room, events = _room()
+    room.join(1, "Ada")
+    room.report_step(1, "L", 3)
+    room.follow(1, False)
+    events.clear()
+    room.join(1, "Ada ")
+    assert events == [] and not room.is_following(1)
+    assert (room.roster()[0].lesson, room.roster()[0].step) == ("L", 3)
+
+
+def test_a_full_class_refuses_a_new_name_but_not_a_returning_one(monkeypatch):
+    import egtviz.classroom.room as room_module
+
+    monkeypatch.setattr(room_module, "MAX_STUDENTS", 3)
+    room, _ = _room()
+    for tab, name in enumerate(["a", "b", "c"]):
+        room.join(tab, name)
+    with pytest.raises(ClassroomError, match="full"):
+        room.join(9, "d")
+    room.leave(0)
+    room.join(9, "a")
+    assert room.name_of(9) == "a"

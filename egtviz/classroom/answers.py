@@ -97,8 +97,9 @@ class AnswerBook:
             self._last_event[student] = now
         return question, due
 
-    def forget_student(self, student: str) -> None:
-        self._last_event.pop(student, None)
+    def has_answered(self, student: str) -> bool:
+        """Whether ``student`` answered any question kept."""
+        return any(student in q.answers for q in self._questions.values())
 
     def answers(self, question: str) -> dict[str, float | str]:
         """A copy of the answers to ``question`` by student key (empty if none)."""

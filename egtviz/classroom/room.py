@@ -85,12 +85,27 @@ class Classroom(ProjectorControls):
         key = learner_key(name)
         with self._lock:
             s = self._state
+            before = s.tabs.get(tab)
+            if before is not None and before.name == key:
+                return
             if key not in s.students and len(s.students) >= MAX_STUDENTS:
                 raise ClassroomError(f"the class is full ({MAX_STUDENTS} students)")
             s.students[key] = None
             following = s.mode is Mode.FOLLOW
             s.tabs[tab] = TabState(key, following)
+            if before is not None and before.name is not None:
+                self._forget_if_empty(before.name)
         self._emit([RosterChanged(), FollowChanged(tab, following)])
+
+    def _forget_if_empty(self, name: str) -> None:
+        """Drop ``name`` from the class if nothing of theirs is kept (a tab that renamed itself before doing
+        anything), so one tab trying many names cannot fill the class."""
+        s = self._state
+        if name in s.scenes or name in s.labels or s.answers.has_answered(name):
+            return
+        if any(t.name == name for t in s.tabs.values()):
+            return
+        s.students.pop(name, None)
 
     def leave(self, tab: int) -> None:
         """``tab`` closed (a student's or an instructor's); their scene and progress are kept."""
