@@ -95,6 +95,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "Without --scene, --demo or --lesson every new tab opens the course's start page")
     p.add_argument("--present", action="store_true",
                    help="presentation mode in every new tab: large type, thick lines, high contrast (a projector)")
+    p.add_argument("--classroom", action="store_true",
+                   help="teach a class: print the student URL (with its QR code) and a separate instructor URL "
+                   "holding a secret token; students follow the instructor's scene (docs/classroom.md)")
     p.add_argument("--allow-host", metavar="NAME", action="append", default=[], type=_allow_host,
                    help="a name the page is reached under through a proxy (a JupyterHub's, e.g. hub.example.edu), "
                    "whose pages may then connect; repeatable; EGTVIZ_ALLOWED_HOSTS adds comma-separated names")
@@ -217,10 +220,11 @@ def reachable_urls(host: str, port: int) -> list[str]:
 
 def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None, *, verbose: bool = False,
           demo: str | None = None, present: bool = False, lesson: str | None = None, course: bool = False,
-          allow_hosts: tuple[str, ...] = ()):
+          allow_hosts: tuple[str, ...] = (), classroom: bool = False):
     """Start a server and the app without blocking; returns ``(server, app)``.
 
     ``course``: every new tab opens the course's start page; ``lesson``: every new tab opens that lesson.
+    ``classroom``: a class is taught (``app.classroom``, :class:`egtviz.viewer.classroom.ClassroomHost`).
     ``allow_hosts``: names a proxy reaches the page under, with those of ``EGTVIZ_ALLOWED_HOSTS``
     (:func:`egtviz.viewer.server.guard.allowed_hosts`; a bad name raises ``ValueError``).
 
@@ -248,6 +252,10 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     try:
         install_guards(server, limits)
         app = EgtvizApp(server, scene, demo=demo, present=present, course=course, lesson=lesson)
+        if classroom:
+            from ..classroom import ClassroomHost
+
+            ClassroomHost(app, student_url=student_url(host, server.get_port()))
     except BaseException:
         server.stop()
         raise
@@ -256,7 +264,8 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
 
 def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None,
           *, stop_event: threading.Event | None = None, demo: str | None = None, present: bool = False,
-          lesson: str | None = None, course: bool = False, allow_hosts: tuple[str, ...] = ()) -> int:
+          lesson: str | None = None, course: bool = False, allow_hosts: tuple[str, ...] = (),
+          classroom: bool = False) -> int:
     """Serve until Ctrl-C (or until ``stop_event`` is set); returns the exit status.
 
     Exit status 2 for a scene file that cannot be read, a lesson that does not exist or a bad name in
@@ -276,8 +285,8 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
         bind = check_bind(host, port)
         if bind.port_busy:
             print(f"egtviz: port {port} is busy on {host}; using the next free one", file=sys.stderr, flush=True)
-        server, _app = start(host, port, scene_path, demo=demo, present=present, lesson=lesson, course=course,
-                             allow_hosts=allow_hosts)
+        server, app = start(host, port, scene_path, demo=demo, present=present, lesson=lesson, course=course,
+                            allow_hosts=allow_hosts, classroom=classroom)
     except SceneFileError as exc:
         print(f"egtviz: cannot read the scene file: {exc}", file=sys.stderr)
         return 2
@@ -293,13 +302,39 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
             print(f"egtviz: warning: --host {host} opens the app to the network: anyone who can reach this "
                   "machine can use it (each tab has its own scene; see docs/server.md)", file=sys.stderr, flush=True)
         print(f"egtviz running at {' '.join(reachable_urls(host, server.get_port()))}", flush=True)
+        if app.classroom is not None:
+            _print_classroom(app.classroom, host, server.get_port())
         while not stop.wait(0.5):
             pass
     except KeyboardInterrupt:
         print("egtviz: stopped", flush=True)
     finally:
+        if app.classroom is not None:
+            app.classroom.close()
         server.stop()
     return 0
+
+
+def student_url(host: str, port: int) -> str:
+    """The URL students open: on a wildcard host the first address other computers can reach, else ``host``'s."""
+    urls = reachable_urls(host, port)
+    return urls[1] if len(urls) > 1 else urls[0]
+
+
+def _print_classroom(classroom: object, host: str, port: int) -> None:
+    """The class's two links; the instructor's (with the token) is printed once, here, and nowhere else."""
+    from ..classroom import instructor_url, qr_terminal
+
+    url = student_url(host, port)
+    token = classroom.room.instructor_token  # type: ignore[attr-defined]
+    print(f"egtviz classroom: students open {url}", flush=True)
+    print(qr_terminal(url), end="", flush=True)
+    if _is_wildcard(host) and len(reachable_urls(host, port)) < 2:
+        print("egtviz classroom: no network address found: students on other computers cannot reach this one",
+              file=sys.stderr, flush=True)
+    # The instructor works on this computer: loopback, where the token never crosses the network.
+    print(f"egtviz classroom: instructor (keep this secret) {instructor_url(reachable_urls(host, port)[0], token)}",
+          flush=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -308,7 +343,8 @@ def run(args: argparse.Namespace) -> int:
     # Nothing chosen to open: the course's start page, from which the workbench is one click away.
     course = args.scene is None and demo is None and lesson is None
     return serve(args.host, args.port, args.scene, demo=demo, present=bool(getattr(args, "present", False)),
-                 lesson=lesson, course=course, allow_hosts=tuple(getattr(args, "allow_host", None) or ()))
+                 lesson=lesson, course=course, allow_hosts=tuple(getattr(args, "allow_host", None) or ()),
+                 classroom=bool(getattr(args, "classroom", False)))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -53,9 +53,12 @@ __all__ = [
     "Guards",
     "allowed_host",
     "allowed_hosts",
+    "Handshake",
     "check_viser_internals",
+    "handshake_of",
     "install_guards",
     "origin_allowed",
+    "serve_page_under",
 ]
 
 _log = logging.getLogger(__name__)
@@ -663,3 +666,55 @@ def install_guards(server: viser.ViserServer, limits: GuardLimits | None = None)
     server.scene._thread_executor = fair  # type: ignore[assignment]
     server.gui._thread_executor = fair  # type: ignore[assignment]
     return Guards(limits, stats)
+
+
+# -- a page under a path prefix, and what a tab's handshake asked for (the classroom's instructor link) ------------
+
+
+@dataclasses.dataclass(frozen=True)
+class Handshake:
+    """What a connected tab's websocket handshake asked for.
+
+    Attributes:
+        path: the request path (the page's path: viser's client connects to the page's own URL, query dropped).
+        peer: the peer's address (an IP literal; ``""`` when unknown).
+    """
+
+    path: str
+    peer: str
+
+
+def handshake_of(server: viser.ViserServer, client_id: int) -> Handshake | None:
+    """The handshake of the connected tab ``client_id``; None once it left (or before viser listed it)."""
+    connection = server._websock_server._live_connections.get(client_id)
+    request = getattr(connection, "request", None)
+    if connection is None or request is None:
+        return None
+    try:
+        peer = str(connection.remote_address[0])
+    except (TypeError, IndexError, OSError):
+        peer = ""
+    return Handshake(str(request.path), peer)
+
+
+def serve_page_under(server: viser.ViserServer, prefix: str) -> None:
+    """Serve viser's page at every path ``prefix/<one segment>`` too, as at ``/`` (its websocket then arrives
+    with that path, which :func:`handshake_of` reports). Call it after :func:`install_guards`.
+
+    Args:
+        prefix: a path such as ``/egtviz-instructor`` (starts with ``/``, no trailing ``/``).
+    """
+    if not prefix.startswith("/") or prefix.endswith("/") or len(prefix) < 2:
+        raise ValueError(f"prefix: expected a path such as '/name', got {prefix!r}")
+    ws_server = _websockets_server(server)
+    original = ws_server.process_request
+
+    def process_request(connection: Any, request: Any) -> Any:
+        path, sep, query = request.path.partition("?")
+        if request.headers.get("Upgrade", "").lower() != "websocket" and path.startswith(prefix + "/"):
+            rest = path[len(prefix) + 1:].split("/", 1)
+            page = "/" + (rest[1] if len(rest) > 1 else "")
+            request = dataclasses.replace(request, path=page + sep + query)
+        return original(connection, request) if original is not None else None
+
+    ws_server.process_request = process_request

@@ -139,6 +139,9 @@ class ClientView:
         self.last_update_wall: float = 0.0
         #: Called with each applied update's :class:`UpdateTiming` (under the lock; keep it short).
         self.on_update_timed: Callable[[UpdateTiming], None] | None = None
+        #: Called with this view under the lock after each drawn update (its :attr:`svgs` and read-out are then
+        #: the ones sent): a classroom sends the very same panels to every follower.
+        self.on_rendered: Callable[[ClientView], None] | None = None
         self._t_event: float | None = None
         self._c_event: float | None = None
         self.svgs: dict[str, str] = {}
@@ -367,6 +370,8 @@ class ClientView:
         wall.append(time.perf_counter())
         cpu.append(time.thread_time())
         self._record(wall, cpu)
+        if self.on_rendered is not None:
+            self.on_rendered(self)
 
     def _draw_panels(self, scene: Scene, derived: Derived) -> None:
         """Every camera's image-plane panel and every figure plot, as the lesson policy filters them."""
@@ -515,6 +520,9 @@ class EgtvizApp:
         self._gone: set[int] = set()
         #: The course (start page, lessons) that new tabs open in; None: the workbench or ``demo``.
         self.course: Any = None
+        #: A class being taught (:class:`egtviz.viewer.classroom.ClassroomHost`): it is asked first what a new tab
+        #: shows, told when a tab leaves or is cleared; None: no class.
+        self.classroom: Any = None
         if course or lesson is not None:
             from ..course.start_page import Course
 
@@ -560,6 +568,8 @@ class EgtvizApp:
             view.model.load_scene(scene)
 
     def _connect(self, client: viser.ClientHandle) -> None:
+        if self.classroom is not None and self.classroom.open(client):
+            return
         if self.course is not None:
             self.course.open(client)
             return
@@ -583,7 +593,7 @@ class EgtvizApp:
         open_demo = lambda kind, c=client, **options: self.open_demo(c, kind, **options)  # noqa: E731
         window = self._windows.get(client.client_id)
         try:
-            return ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
+            view = ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
                               field_delay=self.field_delay, present=self.present, window=window)
         except Exception as exc:  # noqa: BLE001 - the tab must come up whatever the scene holds
             title, body = describe_error(exc)
@@ -597,7 +607,9 @@ class EgtvizApp:
                               present=self.present, window=window)
             client.add_notification("Showing the default scene instead",
                                     f"The scene could not be drawn: {body}", color="red", auto_close_seconds=None)
-            return view
+        if self.classroom is not None:
+            self.classroom.built(client, view)
+        return view
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -613,6 +625,8 @@ class EgtvizApp:
             demo.close(client_gone=True)
         if self.course is not None:
             self.course.forget(client.client_id)
+        if self.classroom is not None:
+            self.classroom.forget(client.client_id)
 
     # -- visual-servoing demos (egtviz.viewer.servo.servo_demo) ---------------------------------
 
@@ -700,6 +714,8 @@ class EgtvizApp:
             demo.close()
         client.gui.reset()
         client.scene.reset()
+        if self.classroom is not None:
+            self.classroom.cleared(client)
 
     def wait_for_view(self, timeout: float = 10.0, count: int = 1) -> list[ClientView]:
         """Block until at least ``count`` tabs are connected (tests, benchmark)."""

@@ -1,0 +1,479 @@
+"""A class on an :class:`~egtviz.viewer.workbench.app.EgtvizApp`: which tab is the instructor's, what each
+student's tab shows, and the room's scene sent to every follower.
+
+* **Who is who.** The instructor opens ``/egtviz-instructor/<token>`` (:mod:`.links`); the token is read from
+  the tab's websocket handshake and checked by the classroom (rate limited; a wrong one gets a page saying the
+  link is not valid, and nothing else). Every other tab is a student's: it joins under a name, kept in the
+  browser so that a reconnecting tab comes back as the same student, with their own scene.
+* **Follow me.** Each drawn update of the instructor's tab becomes one :class:`~.follow_view.RoomFrame` (the
+  scene, its derived geometry and the panels' SVG strings, all made once); one sender thread gives the newest
+  frame to every follower (a slow follower never holds up the instructor, and a follower that falls behind
+  skips to the newest frame).
+* **Released.** A student not following works on their own scene (a workbench), or, released to the tasks,
+  on the instructor's lesson step if the pacing allows it.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+from ...classroom import (
+    AnswersChanged, CamerasLocked, Classroom, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged,
+    RosterChanged, SharedChanged, SnapshotShown,
+)
+from ...scene import SceneModel
+from ..server.guard import handshake_of, serve_page_under
+from ..workbench.fields import FieldError, notify_error
+from .follow_view import FollowView
+from .links import INSTRUCTOR_PREFIX, token_from_path
+from .room_sender import RoomSender, frame_of
+from .snapshot_pane import RoomSnapshots
+from .student_bar import JoinPage, StudentBar
+from .instructor_panel import InstructorPanel
+
+__all__ = ["NAME_KEY", "ClassroomHost"]
+
+#: The browser's local storage key under which a student's name is kept (a reconnecting tab rejoins with it).
+NAME_KEY = "egtviz-classroom-name"
+#: Seconds a new tab is given to say whether it holds a name.
+NAME_TIMEOUT = 3.0
+_REFUSED_PAGE = ('<div data-egtviz="refused" style="padding:0.6em;font-size:1.2em">This link is not valid.</div>')
+
+
+class ClassroomHost:
+    """The class taught on ``app``'s server.
+
+    Args:
+        app: the viewer app (its ``classroom`` hook is set to this host).
+        room: the class's state (default: a new :class:`~egtviz.classroom.Classroom` on the course's progress).
+        student_url: the URL students open (shown with its QR code in the instructor's panel).
+    """
+
+    def __init__(self, app: Any, room: Classroom | None = None, *, student_url: str = "") -> None:
+        self.app = app
+        progress = getattr(app.course, "progress", None)
+        self.room = room if room is not None else Classroom(progress)
+        self.student_url = student_url
+        #: The question the instructor asked (students see it in their bar); None: none.
+        self.question: str | None = None
+        self._lock = threading.RLock()
+        self._clients: dict[int, Any] = {}
+        self._roles: dict[int, str] = {}
+        self._fresh: set[int] = set()
+        self.followers: dict[int, FollowView] = {}
+        self.bars: dict[int, StudentBar] = {}
+        self.panels: dict[int, InstructorPanel] = {}
+        self.snapshots = RoomSnapshots()
+        self._models: dict[str, SceneModel] = {}
+        self._instructor_camera: tuple | None = None
+        self._tab_locks: dict[int, threading.RLock] = {}
+        self._routes = ThreadPoolExecutor(max_workers=2, thread_name_prefix="egtviz-class-route")
+        self.sender = RoomSender(lambda: list(self.followers.values()))
+        self._refresh = _Throttled(self._refresh_panels, 0.25)
+        serve_page_under(app.server, INSTRUCTOR_PREFIX)
+        self._unsubscribe = self.room.subscribe(self._on_event)
+        app.classroom = self
+
+    # -- the app's hooks ------------------------------------------------------------------------------
+
+    def open(self, client: Any) -> bool:
+        """A new tab: the instructor's (a workbench with the instructor's panel on top), a student's (their
+        name first), or a refused one. True: this host showed the tab."""
+        cid = client.client_id
+        shake = handshake_of(self.app.server, cid)
+        candidate = token_from_path(shake.path) if shake is not None else None
+        with self._lock:
+            self._clients[cid] = client
+            self._tab_locks[cid] = threading.RLock()
+        if candidate is not None:
+            if self.room.check_token(candidate, shake.peer if shake is not None else ""):
+                with self._lock:
+                    self._roles[cid] = "instructor"
+                self.room.instructor_join(cid)
+                client.camera.on_update(lambda cam: self._instructor_moved(cid, cam))
+                # The workbench first: its scene is what the students follow (the course is one click away).
+                if self.app.course is not None:
+                    self.app.course.open_workbench(client)
+                else:
+                    self.app.show_workbench(client)
+                return True
+            with self._lock:
+                self._roles[cid] = "refused"
+            client.gui.add_html(_REFUSED_PAGE)
+            return True
+        with self._lock:
+            self._roles[cid] = "joining"
+        name = self._stored_name(client)
+        if name:
+            try:
+                self.join(client, name)
+                return True
+            except Exception:  # noqa: BLE001 - a name the class refuses now: ask again
+                pass
+        JoinPage(client, lambda typed: self.join(client, typed), lambda exc: notify_error(client, exc))
+        return True
+
+    def cleared(self, client: Any) -> None:
+        """The app emptied the tab: put the instructor's panel or the student's bar back on top."""
+        cid = client.client_id
+        with self._lock:
+            role = self._roles.get(cid)
+            self._fresh.add(cid)
+        self.snapshots.forget(cid)
+        if role == "instructor":
+            self._build_panel(client)
+        elif role == "student":
+            self._build_bar(client)
+        self._show_snapshot_in(client)
+
+    def built(self, client: Any, view: Any) -> None:
+        """The app built a workbench in the tab: the instructor's feeds the room, a student's keeps their scene."""
+        cid = client.client_id
+        with self._lock:
+            role = self._roles.get(cid)
+            fresh = cid in self._fresh
+            self._fresh.discard(cid)
+        if role == "instructor":
+            view.on_rendered = self._instructor_rendered
+            if not fresh:
+                self._build_panel(client)
+                self._show_snapshot_in(client)
+            self._instructor_rendered(view)
+        elif role == "student":
+            view.on_rendered = self._student_rendered
+            if not fresh:
+                self._build_bar(client)
+                self._show_snapshot_in(client)
+
+    def forget(self, client_id: int) -> None:
+        """The tab left: the class keeps the student's scene and progress."""
+        with self._lock:
+            role = self._roles.pop(client_id, None)
+            self._clients.pop(client_id, None)
+            self._fresh.discard(client_id)
+            follower = self.followers.pop(client_id, None)
+            self.bars.pop(client_id, None)
+            self.panels.pop(client_id, None)
+            self.snapshots.forget(client_id)
+            self._tab_locks.pop(client_id, None)
+        if follower is not None:
+            follower.close()
+        if role == "instructor":
+            self.room.instructor_leave(client_id)
+        elif role == "student":
+            self.room.leave(client_id)
+
+    # -- students ---------------------------------------------------------------------------------------
+
+    def _stored_name(self, client: Any) -> str | None:
+        try:
+            value = client.local_storage.get_item(NAME_KEY, timeout=NAME_TIMEOUT)
+        except Exception:  # noqa: BLE001 - no storage, or no answer in time: the student types their name
+            return None
+        return value if isinstance(value, str) and value.strip() else None
+
+    def join(self, client: Any, name: Any) -> None:
+        """The student on ``client`` joins the class as ``name`` (refused names raise, and the tab says why)."""
+        if not isinstance(name, str) or not name.strip():
+            raise FieldError("your name: type it to join the class")
+        cid = client.client_id
+        with self._lock:
+            if self._roles.get(cid) not in ("joining", "student"):
+                return
+            self._roles[cid] = "student"
+        try:
+            self.room.join(cid, name)  # FollowChanged routes the tab
+        except Exception:
+            with self._lock:
+                self._roles[cid] = "joining"
+            raise
+        try:
+            client.local_storage.set_item(NAME_KEY, name)
+        except Exception:  # noqa: BLE001 - storage refused: the student types their name again next time
+            pass
+
+    def _route(self, cid: int) -> None:
+        """Show the student's tab as the class says: the room's scene, their own, or the lesson's tasks."""
+        with self._lock:
+            client = self._clients.get(cid)
+            lock = self._tab_locks.get(cid)
+        if client is None or lock is None:
+            return
+        with lock:
+            try:
+                if self.room.is_following(cid):
+                    self._show_following(client)
+                else:
+                    self._show_own(client)
+            except Exception as exc:  # noqa: BLE001 - a tab that cannot be shown says why; the others carry on
+                notify_error(client, exc)
+
+    def _show_following(self, client: Any) -> None:
+        cid = client.client_id
+        with self._lock:
+            if cid in self.followers or cid not in self._clients:
+                return
+        self.app.clear_tab(client)
+        view = FollowView(client, self.sender.latest)
+        with self._lock:
+            if cid not in self._clients:
+                view.close()
+                return
+            self.followers[cid] = view
+        self._sync_bar(cid)
+        client.camera.on_update(lambda cam: self._follower_moved(cid))
+        if self.room.cameras_locked and self._instructor_camera is not None:
+            view.set_camera(*self._instructor_camera)
+
+    def _show_own(self, client: Any) -> None:
+        cid = client.client_id
+        with self._lock:
+            follower = self.followers.pop(cid, None)
+        name = self.room.name_of(cid)
+        if name is None:
+            return
+        if follower is None and cid in self.app.views:
+            self._sync_bar(cid)
+            return  # already on their own scene
+        if follower is not None:
+            follower.close()
+        shared = self.room.shared()
+        if (self.room.mode is Mode.TASKS and self.app.course is not None and shared.lesson is not None
+                and self.room.may_open(shared.lesson, shared.step or 0)):
+            panel = self.app.course.open_lesson(client, shared.lesson, name)
+            if panel is not None and shared.step is not None and panel.run.step_index != shared.step:
+                panel.go_to(shared.step)
+        else:
+            self.app.show_workbench(client, self._own_model(name))
+        self._sync_bar(cid)
+
+    def _own_model(self, name: str) -> SceneModel:
+        """The student's own scene: kept in this process, else the class's copy, else the room's scene."""
+        with self._lock:
+            model = self._models.get(name)
+        if model is None:
+            scene = self.room.own_scene(name) or self.room.shared().scene or self.app.initial_scene
+            model = SceneModel(scene)
+            with self._lock:
+                model = self._models.setdefault(name, model)
+        return model
+
+    def _student_rendered(self, view: Any) -> None:
+        """A student's own view drew: keep their scene for a reconnect, and tell the roster where they are."""
+        cid = view.client.client_id
+        name = self.room.name_of(cid)
+        if name is None:
+            return
+        self.room.keep_scene(name, view.model.scene)
+        tab = self.app.course.tabs.get(cid) if self.app.course is not None else None
+        run = getattr(tab, "run", None)
+        if run is not None and getattr(run, "model", None) is view.model:
+            self.room.report_step(cid, run.lesson.name, run.step_index)
+        else:
+            self.room.report_step(cid, None, None)
+
+    def _build_bar(self, client: Any) -> None:
+        cid = client.client_id
+        name = self.room.name_of(cid) or ""
+        bar = StudentBar(client, name, on_follow=lambda on: self.room.follow(cid, on),
+                         on_answer=lambda text: self._answer(cid, text), report=lambda exc: notify_error(client, exc))
+        with self._lock:
+            self.bars[cid] = bar
+        self._sync_bar(cid)
+        bar.set_paused(self.room.paused())
+
+    def _sync_bar(self, cid: int) -> None:
+        bar = self.bars.get(cid)
+        if bar is not None:
+            bar.show(self.room.is_following(cid), self.question)
+
+    def _answer(self, cid: int, text: Any) -> None:
+        question = self.question
+        if question is None:
+            raise FieldError("your answer: no question is asked at the moment")
+        if not isinstance(text, str) or not text.strip():
+            raise FieldError("your answer: type it first")
+        value: float | str = text.strip()
+        try:
+            value = float(str(value).replace(",", "."))
+        except ValueError:
+            pass
+        self.room.record_answer(cid, question, value)
+        client = self._clients.get(cid)
+        if client is not None:
+            client.add_notification("Answer sent", "The instructor sees it (without your name).", color="green",
+                                    auto_close_seconds=3.0)
+
+    # -- the instructor ---------------------------------------------------------------------------------
+
+    def _build_panel(self, client: Any) -> None:
+        panel = InstructorPanel(client, self, lambda exc: notify_error(client, exc))
+        with self._lock:
+            self.panels[client.client_id] = panel
+
+    def _instructor_rendered(self, view: Any) -> None:
+        """The instructor's tab drew an update: while students follow, it is the room's new frame."""
+        if self.room.mode is not Mode.FOLLOW:
+            return
+        lesson, step = self._instructor_place(view.client.client_id, view)
+        version = self.room.publish(view.model.scene, lesson=lesson, step=step)
+        self.sender.post(frame_of(view, version, self.sender.next_number()))
+
+    def _instructor_place(self, cid: int, view: Any) -> tuple[str | None, int | None]:
+        tab = self.app.course.tabs.get(cid) if self.app.course is not None else None
+        run = getattr(tab, "run", None)
+        if run is not None and getattr(run, "model", None) is view.model:
+            return run.lesson.name, run.step_index
+        return None, None
+
+    def set_follow_me(self, client: Any, on: bool) -> None:
+        """Follow me (every student shows this tab's scene) or release them to explore."""
+        if not on:
+            self.release(Mode.EXPLORE)
+            return
+        self.room.set_mode(Mode.FOLLOW)
+        view = self.app.views.get(client.client_id)
+        if view is not None:
+            with view.lock:
+                self._instructor_rendered(view)
+
+    def release(self, mode: Mode) -> None:
+        """Release the students to their own scenes (``EXPLORE``) or to the lesson step's tasks (``TASKS``)."""
+        self.room.set_mode(mode)
+
+    def ask(self, question: Any) -> None:
+        """Ask every student ``question`` (None: take the question away)."""
+        if question is not None:
+            from ...classroom.text import plain_text
+
+            question = plain_text(question, "question", 120)
+        self.question = question
+        for cid in list(self.bars):
+            self._sync_bar(cid)
+        self._refresh.now()
+
+    def answers_by_name(self, question: str) -> dict[str, float | str]:
+        """Each student's answer to ``question`` (for the instructor's eyes: "show names")."""
+        answers = getattr(self.room, "answers", None)
+        return dict(answers(question)) if callable(answers) else {}
+
+    def lesson_names(self) -> list[str]:
+        course = self.app.course
+        return list(course.lessons) if course is not None else []
+
+    def student_tabs(self) -> dict[str, int]:
+        """Connected students' names and one tab of each (the snapshot's choices)."""
+        with self._lock:
+            cids = [cid for cid, role in self._roles.items() if role == "student"]
+        out: dict[str, int] = {}
+        for cid in cids:
+            name = self.room.name_of(cid)
+            if name is not None:
+                out.setdefault(name, cid)
+        return out
+
+    def _instructor_moved(self, cid: int, camera: Any) -> None:
+        try:
+            pose = (tuple(camera.position), tuple(camera.look_at), tuple(camera.up_direction))
+        except (AssertionError, AttributeError):
+            return
+        self._instructor_camera = pose
+        if self.room.cameras_locked:
+            for view in list(self.followers.values()):
+                view.set_camera(*pose)
+
+    def _follower_moved(self, cid: int) -> None:
+        view = self.followers.get(cid)
+        pose = self._instructor_camera
+        if view is None or pose is None or not self.room.cameras_locked:
+            return
+        try:
+            now = tuple(view.client.camera.position)
+        except (AssertionError, AttributeError):
+            return
+        if max(abs(a - b) for a, b in zip(now, pose[0])) > 1e-3:
+            view.set_camera(*pose)
+
+    # -- the classroom's events --------------------------------------------------------------------------
+
+    def _on_event(self, event: Any) -> None:
+        if isinstance(event, FollowChanged):
+            self._routes.submit(self._route, event.tab)
+        elif isinstance(event, ModeChanged):
+            if event.mode is not Mode.FOLLOW:
+                self.sender.clear_pending()
+        elif isinstance(event, PauseChanged):
+            for bar in list(self.bars.values()):
+                bar.set_paused(event.message)
+        elif isinstance(event, CamerasLocked):
+            if event.locked and self._instructor_camera is not None:
+                for view in list(self.followers.values()):
+                    view.set_camera(*self._instructor_camera)
+        elif isinstance(event, SnapshotShown):
+            self._snapshot_changed()
+        if isinstance(event, (RosterChanged, AnswersChanged, ModeChanged, PauseChanged, PacingChanged,
+                              CamerasLocked, SharedChanged)):
+            self._refresh.mark()
+
+    def _refresh_panels(self) -> None:
+        for panel in list(self.panels.values()):
+            try:
+                panel.refresh()
+            except Exception as exc:  # noqa: BLE001 - shown in that tab; the other panels still refresh
+                notify_error(panel.client, exc)
+
+    def _snapshot_changed(self) -> None:
+        self.snapshots.set(self.room.shown_snapshot(), present=bool(getattr(self.app, "present", False)))
+        with self._lock:
+            clients = [self._clients[cid] for cid, role in self._roles.items()
+                       if role in ("instructor", "student") and cid in self._clients]
+        for client in clients:
+            self._show_snapshot_in(client)
+
+    def _show_snapshot_in(self, client: Any) -> None:
+        self.snapshots.show_in(client)
+
+    def close(self) -> None:
+        """Stop the sender and the routing threads (the server is stopping)."""
+        self._unsubscribe()
+        self.sender.close()
+        self._refresh.close()
+        self._routes.shutdown(wait=False, cancel_futures=True)
+
+
+class _Throttled:
+    """Runs ``action`` at most once per ``interval`` seconds after :meth:`mark` (on a timer thread)."""
+
+    def __init__(self, action: Callable[[], None], interval: float) -> None:
+        self._action = action
+        self._interval = interval
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._closed = False
+
+    def mark(self) -> None:
+        with self._lock:
+            if self._timer is not None or self._closed:
+                return
+            self._timer = threading.Timer(self._interval, self._run)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def now(self) -> None:
+        self._run()
+
+    def _run(self) -> None:
+        with self._lock:
+            self._timer = None
+            if self._closed:
+                return
+        self._action()
+
+    def close(self) -> None:
+        with self._lock:
+            self._closed = True
+            if self._timer is not None:
+                self._timer.cancel()

@@ -1,0 +1,191 @@
+"""The instructor's controls, at the top of the instructor's tab: follow me, release, lock cameras, pause,
+pacing, the roster, the question and its live histogram, snapshots, the roster as CSV and the student URL's QR
+code.
+
+The panel only reads the classroom and calls it; what each control does to the students' tabs is the
+:class:`~egtviz.viewer.classroom.host.ClassroomHost`'s job. Names, questions and messages are shown as text.
+"""
+
+from __future__ import annotations
+
+from html import escape
+from typing import TYPE_CHECKING, Any
+
+import viser
+
+from ...classroom import Mode
+from ..workbench.fields import FieldError, on_event
+from .links import qr_svg
+from .room_html import histogram_html, roster_html, status_html
+
+if TYPE_CHECKING:
+    from .host import ClassroomHost
+
+__all__ = ["ALL_STEPS", "InstructorPanel", "RELEASE_TO"]
+
+#: The release buttons: label -> the mode students are released to.
+RELEASE_TO = {"explore": Mode.EXPLORE, "tasks": Mode.TASKS}
+#: The pacing field's text for "every step".
+ALL_STEPS = ""
+#: Bins of the answers' histogram.
+HISTOGRAM_BINS = 8
+_NO_STUDENT = "(nobody)"
+
+
+class InstructorPanel:
+    """The "Classroom" folder of one instructor tab.
+
+    Args:
+        client: the instructor's tab.
+        host: the class's host (the classroom, the student URL, the question, the actions).
+        report: shows an exception in the tab.
+    """
+
+    def __init__(self, client: Any, host: ClassroomHost, report: Any) -> None:
+        self.client = client
+        self.host = host
+        self.room = host.room
+        self._report = report
+        self._students: dict[str, int] = {}
+        gui = client.gui
+        with client.atomic(), gui.add_folder("Classroom", order=-1000.0, expand_by_default=True):
+            self.status = gui.add_html("")
+            self.follow_me = gui.add_checkbox("follow me", self.room.mode is Mode.FOLLOW,
+                                              hint="Every student's tab shows your scene, live.")
+            self.release = gui.add_button_group("release to", tuple(RELEASE_TO))
+            self.lock = gui.add_checkbox("lock students' cameras", self.room.cameras_locked,
+                                         hint="Followers see the scene from your viewpoint and cannot turn it.")
+            self.pause_text = gui.add_text("pause message", "Eyes on the projector, please.")
+            self.pause = gui.add_button("Pause every screen", icon=viser.Icon.PLAYER_PAUSE)
+            self._build_join(gui)
+            self._build_roster(gui)
+            self._build_question(gui)
+            self._build_snapshot(gui)
+            self._build_pacing(gui)
+        self._wire()
+        self.refresh()
+
+    def _build_join(self, gui: Any) -> None:
+        with gui.add_folder("Join (student URL)", expand_by_default=False):
+            url = self.host.student_url
+            self.join = gui.add_html(
+                f'<div data-egtviz="join-qr" style="padding:0 0.6em;text-align:center">{qr_svg(url) if url else ""}'
+                f'<div style="font-size:1.1em;word-break:break-all">{escape(url)}</div></div>')
+
+    def _build_roster(self, gui: Any) -> None:
+        with gui.add_folder("Students", expand_by_default=False):
+            self.roster = gui.add_html("")
+            self.csv = gui.add_button("Download roster (CSV)", icon=viser.Icon.DOWNLOAD)
+
+    def _build_question(self, gui: Any) -> None:
+        with gui.add_folder("Question", expand_by_default=True):
+            self.question = gui.add_text("question", "")
+            self.ask = gui.add_button_group("ask the room", ("ask", "clear"))
+            self.show_names = gui.add_checkbox("show names", False, hint="Off on a projector: only counts are shown.")
+            self.histogram = gui.add_html("")
+
+    def _build_snapshot(self, gui: Any) -> None:
+        with gui.add_folder("Snapshot", expand_by_default=False):
+            self.student = gui.add_dropdown("student", (_NO_STUDENT,), initial_value=_NO_STUDENT)
+            self.snapshot = gui.add_button_group("snapshot", ("show to the room", "hide"))
+
+    def _build_pacing(self, gui: Any) -> None:
+        lessons = tuple(self.host.lesson_names()) or ("(no lessons)",)
+        with gui.add_folder("Pacing", expand_by_default=False):
+            self.lesson = gui.add_dropdown("lesson", lessons, initial_value=lessons[0])
+            self.max_step = gui.add_text("up to step", ALL_STEPS, hint="Blank: every step.")
+            self.only = gui.add_checkbox("only this lesson", False)
+            self.apply_pacing = gui.add_button("Apply pacing")
+            self.pacing = gui.add_html("")
+
+    def _wire(self) -> None:
+        host, rep = self.host, self._report
+        on_event(self.follow_me.on_update, lambda e: host.set_follow_me(self.client, bool(e.target.value)), rep)
+        on_event(self.release.on_click, lambda e: host.release(self._release_mode(e.target.value)), rep)
+        on_event(self.lock.on_update, lambda e: self.room.lock_cameras(bool(e.target.value)), rep)
+        on_event(self.pause.on_click, lambda _: self._toggle_pause(), rep)
+        on_event(self.csv.on_click, lambda _: self.client.send_file_download(
+            "egtviz-roster.csv", self.room.roster_csv().encode("utf-8"), save_immediately=True), rep)
+        on_event(self.ask.on_click, lambda e: host.ask(self.question.value if e.target.value == "ask" else None), rep)
+        on_event(self.show_names.on_update, lambda _: self.refresh(), rep)
+        on_event(self.snapshot.on_click, lambda e: self._snapshot(e.target.value), rep)
+        on_event(self.apply_pacing.on_click, lambda _: self._apply_pacing(), rep)
+
+    # -- actions ---------------------------------------------------------------------------------------
+
+    @staticmethod
+    def _release_mode(label: Any) -> Mode:
+        mode = RELEASE_TO.get(label) if isinstance(label, str) else None
+        if mode is None:
+            raise FieldError(f"release to: expected one of {sorted(RELEASE_TO)}")
+        return mode
+
+    def _toggle_pause(self) -> None:
+        if self.room.paused() is None:
+            self.room.pause(self.pause_text.value)
+        else:
+            self.room.pause(None)
+
+    def _snapshot(self, action: Any) -> None:
+        if action == "hide":
+            self.room.show_snapshot(None)
+            return
+        if action != "show to the room":
+            raise FieldError("snapshot: no such action")
+        tab = self._students.get(self.student.value)
+        if tab is None:
+            raise FieldError("snapshot: choose a connected student first")
+        self.room.show_snapshot(self.room.snapshot(tab))
+
+    def _apply_pacing(self) -> None:
+        lesson = self.lesson.value
+        if lesson not in self.host.lesson_names():
+            raise FieldError("pacing: no lesson to pace")
+        text = str(self.max_step.value).strip()
+        if text == ALL_STEPS:
+            last = None
+        else:
+            try:
+                last = int(text) - 1
+            except ValueError:
+                raise FieldError(f"up to step: expected a step number or blank, got {text[:20]!r}") from None
+            if last < 0:
+                raise FieldError("up to step: steps count from 1")
+        self.room.pace(lesson, last)
+        self.room.allow_lessons([lesson] if self.only.value else None)
+
+    # -- what the panel shows -----------------------------------------------------------------------------
+
+    def refresh(self) -> None:
+        """Show the room as it is now: status, roster, students to snapshot, the histogram, the pacing."""
+        rows = self.room.roster()
+        connected = [r for r in rows if r.connected]
+        paused = self.room.paused()
+        mode = self.room.mode
+        with self.client.atomic():
+            self.status.content = status_html(len(connected), sum(r.following for r in connected), mode.value,
+                                              paused)
+            self.pause.label = "Resume every screen" if paused is not None else "Pause every screen"
+            if self.follow_me.value != (mode is Mode.FOLLOW):
+                self.follow_me.value = mode is Mode.FOLLOW
+            if self.lock.value != self.room.cameras_locked:
+                self.lock.value = self.room.cameras_locked
+            self.roster.content = roster_html(rows)
+            self._students = self.host.student_tabs()
+            options = tuple(self._students) or (_NO_STUDENT,)
+            if tuple(self.student.options) != options:
+                self.student.options = options
+            self.histogram.content = self._histogram_html()
+            allowed, paced = self.room.pacing()
+            self.pacing.content = ('<div data-egtviz="pacing" style="padding:0 0.6em">'
+                                   + ("all lessons" if allowed is None else escape(", ".join(sorted(allowed))))
+                                   + "".join(f"<br>{escape(k)}: up to step {v + 1}" for k, v in sorted(paced.items()))
+                                   + "</div>")
+
+    def _histogram_html(self) -> str:
+        question = self.host.question
+        if question is None:
+            return '<div data-egtviz="histogram" data-n="0" style="padding:0 0.6em">No question asked.</div>'
+        hist = self.room.histogram(question, HISTOGRAM_BINS)
+        names = self.host.answers_by_name(question) if self.show_names.value else None
+        return histogram_html(hist, names=names)

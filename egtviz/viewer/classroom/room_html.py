@@ -1,0 +1,100 @@
+"""What the instructor's panel and a student's bar show, as HTML built from data: every name, question and
+message is escaped text, never markup (a student called ``<b>x</b>`` reads as those characters).
+
+Pure functions: the same data gives the same HTML, which is all the tests need to read.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from html import escape
+from typing import Any
+
+__all__ = ["histogram_html", "pause_html", "roster_html", "status_html", "student_status_html"]
+
+#: Bars of the histogram are drawn in this colour (the palette's blue, readable on a projector).
+BAR_COLOUR = "#0072B2"
+
+
+def _cell(value: Any) -> str:
+    return f"<td>{escape(str(value))}</td>"
+
+
+def roster_html(rows: Sequence[Any]) -> str:
+    """The roster as a table: name, connected, following, lesson, step (from 1), tasks passed of the lesson's.
+
+    ``rows`` are :class:`egtviz.classroom.RosterRow`.
+    """
+    if not rows:
+        return '<div data-egtviz="roster" data-rows="0" style="padding:0.3em 0.6em">No student has joined yet.</div>'
+    head = "".join(f"<th style='text-align:left;padding-right:0.6em'>{h}</th>"
+                   for h in ("name", "here", "follows", "lesson", "step", "tasks"))
+    body = []
+    for r in rows:
+        step = "" if r.step is None else r.step + 1
+        tasks = f"{r.tasks_passed}/{r.tasks_total}" if r.tasks_total else str(r.tasks_passed)
+        body.append(f'<tr data-name="{escape(r.name)}">' + _cell(r.name) + _cell("yes" if r.connected else "no")
+                    + _cell("yes" if r.following else "no") + _cell(r.lesson or "") + _cell(step) + _cell(tasks)
+                    + "</tr>")
+    return (f'<div data-egtviz="roster" data-rows="{len(rows)}" style="padding:0 0.6em;overflow-x:auto">'
+            f'<table style="border-collapse:collapse;width:100%"><thead><tr>{head}</tr></thead>'
+            f'<tbody>{"".join(body)}</tbody></table></div>')
+
+
+def _number(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def histogram_html(hist: Any, *, names: Mapping[str, float | str] | None = None, width_px: int = 320) -> str:
+    """A bar chart of the answers to one question (an :class:`egtviz.classroom.Histogram`), no names in it;
+    ``names`` (each student's answer) adds a list under it, for the instructor's eyes only."""
+    q = escape(hist.question)
+    if hist.n == 0:
+        return (f'<div data-egtviz="histogram" data-n="0" style="padding:0.3em 0.6em"><b>{q}</b><br>'
+                "No answer yet.</div>")
+    bars: list[tuple[str, int]] = []
+    for i, count in enumerate(hist.counts):
+        bars.append((f"{_number(hist.edges[i])} to {_number(hist.edges[i + 1])}", count))
+    bars += [(text, count) for text, count in hist.categories]
+    top = max(count for _, count in bars) or 1
+    row_h, label_w = 26, 150
+    height = row_h * len(bars) + 8
+    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="100%" viewBox="0 0 {width_px} {height}" '
+             'style="display:block;font-family:sans-serif">']
+    for k, (label, count) in enumerate(bars):
+        y = 4 + k * row_h
+        w = (width_px - label_w - 40) * count / top
+        parts.append(f'<text x="{label_w - 6}" y="{y + 17}" text-anchor="end" font-size="15">{escape(label)}</text>'
+                     f'<rect data-kind="bar" data-count="{count}" x="{label_w}" y="{y + 3}" width="{w:.1f}" '
+                     f'height="{row_h - 6}" fill="{BAR_COLOUR}"/>'
+                     f'<text x="{label_w + w + 5:.1f}" y="{y + 17}" font-size="15">{count}</text>')
+    parts.append("</svg>")
+    listing = ""
+    if names:
+        items = "".join(f"<li>{escape(n)}: {escape(v if isinstance(v, str) else _number(v))}</li>"
+                        for n, v in sorted(names.items(), key=lambda kv: kv[0].casefold()))
+        listing = f'<ul data-egtviz="answers-by-name" style="margin:0.3em 0">{items}</ul>'
+    return (f'<div data-egtviz="histogram" data-n="{hist.n}" style="padding:0 0.6em"><b>{q}</b> '
+            f'({hist.n} answered){"".join(parts)}{listing}</div>')
+
+
+def status_html(students: int, following: int, mode: str, paused: str | None) -> str:
+    """The instructor's one-line summary of the room."""
+    pause = f' · <b style="color:#D55E00">paused</b>' if paused is not None else ""
+    return (f'<div data-egtviz="room-status" style="padding:0 0.6em;font-size:1.05em">'
+            f"{students} connected · {following} following · mode: {escape(mode)}{pause}</div>")
+
+
+def student_status_html(name: str, following: bool, question: str | None) -> str:
+    """A student's bar: who they are, whether they follow the instructor, and the question asked, if any."""
+    where = "You are following the instructor's scene." if following else "This is your own scene."
+    ask = f'<div data-egtviz="question" style="margin-top:0.3em"><b>Question:</b> {escape(question)}</div>' \
+        if question else ""
+    return (f'<div data-egtviz="student-bar" data-following="{str(following).lower()}" style="padding:0 0.6em">'
+            f"<b>{escape(name)}</b> · {where}{ask}</div>")
+
+
+def pause_html(message: str) -> str:
+    """What a paused student's screen says (the instructor's message, as text)."""
+    return (f'<div data-egtviz="paused" style="font-size:1.6em;line-height:1.4;padding:0.6em 0.2em">'
+            f"{escape(message)}</div>")

@@ -1,0 +1,101 @@
+"""The room's frames: made once from the instructor's drawn update, sent by one thread to every follower.
+
+:func:`frame_of` takes what the instructor's tab has just sent to its own browser (its panels' SVG strings, its
+read-out, its scene and derived geometry): nothing is computed again. :class:`RoomSender` gives the newest
+frame to each follower in turn; a frame that arrives while it is sending replaces the one waiting (latest
+wins), so a room of followers costs the instructor nothing but handing over a reference.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from .follow_view import FollowView, RoomFrame
+
+__all__ = ["RoomSender", "frame_of", "panel_titles"]
+
+_log = logging.getLogger(__name__)
+
+
+def panel_titles(scene: Any) -> dict[str, str]:
+    """The tab title of each panel key of ``scene``: ``"<camera>: image plane"``, a figure plot's title."""
+    from ..workbench.panel_dock import plot_key
+
+    titles = {c.name: f"{c.name}: image plane" for c in scene.cameras}
+    titles.update({plot_key(p.number): p.title for p in scene.annotations.plots})
+    return titles
+
+
+def frame_of(view: Any, version: int, number: int) -> RoomFrame:
+    """The room's frame of the instructor's :class:`~egtviz.viewer.workbench.app.ClientView` as just drawn."""
+    scene = view.model.scene
+    titles = panel_titles(scene)
+    panels = tuple((key, titles[key], svg) for key, svg in view.svgs.items() if key in titles)
+    return RoomFrame(number, version, scene, view.model.derived, panels, view.readout, bool(view.present))
+
+
+class RoomSender:
+    """One thread that shows the newest :class:`RoomFrame` in every follower.
+
+    Args:
+        followers: returns the followers' views now (called once per frame sent).
+    """
+
+    def __init__(self, followers: Callable[[], list[FollowView]]) -> None:
+        self._followers = followers
+        self._cond = threading.Condition()
+        self._numbers = itertools.count(1)
+        #: The newest frame posted (a new follower starts from it); None before the first.
+        self.latest: RoomFrame | None = None
+        self._pending = False
+        self._closed = False
+        #: Frames sent to all followers (each follower shown each frame at most once).
+        self.sent = 0
+        self._thread = threading.Thread(target=self._run, name="egtviz-room-sender", daemon=True)
+        self._thread.start()
+
+    def next_number(self) -> int:
+        return next(self._numbers)
+
+    def post(self, frame: RoomFrame) -> None:
+        """Make ``frame`` the newest; the sender shows it to every follower as soon as it is free."""
+        with self._cond:
+            if self.latest is not None and frame.number <= self.latest.number:
+                return
+            self.latest = frame
+            self._pending = True
+            self._cond.notify()
+
+    def clear_pending(self) -> None:
+        """Students no longer follow: a frame waiting need not be sent."""
+        with self._cond:
+            self._pending = False
+
+    def _run(self) -> None:
+        while True:
+            with self._cond:
+                while not self._pending and not self._closed:
+                    self._cond.wait()
+                if self._closed:
+                    return
+                self._pending = False
+                frame = self.latest
+            if frame is None:
+                continue
+            for view in self._followers():
+                with self._cond:
+                    newer = self.latest
+                try:
+                    view.show(newer if newer is not None else frame)
+                except Exception:  # noqa: BLE001 - one follower's broken tab must not stop the room
+                    _log.exception("egtviz classroom: a follower could not be shown the room's scene")
+            self.sent += 1
+
+    def close(self) -> None:
+        with self._cond:
+            self._closed = True
+            self._cond.notify()

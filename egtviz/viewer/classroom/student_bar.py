@@ -1,0 +1,93 @@
+"""A student's controls in a class: the name they join under, their bar (follow or not, the question asked,
+their answer) and the paused screen.
+
+The bar sits at the top of whatever the tab shows (a following view, their own workbench, a lesson); it is
+built again whenever the tab is cleared. Every callback's failure is shown in the tab
+(:func:`egtviz.viewer.workbench.fields.on_event`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import viser
+
+from ..workbench.fields import on_event
+from .room_html import pause_html, student_status_html
+
+__all__ = ["BAR_ORDER", "JoinPage", "StudentBar"]
+
+#: GUI order of the bar: above everything a workbench or a lesson adds.
+BAR_ORDER = -1000.0
+
+
+class JoinPage:
+    """The first thing a student sees: a name field and a button to join the class.
+
+    Args:
+        client: the tab.
+        on_join: called with the typed name (it raises what is wrong with it).
+        report: shows an exception in the tab.
+    """
+
+    def __init__(self, client: Any, on_join: Callable[[str], None], report: Callable[[BaseException], None]) -> None:
+        gui = client.gui
+        with client.atomic():
+            gui.configure_theme(dark_mode=False, show_logo=False)
+            self.title = gui.add_html('<div data-egtviz="join" style="padding:0 0.6em"><h2 style="margin:0.3em 0">'
+                                      "Join the class</h2>Type your name: your work and progress are kept under "
+                                      "it, and come back if you reconnect.</div>")
+            self.name = gui.add_text("your name", "")
+            self.button = gui.add_button("Join", color="teal", icon=viser.Icon.ARROW_RIGHT)
+        on_event(self.button.on_click, lambda _: on_join(self.name.value), report)
+
+
+class StudentBar:
+    """The bar of a student who joined: status, follow / leave follow, and the question, if one is asked.
+
+    Args:
+        client: the tab.
+        name: the student's name (shown as text).
+        on_follow: ``on_follow(True)`` to follow the instructor, ``False`` to leave follow.
+        on_answer: called with the text of an answer.
+        report: shows an exception in the tab.
+    """
+
+    def __init__(self, client: Any, name: str, *, on_follow: Callable[[bool], None],
+                 on_answer: Callable[[str], None], report: Callable[[BaseException], None]) -> None:
+        self.client = client
+        self.name = name
+        self.following = False
+        self.question: str | None = None
+        self._modal: Any = None
+        gui = client.gui
+        with client.atomic():
+            self.status = gui.add_html("", order=BAR_ORDER)
+            self.btn_follow = gui.add_button("Follow the instructor", order=BAR_ORDER + 0.1,
+                                             icon=viser.Icon.PLAYER_PLAY)
+            self.answer = gui.add_text("your answer", "", order=BAR_ORDER + 0.2, visible=False)
+            self.btn_answer = gui.add_button("Send my answer", order=BAR_ORDER + 0.3, visible=False)
+        on_event(self.btn_follow.on_click, lambda _: on_follow(not self.following), report)
+        on_event(self.btn_answer.on_click, lambda _: on_answer(self.answer.value), report)
+
+    def show(self, following: bool, question: str | None) -> None:
+        """Say whether the tab follows the instructor, and show the question asked (None: none)."""
+        self.following, self.question = following, question
+        with self.client.atomic():
+            self.status.content = student_status_html(self.name, following, question)
+            self.btn_follow.label = "Leave follow (my own scene)" if following else "Follow the instructor"
+            self.answer.visible = self.btn_answer.visible = question is not None
+
+    def set_paused(self, message: str | None) -> None:
+        """Cover the screen with the instructor's message (None: take it away)."""
+        if self._modal is not None:
+            try:
+                self._modal.close()
+            except Exception:  # noqa: BLE001 - gone with a cleared tab
+                pass
+            self._modal = None
+        if message is not None:
+            self._modal = self.client.gui.add_modal("The class is paused")
+            with self._modal:
+                self.client.gui.add_html(pause_html(message))
