@@ -12,7 +12,7 @@ from egtviz.geometry import GeometryError, Pose
 from egtviz.geometry.poses import egt_rotation_from_ypr, ypr_from_egt_rotation
 from egtviz.scene import PanoramicSpec, PinholeSpec, Scene, SceneError, SceneModel, default_scene, panoramic_scene
 from egtviz.scene.io import scene_from_dict
-from egtviz.scene.specs import panoramic_rotation_from_ypr
+from egtviz.scene.cameras.catadioptric import panoramic_rotation_from_ypr
 
 
 def rebuilt(scene: Scene) -> Scene:
@@ -49,7 +49,7 @@ def test_a_camera_change_keeps_the_checked_points():
     model.select_point(3)
     after = model.scene
     assert after.points is before.points and after.points_array() is before.points_array()
-    assert after == rebuilt(after)
+    assert after.to_dict() == rebuilt(after).to_dict()  # a dragged pose reads back from its angles to rounding
 
 
 def test_moving_a_point_changes_its_row_only_and_undo_restores_the_arrays():

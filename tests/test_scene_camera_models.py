@@ -196,6 +196,11 @@ GENERIC_MODULES = [
     "egtviz/viewer/workbench/models/catadioptric.py",
     "egtviz/viewer/workbench/models/unified.py",
     "egtviz/viewer/workbench/models/common.py",
+    "egtviz/viewer/workbench/models/__init__.py",
+    "egtviz/viewer/workbench/camera_settings.py",
+    "egtviz/scene/cameras/__init__.py",
+    "egtviz/scene/camera_entry.py",
+    "egtviz/scene/io.py",
 ]
 KIND_NAMES = re.compile(r"""["'](pinhole|panoramic|hyperbolic|parabolic|unified|fisheye)["']""")
 KIND_TEST = re.compile(r"""(?<!dtype)\.(model_)?kind\s*(==|!=|in\b|not in\b)|isinstance\([^)]*(PinholeCamera|CatadioptricCamera|UnifiedCamera|"""
@@ -226,13 +231,19 @@ def test_no_camera_kind_is_tested_or_named_outside_the_registry(module):
 
 
 def test_the_registries_name_each_kind_once_and_agree():
-    from egtviz.viewer.workbench.models import DRAWINGS, SHORT_LABELS, drawing_class
+    from egtviz.scene.camera_entry import MeshBody
+    from egtviz.scene.cameras import CAMERA_ENTRIES
+    from egtviz.viewer.workbench.models import DRAWINGS, SHORT_LABELS, MeshDrawing, drawing_class
 
-    assert list(DRAWINGS) == list(CAMERA_MODELS) == list(SHORT_LABELS)
+    assert list(DRAWINGS) == list(CAMERA_MODELS) == list(SHORT_LABELS) == list(CAMERA_ENTRIES)
     for kind in CAMERA_MODELS:
-        assert drawing_class(kind).__module__.startswith("egtviz.viewer.workbench.models.")
+        factory = drawing_class(kind)
+        if isinstance(DRAWINGS[kind], MeshBody):
+            assert factory.func is MeshDrawing  # type: ignore[attr-defined]
+        else:
+            assert factory.__module__.startswith("egtviz.viewer.workbench.models.")
     # The scene file's kinds: only in the spec classes (file format), each spec building registered models.
-    from egtviz.scene.specs import CAMERA_KINDS, spec_for_model
+    from egtviz.scene.cameras import CAMERA_KINDS, spec_for_model
 
     assert set(CAMERA_KINDS) == {"pinhole", "panoramic", "unified", "fisheye"}
     assert {spec_for_model(k)[0] for k in CAMERA_MODELS} == set(CAMERA_KINDS.values())

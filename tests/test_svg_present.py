@@ -480,7 +480,7 @@ def test_zoomed_in_view_keeps_the_contract_and_numbers_only_what_it_shows():
 def test_fit_shows_the_horizon_of_a_unified_camera():
     """The horizon of a unified camera (radius f / xi about the principal point) may reach beyond the image."""
     from egtviz.scene import Scene, compute_derived
-    from egtviz.scene.specs import UnifiedSpec
+    from egtviz.scene import UnifiedSpec
 
     scene = Scene(cameras=(UnifiedSpec("uni", xi=0.9, focal_pixels=300.0),), points=((0.0, 3.0, 0.5),))
     plane = compute_derived(scene).image_planes["uni"]

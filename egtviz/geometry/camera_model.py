@@ -33,7 +33,8 @@ normals finite or all NaN), with the same arithmetic; anything else gives an und
 ranges), one registration line per model. How to add a model: ``docs/camera_models.md``.
 
 The models are :class:`~egtviz.geometry.pinhole.PinholeCamera`, :class:`~egtviz.geometry.catadioptric.CatadioptricCamera`
-(two kinds, ``hyperbolic`` and ``parabolic``, one per mirror shape) and :class:`~egtviz.geometry.unified.UnifiedCamera` and :class:`~egtviz.geometry.fisheye.FisheyeCamera`.
+(two kinds, ``hyperbolic`` and ``parabolic``, one per mirror shape), :class:`~egtviz.geometry.unified.UnifiedCamera`
+and every model registered below.
 """
 
 from __future__ import annotations
@@ -270,7 +271,7 @@ class CameraModel(Protocol):
 
     def plane_image_conics(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:
         """Exact image conics (N, 3, 3) of planes through the centre, unit Frobenius norm; NaN rows for zero or
-        NaN normals; None if the model does not image planes to conics (the fisheye: its arcs are sampled)."""
+        NaN normals; None if the model does not image planes to conics (its arcs are sampled)."""
         ...
 
     def plane_image_lines(self, normals_world: npt.ArrayLike, *, check: bool = True) -> np.ndarray | None:

@@ -38,7 +38,8 @@ class EpipolarCurves:
 
     conics: np.ndarray | None
     """(N, 3, 3) exact conics :math:`m^T C m = 0`, unit Frobenius norm (a double line :math:`l l^T` for a pin-hole);
-    NaN rows for points on the baseline; None if not asked for or the model has none (the fisheye)."""
+    NaN rows for points on the baseline; None if not asked for or the model has none (its plane images are sampled
+    arcs)."""
     lines: np.ndarray | None
     """(N, 3) exact lines :math:`l \\cdot m = 0` where the model images planes to lines (pin-hole), else None."""
     arcs: Sequence[Sequence[np.ndarray]]

@@ -214,7 +214,7 @@ class SetRange:
 
     def _apply(self, model: SceneModel) -> SetRange:
         spec = model.scene.camera(self.camera)  # SceneError: no such camera
-        if self.field not in {f.name for f in dataclasses.fields(spec)}:
+        if self.field not in spec.field_names():
             raise EntryError("field", f"camera {self.camera!r} ({spec.kind}) has no field {self.field!r}")
         return self
 

@@ -20,13 +20,21 @@ from .model import Change as Change
 from .model import SceneModel as SceneModel
 from .scene import Scene as Scene
 from .scene import SceneFileError as SceneFileError
+from .cameras import SPEC_CLASSES as _SPEC_CLASSES
+from .cameras.catadioptric import PanoramicSpec as PanoramicSpec
+from .cameras.pinhole import PinholeSpec as PinholeSpec
+from .cameras.unified import UnifiedSpec as UnifiedSpec
 from .specs import CameraSpec as CameraSpec
-from .specs import FisheyeSpec as FisheyeSpec
 from .specs import DisplayOptions as DisplayOptions
 from .specs import OutOfRangeError as OutOfRangeError
-from .specs import PanoramicSpec as PanoramicSpec
-from .specs import PinholeSpec as PinholeSpec
 from .specs import SceneError as SceneError
 from .specs import SurfaceSpec as SurfaceSpec
-from .specs import UnifiedSpec as UnifiedSpec
 from .surfaces import mesh_names as mesh_names
+
+
+def __getattr__(name: str) -> type:
+    """Every registered camera spec class by its name (``egtviz.scene.cameras``), e.g. a model added since."""
+    for cls in _SPEC_CLASSES:
+        if cls.__name__ == name:
+            return cls
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

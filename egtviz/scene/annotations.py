@@ -50,7 +50,7 @@ from .limits import (
     Range,
 )
 from ._values import SceneError, as_pair, as_ranged, as_triple, has_control_characters, required_fields, short_text
-from .specs import PinholeSpec
+from .cameras.pinhole import PinholeSpec
 
 __all__ = [
     "ANNOTATION_KINDS",
@@ -418,8 +418,8 @@ def virtual_camera_spec(real: PinholeSpec, mirror: PlanarMirror, name: str) -> P
     position = t - 2.0 * (t @ n - mirror.distance) * n
     Rp = (np.eye(3) - 2.0 * np.outer(n, n)) @ np.asarray(pose.R, float) @ _S
     ypr = PinholeSpec.ypr_from_world_rotation(Rp)
-    return dataclasses.replace(real, name=name, position=(float(position[0]), float(position[1]), float(position[2])),
-                               ypr_deg=(float(ypr[0]), float(ypr[1]), float(ypr[2])))
+    return real.with_fields(name=name, position=(float(position[0]), float(position[1]), float(position[2])),
+                            ypr_deg=(float(ypr[0]), float(ypr[1]), float(ypr[2])))
 
 
 def resolve_reflections(cameras: tuple, annotations: Annotations) -> tuple:

@@ -9,7 +9,8 @@ import numpy as np
 
 from .annotations import Annotations, PlanarMirror
 from .scene import Scene
-from .specs import PanoramicSpec, PinholeSpec
+from .cameras.catadioptric import PanoramicSpec
+from .cameras.pinhole import PinholeSpec
 
 #: Corners of a 2 m cube standing on the ground at the origin: easy to read in both images.
 CUBE = tuple(

@@ -30,7 +30,8 @@ from .limits import (
 from .annotations import annotations_from_dict
 from .scene import FILE_FORMAT, FILE_VERSION, Scene, SceneFileError, scene_to_bytes, scene_to_dict
 from ._values import SceneError, required_fields, short_text
-from .specs import CAMERA_KINDS, DisplayOptions, SurfaceSpec, spec_for_model
+from .cameras import CAMERA_KINDS, spec_for_model
+from .specs import DisplayOptions, SurfaceSpec
 from .surfaces import check_surface
 
 __all__ = [
@@ -171,10 +172,12 @@ _REQUIRED_WHAT = {"name": "a non-empty string"}
 
 
 def _fields(entry: Any, where: str, source: str, cls: type, what: str) -> dict[str, Any]:
-    """A JSON object's entries as keyword arguments of ``cls`` (lists become tuples); unknown keys refused."""
+    """A JSON object's entries as keyword arguments of ``cls`` (lists become tuples); unknown keys refused (a camera
+    spec's are its ``field_names()``: its pose as ``position`` and ``ypr_deg``)."""
     if not isinstance(entry, dict):
         raise SceneFileError(f"{source}: {where}: expected an object, got {short_text(entry)}")
-    known = {f.name for f in dataclasses.fields(cls)}
+    names = getattr(cls, "field_names", None)
+    known = set(names()) if names is not None else {f.name for f in dataclasses.fields(cls)}
     for key in entry:
         if key not in known:
             raise SceneFileError(f"{source}: {where}.{printable(key)}: unknown field for {what}")

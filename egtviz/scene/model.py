@@ -26,15 +26,10 @@ from .constraints import CameraRanges
 from .derived import Derived, compute_derived
 from .limits import COORDINATE, MAX_POINTS, Range
 from .scene import Scene, SceneFileError
-from .specs import (
-    CAMERA_KINDS,
-    DisplayOptions,
-    PanoramicSpec,
-    PinholeSpec,
-    SceneError,
-    SurfaceSpec,
-    spec_for_model,
-)
+from .cameras import CAMERA_KINDS, spec_for_model
+from .cameras.catadioptric import PanoramicSpec
+from .cameras.pinhole import PinholeSpec
+from .specs import DisplayOptions, SceneError, SurfaceSpec
 from ._values import as_ranged as _ranged, as_triple as _triple, short_text as _short
 from .surfaces import check_surface
 

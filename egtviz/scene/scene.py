@@ -23,9 +23,10 @@ from .limits import (
     MAX_TOTAL_SURFACE_SAMPLES,
 )
 from ._values import SceneError, as_triple, has_control_characters, short_text
-from .specs import CAMERA_KINDS, CameraSpec, DisplayOptions, SurfaceSpec, spec_to_dict
+from .cameras import SPEC_CLASSES
+from .specs import CameraSpec, DisplayOptions, SurfaceSpec, spec_to_dict
 
-_CAMERA_TYPES = tuple(CAMERA_KINDS.values())
+_CAMERA_TYPES = SPEC_CLASSES
 _POINT_MARK = re.compile(r"point:(0|[1-9][0-9]{0,8})")
 
 

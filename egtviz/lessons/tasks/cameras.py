@@ -3,7 +3,6 @@ range (:class:`CameraFieldTask`), the unified-sphere :math:`\xi` in a range (:cl
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -99,7 +98,7 @@ class CameraFieldTask(Task):
 
     def validate(self, scene: Scene) -> None:
         spec = camera_in(scene, self.camera)
-        if self.field not in {f.name for f in dataclasses.fields(spec)}:
+        if self.field not in spec.field_names():
             raise EntryError("field", f"camera {self.camera!r} ({spec.kind}) has no field {self.field!r}")
         value = getattr(spec, self.field)
         if isinstance(value, tuple) != (self.component is not None):

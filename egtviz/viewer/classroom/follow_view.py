@@ -72,16 +72,18 @@ class FollowView:
         with self.lock, client.atomic():
             self.note = client.gui.add_markdown("The instructor has not shown a scene yet." if frame is None else "")
             self.readout = client.gui.add_markdown("")
-            self.scene3d = Scene3D(client.scene, self._refuse_camera, self._refuse_point, report=self.report)
+            self.scene3d = Scene3D(client.scene, self.camera_event, self.point_event, report=self.report)
         if frame is not None:
             self.show(frame)
 
     # -- a follower may look, not touch ---------------------------------------------------------------
 
-    def _refuse_camera(self, name: str, event: Any) -> None:
+    def camera_event(self, name: str, event: Any) -> None:
+        """A camera's gizmo moved in the browser: refused (:meth:`report` puts it back)."""
         raise SceneError(FOLLOW_REFUSAL)
 
-    def _refuse_point(self, index: int, event: Any) -> None:
+    def point_event(self, index: int, event: Any) -> None:
+        """A point's gizmo moved in the browser: refused."""
         raise SceneError(FOLLOW_REFUSAL)
 
     def report(self, exc: BaseException) -> None:

@@ -11,10 +11,10 @@ from collections.abc import Sequence
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
-from ...geometry.camera_model import CAMERA_MODELS
 from ...scene import SceneError, limits
-from ...scene.specs import OutOfRangeError, model_choices
-from .camera_fields import CameraField, camera_fields
+from ...scene.cameras import camera_entry, model_choices
+from ...scene.specs import OutOfRangeError
+from .camera_fields import CameraField, camera_fields, field_rules as _field_rules
 from .fields import FieldError, NumberRule, format_number, format_numbers, parse_numbers
 from .models import SHORT_LABELS
 from .gui_text import plain, set_value
@@ -40,18 +40,11 @@ FIELD_RULES: dict[str, tuple[NumberRule, ...]] = {
 """The pose fields every camera has; a model's own fields take their rules from its parameters
 (:mod:`egtviz.viewer.workbench.camera_fields`)."""
 
-#: Spec fields (as :class:`OutOfRangeError` names them) in the words and units of the GUI: label, unit, scale.
-_SPEC_TERMS = {
-    "focal_length": ("focal length", "mm", 1e3),
-    "focal_length * pixels_per_metre": ("focal length in pixels (focal length / pixel size)", "px", 1.0),
-    "b/a": ("b / a", "", 1.0),
-    "focal_pixels": ("focal length", "px", 1.0),
-}
-
-
-def _restated(exc: OutOfRangeError, name: str) -> FieldError:
-    """The model's range refusal restated for the user: the camera, the field's words and units."""
-    label, unit, scale = _SPEC_TERMS.get(exc.field, (exc.field.replace("_", " "), exc.limit.unit, 1.0))
+def _restated(exc: OutOfRangeError, name: str, model_kind: str) -> FieldError:
+    """The model's range refusal restated for the user: the camera, the field's words and units (as the model's
+    entry words them)."""
+    terms = camera_entry(model_kind).terms
+    label, unit, scale = terms.get(exc.field, (exc.field.replace("_", " "), exc.limit.unit, 1.0))
     rule = NumberRule(label, unit, exc.limit.low * scale, exc.limit.high * scale, integer=exc.limit.integer)
     try:
         rule.check(float(exc.value) * scale, owner=name)
@@ -63,17 +56,16 @@ def _restated(exc: OutOfRangeError, name: str) -> FieldError:
 
 
 @lru_cache(maxsize=16)
-def _model_fields(model_kind: str) -> tuple[dict[str, CameraField], dict[str, Any]]:
-    """A model's GUI fields by key, and its parameter specs by name (from the registry)."""
-    params = CAMERA_MODELS[model_kind].parameters
-    return {f.key: f for f in camera_fields(params)}, {p.name: p for p in params}
+def _model_fields(model_kind: str) -> dict[str, CameraField]:
+    """A model's GUI fields by key (from its entry)."""
+    return {f.key: f for f in camera_fields(model_kind)}
 
 
 def spec_values(spec: Any) -> dict[str, tuple[float, ...]]:
     """A camera spec's values as its fields show them (model parameters -> the fields' units)."""
     values: dict[str, tuple[float, ...]] = {"position": tuple(spec.position), "ypr": tuple(spec.ypr_deg)}
     params = spec.model_values()
-    for key, field in _model_fields(spec.model_kind)[0].items():
+    for key, field in _model_fields(spec.model_kind).items():
         values[key] = field.shown(params)
     return values
 
@@ -82,10 +74,10 @@ def field_rules(spec: Any, key: str) -> tuple[NumberRule, ...]:
     """What field ``key`` of this camera accepts (its parameters' ranges in the field's units)."""
     if key in FIELD_RULES:
         return FIELD_RULES[key]
-    fields, specs = _model_fields(spec.model_kind)
+    fields = _model_fields(spec.model_kind)
     if key not in fields:
         raise FieldError(f"{spec.name}: no field {key!r} on a {spec.model.label.lower()}")
-    return fields[key].rules(specs)
+    return _field_rules(fields[key], spec.model_kind)
 
 
 def _spec_fields(spec: Any, key: str, v: tuple[float, ...]) -> dict[str, Any]:
@@ -94,7 +86,7 @@ def _spec_fields(spec: Any, key: str, v: tuple[float, ...]) -> dict[str, Any]:
         return {"position": v}
     if key == "ypr":
         return {"ypr_deg": v}
-    field = _model_fields(spec.model_kind)[0].get(key)
+    field = _model_fields(spec.model_kind).get(key)
     if field is None:
         raise FieldError(f"unknown field {key!r}")
     return spec.fields_for_parameters(**field.parameters_of(v))
@@ -125,7 +117,7 @@ class CameraSettings:
         """The pose fields, the model choices and one field per model parameter (or pair), units in the labels."""
         gui = self.view.client.gui
         values = spec_values(spec)
-        fields, params = _model_fields(spec.model_kind)
+        fields = _model_fields(spec.model_kind)
         f: dict[str, Any] = {}
         with self.folder:
             f["position"] = gui.add_text("position x, y, z (m)", format_numbers(values["position"]),
@@ -137,7 +129,7 @@ class CameraSettings:
                 f[key] = gui.add_dropdown(key, options, initial_value=getattr(spec, key))
             for key, field in fields.items():
                 if field.slider:
-                    (p,) = field.rules(params)
+                    (p,) = _field_rules(field, spec.model_kind)
                     f[key] = gui.add_slider(field.title, min=p.lo, max=p.hi, step=0.01, initial_value=values[key][0],
                                             hint=field.hint or None)
                 else:
@@ -150,7 +142,7 @@ class CameraSettings:
     def _attach(self, spec: Any) -> None:
         view = self.view
         choices = model_choices(type(spec))
-        fields = _model_fields(spec.model_kind)[0]
+        fields = _model_fields(spec.model_kind)
         for key, handle in self.fields.items():
             if key in choices:
                 view._on(handle.on_update,
@@ -205,7 +197,7 @@ class CameraSettings:
         try:
             self.view.model.update_camera(name, merge_key=merge_key, **fields)
         except OutOfRangeError as exc:  # a limit across fields (e.g. focal length in pixels): say it in UI terms
-            raise _restated(exc, name) from exc
+            raise _restated(exc, name, spec.model_kind) from exc
         except SceneError as exc:
             if str(exc).startswith(f"{name}:"):
                 raise
@@ -227,7 +219,7 @@ class CameraSettings:
         if not force and self._synced is spec:
             return
         self._synced = spec
-        sliders = {k for k, fld in _model_fields(spec.model_kind)[0].items() if fld.slider}
+        sliders = {k for k, fld in _model_fields(spec.model_kind).items() if fld.slider}
         f = self.fields
         for key, values in spec_values(spec).items():
             set_value(f[key], values[0] if key in sliders else format_numbers(values))

@@ -1,32 +1,35 @@
-"""How each camera model is drawn in the 3D view: one drawing module per model, named by the model's spec class.
+"""How each camera model is drawn in the 3D view: the drawing its entry names (``egtviz.scene.cameras``).
 
 A drawing owns the nodes of one camera's body (a frustum, a mirror over its CCD, a sphere, a lens) under the camera's
 gizmo node ``root`` (so they move with the gizmo, in the model frame) and any world-level nodes it needs. It draws
 only what the core model and the scene layer computed (``egtviz.scene.Derived``): the geometry comes from the
 camera model's public methods, never from a formula here.
 
-There is no registry here: each spec class of ``egtviz.scene.specs`` (the scene's one entry per camera spec) names
-the drawing and short label of every model it builds (``DRAWINGS``), and :data:`DRAWINGS` and :data:`SHORT_LABELS`
-are read from them. ``scene3d.Scene3D`` looks a camera's drawing up by its model's ``kind`` (:func:`drawing_class`);
-no kind is tested anywhere else. How to add a model: ``docs/camera_models.md``.
+There is no registry here: each model's entry (``egtviz.scene.cameras.CAMERA_ENTRIES``) names its drawing, a
+``"module:Class"`` of this package (a body with its own behaviour: the pin-hole's image plane, the mirror, the
+sphere) or a :class:`~egtviz.scene.camera_entry.MeshBody` that :class:`MeshDrawing` draws (a model file of the scene
+layer then needs nothing here). ``scene3d.Scene3D`` looks a camera's drawing up by its model's ``kind``
+(:func:`drawing_class`); no kind is tested anywhere else. How to add a model: ``docs/camera_models.md``.
 """
 
 from __future__ import annotations
 
+import functools
 import importlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import numpy as np
 
-from ....geometry.camera_model import CAMERA_MODELS
-from ....scene.specs import SPEC_CLASSES
+from ....scene.camera_entry import MeshBody
+from ....scene.cameras import CAMERA_ENTRIES
 
 if TYPE_CHECKING:
     from ....geometry.camera_model import CameraModel
     from ....scene.derived import ImagePlane
 
-__all__ = ["DRAWINGS", "SHORT_LABELS", "CameraDrawing", "DrawContext", "drawing_class"]
+__all__ = ["DRAWINGS", "SHORT_LABELS", "CameraDrawing", "DrawContext", "MeshDrawing", "drawing_class"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,21 +84,50 @@ class CameraDrawing(Generic[ModelT]):
         """Remove the world-level nodes (the children of ``root`` go with the gizmo)."""
 
 
-def _drawings() -> tuple[dict[str, str], dict[str, str]]:
-    """The drawing and short label of each registered model, in the registry's order, from the scene's spec classes
-    (each names the drawings of the models it builds)."""
-    found = {kind: entry for cls in SPEC_CLASSES for kind, entry in cls.DRAWINGS.items()}
-    order = [kind for kind in CAMERA_MODELS if kind in found]
-    return {k: found[k][0] for k in order}, {k: found[k][1] for k in order}
+class MeshDrawing(CameraDrawing[Any]):
+    """A body given by its model's entry as a translucent mesh in the model frame (:class:`MeshBody`): built at
+    the model's default parameters, sent again only when the camera's parameters give another mesh."""
+
+    def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int], *, kind: str,
+                 body: MeshBody) -> None:
+        super().__init__(api, root, k, colour)
+        self._body = body
+        self._key: Any = None
+        self.mesh: Any = None
+        self._draw({p.name: p.default for p in CAMERA_ENTRIES[kind].parameters}, colour)
+
+    def _draw(self, values: dict[str, Any], colour: Any) -> None:
+        key = tuple(values.items())
+        if key == self._key:
+            return
+        vertices, faces = self._body.mesh(values)
+        if self.mesh is not None:
+            self.mesh.remove()
+        self.mesh = self.api.add_mesh_simple(f"{self.root}/{self._body.name}", vertices, faces, color=colour,
+                                             opacity=self._body.opacity, side="double", cast_shadow=False,
+                                             receive_shadow=False)
+        self._key = key
+
+    def named_nodes(self) -> dict[str, Any]:
+        return {self._body.name: self.mesh}
+
+    @property
+    def body(self) -> Any:
+        return self.mesh
+
+    def update(self, camera: Any, plane: ImagePlane, ctx: DrawContext) -> None:
+        """The mesh of the camera's parameters (a new one keeps the colour the old one had: a highlight)."""
+        self._draw(camera.parameters(), self.mesh.color)
 
 
-DRAWINGS, SHORT_LABELS = _drawings()
-"""``"module:Class"`` of the drawing of each registered camera model kind, and a few words naming each model in the
-GUI (a camera's folder: ``cam1 (pin-hole)``); both read from the spec classes (``egtviz.scene.specs``)."""
+DRAWINGS: dict[str, str | MeshBody] = {kind: entry.drawing for kind, entry in CAMERA_ENTRIES.items()}
+"""The drawing of each registered camera model kind (``"module:Class"`` or a mesh body), from its entry."""
+SHORT_LABELS: dict[str, str] = {kind: entry.short_label for kind, entry in CAMERA_ENTRIES.items()}
+"""A few words naming each model in the GUI (a camera's folder: ``cam1 (pin-hole)``), from its entry."""
 
 
-def drawing_class(kind: str) -> type[CameraDrawing]:
-    """The drawing class of the camera model ``kind``.
+def drawing_class(kind: str) -> Callable[[Any, str, int, tuple[int, int, int]], CameraDrawing]:
+    """What builds the drawing of the camera model ``kind``: ``factory(api, root, k, colour)``.
 
     Raises:
         KeyError: naming the kind, when no drawing is registered for it.
@@ -103,5 +135,7 @@ def drawing_class(kind: str) -> type[CameraDrawing]:
     target = DRAWINGS.get(kind)
     if target is None:
         raise KeyError(f"kind: no drawing registered for camera model {kind!r} (have {sorted(DRAWINGS)})")
+    if isinstance(target, MeshBody):
+        return functools.partial(MeshDrawing, kind=kind, body=target)
     module, _, name = target.partition(":")
     return getattr(importlib.import_module(module), name)

@@ -1,0 +1,260 @@
+"""The classroom in headless Chromium: an instructor and students, each in their own browser context.
+
+The instructor's link holds the token (none, wrong, right); students join by name and follow the instructor's
+scene: a follower's panels are the instructor's SVG, byte for byte, after the instructor drags a camera, and a
+follower's own drag is refused. Release, lock, pause, the roster and the histogram are checked on what the pages
+show.
+"""
+
+from __future__ import annotations
+
+import time
+import types
+
+import numpy as np
+import pytest
+
+from egtviz.classroom import Classroom, Mode
+from egtviz.lessons import ProgressStore
+from egtviz.viewer.classroom import ClassroomHost, instructor_url
+from egtviz.viewer.server.browser import chromium
+from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client
+from egtviz.viewer.workbench.fields import safe_callback
+
+pytestmark = pytest.mark.browser
+
+WINDOW = {"width": 1366, "height": 768}
+PANEL_JS = """(camera) => { const s = document.querySelector(
+  `svg[data-egtviz="image-plane"][data-camera="${camera}"]`); return s ? s.outerHTML : null; }"""
+
+
+def _serve(tmp_path, room=None):
+    import viser
+
+    from egtviz.viewer.server.guard import install_guards
+    from egtviz.viewer.workbench.app import EgtvizApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    install_guards(server)
+    app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=ProgressStore(tmp_path / "progress.db"))
+    base = f"http://127.0.0.1:{server.get_port()}"
+    host = ClassroomHost(app, room, student_url=base)
+    return server, app, host, base
+
+
+def _wait(predicate, timeout=30.0, what="condition"):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def _instructor(browser, base, token):
+    context = browser.new_context(viewport=WINDOW)
+    page = context.new_page()
+    page.goto(instructor_url(base, token))
+    return context, page
+
+
+def _join(browser, base, name):
+    context = browser.new_context(viewport=WINDOW)
+    page = context.new_page()
+    page.goto(base)
+    page.wait_for_selector("text=Join the class", timeout=60_000)
+    page.locator('xpath=//label[normalize-space(.)="your name"]/following::input[1]').first.fill(name)
+    page.get_by_role("button", name="Join").click()
+    page.wait_for_selector('[data-egtviz="student-bar"]', timeout=60_000)
+    return context, page
+
+
+def _drag(view, name, dx):
+    """Drag camera ``name`` of a workbench view by ``dx`` metres along x, as viser delivers a gizmo message."""
+    gizmo = view.scene3d.gizmo(name)
+    position = np.array(gizmo.position, float) + np.array([dx, 0.0, 0.0])
+    gizmo_moved_by_client(gizmo, position)
+    view.drag.camera_event(name, types.SimpleNamespace(target=gizmo, phase="update", client=None, client_id=None))
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with chromium() as b:
+        yield b
+
+
+@pytest.fixture(scope="module")
+def room(browser, tmp_path_factory):
+    server, app, host, base = _serve(tmp_path_factory.mktemp("classroom"))
+    ctx, page = _instructor(browser, base, host.room.instructor_token)
+    page.wait_for_selector("text=follow me", timeout=60_000)
+    instructor = _wait(lambda: next(iter(app.views.values()), None), what="the instructor's workbench")
+    yield types.SimpleNamespace(server=server, app=app, host=host, base=base, page=page, view=instructor)
+    ctx.close()
+    host.close()
+    server.stop()
+
+
+def test_the_token_decides_who_is_the_instructor(browser, tmp_path):
+    now = [0.0]
+    room = Classroom(token="t" * 8 + "right-token-0123", clock=lambda: now[0])
+    server, app, host, base = _serve(tmp_path, room)
+    try:
+        # No token: a student's page (asks a name), no instructor panel.
+        ctx, page = browser.new_context(viewport=WINDOW), None
+        page = ctx.new_page()
+        page.goto(base)
+        page.wait_for_selector("text=Join the class", timeout=60_000)
+        assert page.locator("text=follow me").count() == 0
+        ctx.close()
+        # A wrong token: refused, with no detail, and no instructor powers.
+        ctx, page = _instructor(browser, base, "wrong-token-wrong-token")
+        page.wait_for_selector('[data-egtviz="refused"]', timeout=60_000)
+        assert page.locator('[data-egtviz="refused"]').inner_text().strip() == "This link is not valid."
+        assert page.locator("text=follow me").count() == 0 and not room.instructor_present()
+        ctx.close()
+        # The right token: the instructor's panel.
+        ctx, page = _instructor(browser, base, room.instructor_token)
+        page.wait_for_selector("text=follow me", timeout=60_000)
+        _wait(room.instructor_present, what="the instructor's tab")
+        ctx.close()
+        # Rate limited: after five wrong tries from this address even the right token is refused, for a while.
+        for _ in range(5):
+            assert not room.check_token("another-wrong-token-x", "127.0.0.1")
+        ctx, page = _instructor(browser, base, room.instructor_token)
+        page.wait_for_selector('[data-egtviz="refused"]', timeout=60_000)
+        ctx.close()
+        now[0] += 3600.0
+        ctx, page = _instructor(browser, base, room.instructor_token)
+        page.wait_for_selector("text=follow me", timeout=60_000)
+        ctx.close()
+    finally:
+        host.close()
+        server.stop()
+
+
+def test_a_follower_shows_the_instructors_panels_and_cannot_change_them(browser, room):
+    room.host.room.set_mode(Mode.FOLLOW)
+    ctx, page = _join(browser, room.base, "Ada")
+    try:
+        cid = _wait(lambda: next((c for c in room.host.followers), None), what="a follower")
+        follower = room.host.followers[cid]
+        _drag(room.view, "cam1", 0.4)
+        want = room.view.svgs["cam1"]
+        _wait(lambda: follower.frame is not None and follower._shown.get("cam1") is want, what="the new frame")
+        for camera in ("cam1", "cam2"):
+            _wait(lambda c=camera: page.evaluate(PANEL_JS, c) == room.page.evaluate(PANEL_JS, c),
+                  what=f"{camera}'s panel equal in both tabs")
+        moved = float(room.view.model.scene.camera("cam1").position[0])
+        # The follower's drag is refused: the tab says why, the room's scene and the panels stay as they were.
+        gizmo = follower.scene3d.gizmo("cam1")
+        gizmo_moved_by_client(gizmo, np.array(gizmo.position, float) + 1.0)
+        safe_callback(lambda e: follower.camera_event("cam1", e), follower.report)(
+            types.SimpleNamespace(target=gizmo, phase="update", client=None, client_id=None))
+        page.wait_for_selector("text=Following the instructor", timeout=30_000)
+        assert float(room.view.model.scene.camera("cam1").position[0]) == moved
+        assert np.allclose(gizmo.position, room.view.model.scene.camera("cam1").position)
+        assert page.evaluate(PANEL_JS, "cam1") == room.page.evaluate(PANEL_JS, "cam1")
+    finally:
+        ctx.close()
+
+
+def _bar(page):
+    return page.locator('[data-egtviz="student-bar"]').first.get_attribute("data-following")
+
+
+def test_release_lock_and_rejoin_with_three_tabs(browser, room):
+    host = room.host
+    host.room.set_mode(Mode.FOLLOW)
+    (c1, p1), (c2, p2) = _join(browser, room.base, "Bea"), _join(browser, room.base, "Cy")
+    try:
+        _wait(lambda: len(host.followers) >= 2, what="two followers")
+        # Released: each student works on their own scene; the instructor's drags no longer reach them.
+        host.release(Mode.EXPLORE)
+        _wait(lambda: _bar(p1) == "false" and _bar(p2) == "false", what="both released")
+        _wait(lambda: len(host.followers) == 0, what="no follower")
+        own = {cid: v for cid, v in room.app.views.items() if v is not room.view}
+        assert len(own) == 2
+        before = [p.evaluate(PANEL_JS, "cam1") for p in (p1, p2)]
+        _drag(room.view, "cam1", 0.3)
+        time.sleep(1.0)
+        assert [p.evaluate(PANEL_JS, "cam1") for p in (p1, p2)] == before
+        # One student's own drag changes their panel only.
+        a, b = own.values()
+        _drag(a, "cam1", -0.5)
+        _wait(lambda: a.model.scene.camera("cam1").position[0] != b.model.scene.camera("cam1").position[0],
+              what="one student's own scene to move")
+        # Follow me again: both follow, and show the instructor's panels.
+        host.set_follow_me(room.view.client, True)
+        _wait(lambda: _bar(p1) == "true" and _bar(p2) == "true", what="both following")
+        for p in (p1, p2):
+            _wait(lambda p=p: p.evaluate(PANEL_JS, "cam1") == room.page.evaluate(PANEL_JS, "cam1"),
+                  what="the instructor's panel")
+        # Locked cameras: the followers' view cameras go where the instructor's is.
+        host.room.lock_cameras(True)
+        room.view.client.camera.position = (9.0, -7.0, 5.0)
+        room.view.client.camera.look_at = (0.0, 0.0, 1.0)
+        for v in list(host.followers.values()):
+            _wait(lambda v=v: np.allclose(v.client.camera.position, (9.0, -7.0, 5.0), atol=1e-3),
+                  what="a follower's camera at the instructor's")
+        host.room.lock_cameras(False)
+        # A student leaves follow with their button, and comes back to it.
+        p1.get_by_role("button", name="Leave follow (my own scene)").click()
+        _wait(lambda: _bar(p1) == "false", what="left follow")
+        assert _bar(p2) == "true"
+        p1.get_by_role("button", name="Follow the instructor").click()
+        _wait(lambda: _bar(p1) == "true", what="following again")
+    finally:
+        c1.close()
+        c2.close()
+
+
+def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
+    host = room.host
+    host.room.set_mode(Mode.FOLLOW)
+    (c1, p1), (c2, p2) = _join(browser, room.base, "<b>Dee</b>"), _join(browser, room.base, "Eve <i>x</i>")
+    try:
+        tabs = _wait(lambda: (t := host.student_tabs()) and len(t) >= 2 and t, what="two students")
+        host.ask("Where is e1 (u, in px)?")
+        for p in (p1, p2):
+            p.wait_for_selector('[data-egtviz="question"]', timeout=30_000)
+        host.room.record_answer(tabs["<b>Dee</b>"], "Where is e1 (u, in px)?", 120.0)
+        host.room.record_answer(tabs["Eve <i>x</i>"], "Where is e1 (u, in px)?", 120.0)
+        page = room.page
+        page.get_by_text("Students", exact=True).click()
+        _wait(lambda: page.locator('[data-egtviz="histogram"]').first.get_attribute("data-n") == "2",
+              what="two answers in the histogram")
+        counts = [int(c) for c in page.locator('[data-egtviz="histogram"] [data-kind="bar"]').evaluate_all(
+            "els => els.map(e => e.dataset.count)")]
+        assert sorted(counts, reverse=True)[0] == 2 and sum(counts) == 2
+        hist_text = page.locator('[data-egtviz="histogram"]').first.inner_text()
+        assert "Dee" not in hist_text and "Eve" not in hist_text  # names hidden by default
+        roster = page.locator('[data-egtviz="roster"]').first
+        _wait(lambda: roster.get_attribute("data-rows") is not None and int(roster.get_attribute("data-rows")) >= 2,
+              what="the roster")
+        text = roster.inner_text()
+        assert "<b>Dee</b>" in text and "Eve <i>x</i>" in text  # names as text, not markup
+        assert roster.locator("b, i").count() == 0
+        # A student answers through their bar: the histogram counts it.
+        p1.locator('xpath=//label[normalize-space(.)="your answer"]/following::input[1]').first.fill("130")
+        p1.get_by_role("button", name="Send my answer").click()
+        _wait(lambda: host.room.histogram("Where is e1 (u, in px)?").n == 2
+              and 130.0 in _edges_hit(host.room.histogram("Where is e1 (u, in px)?")), what="the typed answer")
+        # Pause every screen: each student's page shows the message.
+        host.room.pause("Look at the board <now>")
+        for p in (p1, p2):
+            p.wait_for_selector('[data-egtviz="paused"]', timeout=30_000)
+            assert p.locator('[data-egtviz="paused"]').inner_text().strip() == "Look at the board <now>"
+        host.room.pause(None)
+        for p in (p1, p2):
+            p.wait_for_selector('[data-egtviz="paused"]', state="detached", timeout=30_000)
+    finally:
+        host.ask(None)
+        c1.close()
+        c2.close()
+
+
+def _edges_hit(hist):
+    """The answers a histogram can hold: its range's ends (two distinct answers span exactly their range)."""
+    return {hist.edges[0], hist.edges[-1]} if hist.edges else set()
