@@ -164,8 +164,11 @@ def epipolar_normals_columns(c1: np.ndarray, c2: np.ndarray, XT: np.ndarray) -> 
     norm2 = np.add.reduce(n * n, axis=0)
     # Points on the baseline: |n| <= 1e-12 |b| |v|, compared squared.
     on_baseline = norm2 <= np.add.reduce(v * v, axis=0) * (1e-24 * (bx * bx + by * by + bz * bz))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        n /= np.sqrt(norm2)
-    if on_baseline.any():
+    if np.logical_or.reduce(on_baseline):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            n /= np.sqrt(norm2)
         n[:, on_baseline] = np.nan
+    else:
+        # Every norm is positive (a zero one is on the baseline): no error context needed (every drag).
+        n /= np.sqrt(norm2)
     return n

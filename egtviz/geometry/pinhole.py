@@ -287,7 +287,7 @@ class PinholeCamera:
         # The depth exactly as :meth:`project` computes it (the same product), without the pixels.
         M = self.K_Rt
         behind = (X @ M.T)[:, 2] <= (M @ self.pose.t)[2]
-        if behind.any():
+        if np.logical_or.reduce(behind):
             out[behind] = np.nan
         return out
 
@@ -425,7 +425,7 @@ class PinholeCamera:
             pixels = np.empty((len(X), 2))
             np.multiply(m[:, 0] - c[0], inv, out=pixels[:, 0])
             np.multiply(m[:, 1] - c[1], inv, out=pixels[:, 1])
-        if not in_front.all():
+        if not np.logical_and.reduce(in_front):
             pixels[~in_front] = np.nan
         return PinholeProjection(pixels, depth, in_front, size)
 

@@ -12,6 +12,7 @@ light paths, the drawn region, and the epipolar curves of the drawn pair by one 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
 from typing import NamedTuple, cast
@@ -176,10 +177,40 @@ class _CameraBlock(NamedTuple):
     """Why the camera cannot be drawn (its pixels or rays overflow), or None; ``compute_derived`` raises it."""
 
 
-@lru_cache(maxsize=64)
-def _camera_block(spec, points: tuple, check: bool) -> _CameraBlock:
-    """Everything about one camera that depends only on its spec and the points (cached: a drag changes one
-    camera, so the others' projections, light paths and image content are reused). Arrays are read-only.
+class _BlockCache:
+    """:func:`_new_camera_block` remembered for the last ``size`` (spec, points) pairs, found by identity: a drag
+    makes a new spec for the moved camera only, so the other cameras' blocks are found again without hashing
+    or comparing a spec's fields (and whatever a spec's hash covers). Least recently used first out."""
+
+    def __init__(self, size: int) -> None:
+        self._size = size
+        self._entries: dict[tuple[int, int, bool], tuple[object, object, _CameraBlock]] = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, spec, points, check: bool) -> _CameraBlock:
+        key = (id(spec), id(points), check)
+        with self._lock:
+            hit = self._entries.pop(key, None)
+            # An entry holds its spec and points, so their ids are not reused while it lives.
+            if hit is not None and hit[0] is spec and hit[1] is points:
+                self._entries[key] = hit
+                return hit[2]
+        block = _new_camera_block(spec, points, check)
+        with self._lock:
+            if len(self._entries) >= self._size:
+                del self._entries[next(iter(self._entries))]
+            self._entries[key] = (spec, points, block)
+        return block
+
+    def cache_clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
+
+def _new_camera_block(spec, points, check: bool) -> _CameraBlock:
+    """Everything about one camera that depends only on its spec and the points (cached by :data:`_camera_block`:
+    a drag changes one camera, so the others' projections, light paths and image content are reused). Arrays are
+    read-only.
 
     The points were checked when the scene took them (``Scene.points_array``): the core is called with
     ``check=False`` unless ``check`` asks for its checked calls (the reference the tests compare with)."""
@@ -210,6 +241,9 @@ def _camera_block(spec, points: tuple, check: bool) -> _CameraBlock:
     return _CameraBlock(cam, (_frozen(np.array(pose.quat_wxyz)), pose.t), ray, plane, overflow)
 
 
+_camera_block = _BlockCache(64)
+
+
 @lru_cache(maxsize=64)
 def _rim_and_horizon(kind: str, values: tuple[tuple[str, float], ...]) -> tuple[np.ndarray | None, tuple]:
     """A camera's drawn-region boundary (None: the image rectangle, which the panel's frame draws) and its horizon's
@@ -235,14 +269,9 @@ def compute_derived(scene: Scene, *, check: bool = False) -> Derived:
             whose ``compute_derived`` succeeds is one the viewer can draw.
     """
     try:
-        derived = _compute_derived(scene, check=True) if check else _compute_derived(scene)
+        return _compute_derived(scene, check=True) if check else _compute_derived(scene)
     except (GeometryError, ArithmeticError, ValueError) as exc:
         raise SceneError(f"cannot be drawn: {exc}") from exc
-    for name in derived.pair.names or ():
-        lines = derived.image_planes[name].lines
-        if lines is not None and np.isinf(lines).any():
-            raise SceneError(f"cannot be drawn: camera {name!r}: image coordinates overflow")
-    return derived
 
 
 def _compute_derived(scene: Scene, check: bool = False) -> Derived:
@@ -270,7 +299,7 @@ def _compute_derived(scene: Scene, check: bool = False) -> Derived:
                 planes[n] = replace(planes[n], message=COINCIDENT_MESSAGE, in_pair=True)
             readout = PairReadout(pair_names, message=COINCIDENT_MESSAGE)
         else:
-            baseline = np.array([c1.centre, c2.centre])
+            baseline = np.array([c1.centre.tolist(), c2.centre.tolist()])
             sides = ((n1, "1", c1, curves.first), (n2, "2", c2, curves.second))
             segments = _clipped_lines([(side, planes[name]) for name, _, _, side in sides])
             for (name, idx, cam, side), seg in zip(sides, segments, strict=True):
@@ -280,9 +309,7 @@ def _compute_derived(scene: Scene, check: bool = False) -> Derived:
             readout = _readout(pair_names, c1, c2, curves.first, curves.second, check)
             sel = scene.selected_point
             if sel is not None and not math.isnan(curves.normals[sel, 0]):  # a normal is all NaN or all finite
-                tri = np.array([c1.centre, c2.centre, X[sel]])
-                centroid = (tri[0] + tri[1] + tri[2]) / 3.0
-                epi_plane = centroid + PLANE_MARGIN * (tri - centroid)
+                epi_plane = _grown_triangle(c1.centre, c2.centre, X[sel])
                 selected_normal = _frozen(curves.normals[sel].copy())
 
     return Derived(
@@ -295,6 +322,15 @@ def _compute_derived(scene: Scene, check: bool = False) -> Derived:
         selected_normal=selected_normal,
         baseline=baseline,
     )
+
+
+def _grown_triangle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """(3, 3) the triangle ``(a, b, c)`` grown about its centroid by ``PLANE_MARGIN``: the numpy formula
+    ``centroid + PLANE_MARGIN * (tri - centroid)`` on plain floats (every drag; the same operations in the same
+    order, so the same values)."""
+    rows = (a.tolist(), b.tolist(), c.tolist())
+    centroid = [(x + y + z) / 3.0 for x, y, z in zip(*rows, strict=True)]
+    return np.array([[m + PLANE_MARGIN * (v - m) for v, m in zip(row, centroid, strict=True)] for row in rows])
 
 
 def _clipped_lines(sides: list[tuple[EpipolarCurves, ImagePlane]]) -> list[np.ndarray | None]:
