@@ -9,6 +9,7 @@ Rotation conventions: ``docs/conventions.md``.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -298,7 +299,16 @@ class CameraSpecBase:
         t = as_triple(position, "position", COORDINATE, self.name)
         # A rotation to rounding (a gizmo's quaternion) and a checked position: nothing for the core to check again.
         # One only within the looser tolerance (a script's matrix) is made orthonormal by the core.
-        return dataclasses.replace(self, pose=Pose(R, np.array(t), check=not is_rotation(m, 1e-12)))
+        pose = Pose(R, np.array(t), check=not is_rotation(m, 1e-12))
+        # Only the pose is new: the model's fields were checked when this spec was made (every drag step comes
+        # here, so they are not checked again). The copy keeps them and the model key, and none of the views or
+        # the camera of the old pose.
+        new = copy.copy(self)
+        for key in _POSE_CACHES:
+            new.__dict__.pop(key, None)
+        new.__dict__["pose"] = pose
+        new.__dict__["_position"] = t
+        return new
 
     def camera(self) -> CameraModel:
         """The camera model of this spec (built once per spec: specs are immutable)."""
@@ -344,6 +354,9 @@ class CameraSpecBase:
             new.__dict__["_ypr"] = ypr
         return new
 
+
+#: What a spec remembers of its pose besides the pose itself (its views and its camera).
+_POSE_CACHES = ("_position", "_ypr", "_camera")
 
 CameraSpec = CameraSpecBase
 """The type of any camera spec."""
