@@ -17,6 +17,7 @@ from typing import Any
 
 from ...scene import Scene, SceneError
 from ...scene.extent import scene_extent
+from ..render.palette import PRESENT_GUI_CSS
 from ..render.panels import DEFAULT_WINDOW, dock_plan, framed_camera, plan_grid, window_from_canvas
 from ..render.svg import NORMAL, PRESENT
 from ..workbench.fields import notify_error
@@ -56,9 +57,10 @@ class FollowView:
     Args:
         client: the tab's viser client.
         frame: the room's frame at the start (None: the instructor has shown nothing yet).
+        present: start in presentation mode (large type); a frame drawn in presentation mode turns it on too.
     """
 
-    def __init__(self, client: Any, frame: RoomFrame | None) -> None:
+    def __init__(self, client: Any, frame: RoomFrame | None, *, present: bool = False) -> None:
         from ..workbench.scene3d import Scene3D
 
         self.client = client
@@ -69,10 +71,13 @@ class FollowView:
         self._shown: dict[str, str] = {}
         self._panels: list[Any] = []
         self._layout_key: tuple | None = None
+        self.present = False
         with self.lock, client.atomic():
+            self.style = client.gui.add_html("")
             self.note = client.gui.add_markdown("The instructor has not shown a scene yet." if frame is None else "")
-            self.readout = client.gui.add_markdown("")
+            self.readout = client.gui.add_html("")
             self.scene3d = Scene3D(client.scene, self.camera_event, self.point_event, report=self.report)
+            self._set_present(present)
         if frame is not None:
             self.show(frame)
 
@@ -107,6 +112,7 @@ class FollowView:
                 return
             first = self.frame is None
             with self.client.atomic():
+                self._set_present(self.present or frame.present)
                 self._layout(frame)
                 for key, _title, svg in frame.panels:
                     handle = self._html.get(key)
@@ -122,6 +128,15 @@ class FollowView:
                     self._frame_camera(frame)
             self.frame = frame
         self.client.flush()
+
+    def _set_present(self, present: bool) -> None:
+        if present == self.present:
+            return
+        from ..workbench.panel_dock import PRESENT_LABEL_SCALE
+
+        self.present = present
+        self.style.content = PRESENT_GUI_CSS if present else ""
+        self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if present else 1.0)
 
     def _window(self) -> Any:
         try:

@@ -217,7 +217,7 @@ class ClassroomHost:
             if cid in self.followers or cid not in self._clients:
                 return
         self.app.clear_tab(client)
-        view = FollowView(client, self.sender.latest)
+        view = FollowView(client, self.sender.latest, present=bool(getattr(self.app, "present", False)))
         with self._lock:
             if cid not in self._clients:
                 view.close()

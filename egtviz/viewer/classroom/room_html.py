@@ -37,7 +37,7 @@ def roster_html(rows: Sequence[Any]) -> str:
                     + _cell("yes" if r.following else "no") + _cell(r.lesson or "") + _cell(step) + _cell(tasks)
                     + "</tr>")
     return (f'<div data-egtviz="roster" data-rows="{len(rows)}" style="padding:0 0.6em;overflow-x:auto">'
-            f'<table style="border-collapse:collapse;width:100%"><thead><tr>{head}</tr></thead>'
+            f'<table style="border-collapse:collapse;width:100%;font-size:0.9em"><thead><tr>{head}</tr></thead>'
             f'<tbody>{"".join(body)}</tbody></table></div>')
 
 
