@@ -1,5 +1,5 @@
 """The ``egtviz`` command: ``serve`` (the default: the course's start page), ``lesson``, ``scene``, ``servo``,
-``figure``, ``bench``, ``version``.
+``figure``, ``export``, ``bench``, ``version``.
 
 Exit status: 0 success; 1 a run that did not succeed (a servo run that did not converge, an output that
 could not be written); 2 a refused argument or input file (argparse usage errors too). Messages never
@@ -170,7 +170,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"egtviz {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{serve,lesson,lessons,progress,check,scene,servo,figure,bench,version}",
+    sub = parser.add_subparsers(dest="command", metavar="{serve,lesson,lessons,progress,check,scene,servo,figure,export,bench,version}",
                                 help="what to do (default: serve)")
     from .viewer.server.cli import add_parser as add_serve
 
@@ -182,6 +182,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
     add_servo(sub)
     _add_figure(sub, with_arguments=command == "figure")
+    from .viewer.export.cli import add_parser as add_export
+
+    add_export(sub)
     _add_bench(sub)
     sub.add_parser("version", help="print the version", description="Print the version of egtviz.")
     return parser
@@ -229,6 +232,10 @@ def main(argv: list[str] | None = None) -> int:
         return _run_scene(args)
     if args.command == "figure":
         return _run_figure(args)
+    if args.command == "export":
+        from .viewer.export.cli import run as run_export
+
+        return run_export(args)
     if args.command in _LESSON_COMMANDS:
         from .lessons import cli as lessons_cli
 
