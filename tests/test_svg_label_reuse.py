@@ -88,3 +88,71 @@ def test_epipoles_in_reach_are_not_clear():
     assert not svg._clear_of_numbers(plan, np.array([[x1, y0, x1 + 5.0, y0 + 5.0]]))  # touching is near
     assert svg._clear_of_numbers(plan, np.array([[1e6, 1e6, 1e6 + 1.0, 1e6 + 1.0]]))
     assert not svg._clear_of_numbers(plan, np.array([[np.nan, 0.0, 1.0, 1.0]]))  # NaN: never clear
+
+
+# -- the numpy forms of the placement's inner loops give the loops' answers -------------------------------------
+
+
+@settings(max_examples=200, deadline=None)
+@given(m=st.integers(41, 300), seed=st.integers(0, 2**32 - 1), grid=st.booleans())
+def test_many_boxes_are_costed_as_by_the_loop(m, seed, grid):
+    from egtviz.viewer.render import panel_view
+
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(0, 60, (m, 2))
+    if grid:  # touching boxes and exact ties between candidates
+        centres = np.round(centres / 4.0) * 4.0
+    half = rng.uniform(0.5, 4.0, (m, 1)) if not grid else np.full((m, 1), 2.0)
+    boxes = np.column_stack([centres - half, centres + half]).tolist()
+    ax, ay = (float(v) for v in rng.uniform(10, 50, 2))
+    reach, w, h = float(rng.uniform(1, 5)), float(rng.uniform(2, 12)), float(rng.uniform(2, 8))
+    bounds = (0.0, 0.0, 60.0, float(rng.choice([45.0, 60.0])))
+    fast = panel_view._best_box(ax, ay, reach, w, h, boxes, bounds)
+    many = panel_view._MANY_BOXES
+    panel_view._MANY_BOXES = 10**9  # the loop, whatever the number of boxes
+    try:
+        assert panel_view._best_box(ax, ay, reach, w, h, boxes, bounds) == fast
+    finally:
+        panel_view._MANY_BOXES = many
+
+
+def _fates_by_label(boxes, n_first, anchors, reach, obstacles, shown):
+    """number_fates as it was written first: each number in turn, numpy over the points for its leader test."""
+    import math
+
+    keep, far = [], []
+    B = boxes[n_first:]
+    tiny = 1e-6 * (B[:, 2] - B[:, 0]) * (B[:, 3] - B[:, 1])
+    drawn = [tuple(b) for b in boxes[:n_first].tolist()]
+    for j, (x0, y0, x1, y1), t in zip(range(n_first, len(boxes)), B.tolist(), tiny.tolist()):
+        hit = any((w := min(x1, o[2]) - max(x0, o[0])) > 0 and (h := min(y1, o[3]) - max(y0, o[1])) > 0
+                  and w * h > t for o in list(map(tuple, obstacles.tolist())) + drawn)
+        keep.append(not hit)
+        if hit:
+            far.append(False)
+            continue
+        drawn.append((x0, y0, x1, y1))
+        ax, ay = anchors[j].tolist()
+        own = math.hypot(max(x0 - ax, 0.0, ax - x1), max(y0 - ay, 0.0, ay - y1))
+        dx = np.maximum(np.maximum(x0 - shown[:, 0], shown[:, 0] - x1), 0.0)
+        dy = np.maximum(np.maximum(y0 - shown[:, 1], shown[:, 1] - y1), 0.0)
+        d = np.hypot(dx, dy)
+        others = d[(shown[:, 0] != ax) | (shown[:, 1] != ay)]
+        far.append(own > svg.NUMBER_NEAR * float(reach[j])
+                   or bool(len(others)) and float(others.min()) < svg.NUMBER_CLEAR * own)
+    return keep, far
+
+
+@settings(max_examples=300, deadline=None)
+@given(n=st.integers(0, 12), n_first=st.integers(0, 2), m=st.integers(0, 15), seed=st.integers(0, 2**32 - 1))
+def test_number_fates_are_decided_as_one_number_at_a_time(n, n_first, m, seed):
+    rng = np.random.default_rng(seed)
+    anchors = np.round(rng.uniform(0, 40, (n_first + n, 2)), 1)
+    shown = np.concatenate([anchors[n_first:], np.round(rng.uniform(0, 40, (3, 2)), 1)])
+    corner = anchors + np.round(rng.uniform(-6, 6, anchors.shape), 1)
+    boxes = np.column_stack([corner, corner + np.round(rng.uniform(1, 8, anchors.shape), 1)])
+    oc = np.round(rng.uniform(0, 40, (m, 2)), 1)
+    obstacles = np.column_stack([oc - 1.5, oc + 1.5]).reshape(-1, 4)
+    reach = rng.uniform(1, 4, n_first + n)
+    assert svg.number_fates(boxes, n_first, anchors, reach, obstacles, shown) == _fates_by_label(
+        boxes, n_first, anchors, reach, obstacles, shown)

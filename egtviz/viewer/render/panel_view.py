@@ -309,7 +309,7 @@ def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, 
     near = ((O[None, :, 0] <= ax_ + reach_x[:, None]) & (O[None, :, 2] >= ax_ - reach_x[:, None])
             & (O[None, :, 1] <= ay_ + reach_y[:, None]) & (O[None, :, 3] >= ay_ - reach_y[:, None]))
     rows = O.tolist()  # once: a list per label's near rows would copy the crowded ones again for each label
-    return [[rows[j] for j in np.flatnonzero(m).tolist()] for m in near], reach_x, reach_y
+    return [[row for row, hit in zip(rows, m) if hit] for m in near.tolist()], reach_x, reach_y
 
 
 def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: list, bounds: tuple[float, ...]
@@ -323,6 +323,8 @@ def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: lis
         boxes: what may overlap a candidate (the near obstacles, then the earlier labels).
         bounds: ``(x0, y0, x1, y1)`` the label should stay inside.
     """
+    if len(boxes) > _MANY_BOXES:
+        return _best_box_many(ax, ay, reach, w, h, boxes, bounds)
     bx0, by0, bx1, by1 = bounds
     best, best_cost = None, math.inf
     area = w * h
@@ -361,3 +363,43 @@ def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: lis
             if best_cost == 0.0:
                 return best
     return best
+
+
+#: Above this many boxes near a label, its candidates' costs are added up in numpy (an epipole among 200 points).
+_MANY_BOXES = 40
+
+
+def _best_box_many(ax: float, ay: float, reach: float, w: float, h: float, boxes: list, bounds: tuple[float, ...]
+                   ) -> tuple[float, float, float, float] | None:
+    """:func:`_best_box` for many boxes, in numpy, with the same result.
+
+    Each candidate's cost is the same sum in the same order (``cumsum`` adds left to right; a box that does not
+    overlap adds 0.0, which changes no sum); the winner is the first of least cost, as in the loop, whose early
+    exits (a candidate that cannot win, the first free box) never change which box wins.
+    """
+    bx0, by0, bx1, by1 = bounds
+    area = w * h
+    tiny = 1e-6 * area
+    cands = []
+    for ring in PLACEMENT_RINGS:
+        d = reach * ring
+        for dx, dy in _DIRECTIONS:
+            x0 = ax + d if dx > 0 else ax - d - w if dx < 0 else ax - w / 2
+            y0 = ay + d if dy > 0 else ay - d - h if dy < 0 else ay - h / 2
+            x1, y1 = x0 + w, y0 + h
+            iw = (x1 if x1 < bx1 else bx1) - (x0 if x0 > bx0 else bx0)
+            ih = (y1 if y1 < by1 else by1) - (y0 if y0 > by0 else by0)
+            cands.append((x0, y0, x1, y1, area - (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)))
+    C = np.array(cands)
+    O = np.array(boxes, float).reshape(-1, 4)
+    ow = np.minimum(C[:, 2, None], O[None, :, 2]) - np.maximum(C[:, 0, None], O[None, :, 0])
+    oh = np.minimum(C[:, 3, None], O[None, :, 3]) - np.maximum(C[:, 1, None], O[None, :, 1])
+    terms = np.where((ow > 0) & (oh > 0), ow * oh, 0.0)
+    cost = np.cumsum(np.concatenate([C[:, 4:], terms], axis=1), axis=1)[:, -1]
+    cost[cost <= tiny] = 0.0  # NaN stays NaN: never a winner, as in the loop
+    valid = cost < math.inf
+    if not valid.any():
+        return None
+    i = int(np.argmin(np.where(valid, cost, math.inf)))
+    x0, y0, x1, y1, _ = cands[i]
+    return (x0, y0, x1, y1)

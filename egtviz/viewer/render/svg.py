@@ -398,14 +398,12 @@ def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: boo
     run's last). On a large image (whole pixels) all runs are rounded in one
     numpy pass and written as one stream of table strings (``integer``).
     """
-    idx, runs, counts = [], [], []
-    for i, arcs in enumerate(conics):  # one pass: 200 conics are some 400 arcs
-        for piece in arcs:
-            n = len(piece)
-            if n >= 2:
-                idx.append(i)
-                runs.append(piece)
-                counts.append(n)
+    runs = [piece for arcs in conics for piece in arcs]
+    idx = [i for i, arcs in enumerate(conics) for _ in arcs]
+    counts = [len(piece) for piece in runs]
+    if counts and min(counts) < 2:  # rare: a piece of one sample is not drawn
+        keep = [j for j, n in enumerate(counts) if n >= 2]
+        runs, idx, counts = [runs[j] for j in keep], [idx[j] for j in keep], [counts[j] for j in keep]
     if not runs:
         return ""
     V = np.concatenate(runs).astype(float, copy=False)
@@ -495,8 +493,11 @@ def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> s
         x, anchor = x0, "start"
     else:
         x, anchor = (x0 + x1) / 2, "middle"
-    return (f'<text x="{svg_number(x)}" y="{svg_number(y1 - 0.17 * size)}" text-anchor="{anchor}" '
-            f'data-box="{svg_number(x0)} {svg_number(y0)} {svg_number(x1)} {svg_number(y1)}"{attrs}>{text}</text>')
+    # One %-format: "%.5g" writes a float as svg_number does (the same text for every float).
+    return _LABEL_TEXT % (x, y1 - 0.17 * size, anchor, x0, y0, x1, y1, attrs, text)
+
+
+_LABEL_TEXT = '<text x="%.5g" y="%.5g" text-anchor="%s" data-box="%.5g %.5g %.5g %.5g"%s>%s</text>'
 
 
 def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
@@ -528,13 +529,17 @@ def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np
         blocked = ((ow > 0) & (oh > 0) & (ow * oh > tiny[:, None])).any(axis=1).tolist()
     else:
         blocked = [False] * len(B)
-    drawn = [tuple(b) for b in boxes[:n_first].tolist()]
-    for (x0, y0, x1, y1), t, hit in zip(B.tolist(), tiny.tolist(), blocked):
-        hit = hit or any((w := min(x1, o[2]) - max(x0, o[0])) > 0 and (h := min(y1, o[3]) - max(y0, o[1])) > 0
-                         and w * h > t for o in drawn)
+    # Which boxes overlap which (a number with every label before it): then drawn in order, each number tested
+    # against the labels drawn before it.
+    ow = np.minimum(B[:, None, 2], boxes[None, :, 2]) - np.maximum(B[:, None, 0], boxes[None, :, 0])
+    oh = np.minimum(B[:, None, 3], boxes[None, :, 3]) - np.maximum(B[:, None, 1], boxes[None, :, 1])
+    overlaps = ((ow > 0) & (oh > 0) & (ow * oh > tiny[:, None])).tolist()
+    drawn = list(range(n_first))
+    for j, (row, hit) in enumerate(zip(overlaps, blocked)):
+        hit = hit or any(row[i] for i in drawn)
         keep.append(not hit)
         if not hit:
-            drawn.append((x0, y0, x1, y1))
+            drawn.append(n_first + j)
     # A number's distance to every drawn point does not depend on the others' fates: all at once.
     A = anchors[n_first:]
     sx, sy = shown[None, :, 0], shown[None, :, 1]
@@ -768,22 +773,28 @@ def _point_marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, se
     plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k)
     marked = plan.marked
     label_of, leader_of, n_unnumbered = _place_numbers(plan, style, k, bounds, epipoles, ep_boxes)
-    rows = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
     special = sorted(set(label_of) | marked)
-    if special:
-        rows = rows.copy()
-        xy = [tuple(p) for p in P.tolist()]
-    for i in special:  # a ring or a number: the disc's row becomes its group
-        if in_image[i]:
-            kind, row = "point", bisect_left(idx, i)
-        else:
-            kind, row = "point-outside", len(idx) + bisect_left(outside, i)
-        group = _point_group(i, kind, xy[i], ring=i in marked, selected=i == selected_point,
-                             label_box=label_of.get(i), leader_box=leader_of.get(i), style=style, k=k, dp=dp)
-        rows[row] = (group, "", "", "", "", "", "")
+    xy = [tuple(p) for p in P.tolist()] if special else []
+
+    def group(i: int, kind: str) -> str:
+        return _point_group(i, kind, xy[i], ring=i in marked, selected=i == selected_point,
+                            label_box=label_of.get(i), leader_box=leader_of.get(i), style=style, k=k, dp=dp)
+
+    if len(special) == len(idx) + len(outside):  # every disc has a number or a ring (a few points): groups only
+        text = "".join([group(i, "point") for i in idx] + [group(i, "point-outside") for i in outside])
+    else:
+        rows = _plain_point_rows(P_bytes, in_image_bytes, in_view_bytes, style, k, dp)
+        if special:
+            rows = rows.copy()
+        for i in special:  # a ring or a number: the disc's row becomes its group
+            if in_image[i]:
+                rows[bisect_left(idx, i)] = (group(i, "point"), "", "", "", "", "", "")
+            else:
+                rows[len(idx) + bisect_left(outside, i)] = (group(i, "point-outside"), "", "", "", "", "", "")
+        text = "".join(rows.ravel().tolist())
     body = (f'<g stroke="{style.ink}" stroke-width="{svg_number(style.line_px * k * 0.5)}" '
             f'font-size="{svg_number(style.label_px * k)}" font-weight="bold" fill="{style.ink}" paint-order="stroke">'
-            f'{"".join(rows.ravel().tolist())}</g>')
+            f'{text}</g>')
     return body, n_unnumbered
 
 
@@ -882,15 +893,15 @@ def _extend_segments(L: np.ndarray, view: ViewBox) -> np.ndarray:
     clipping of ``p = a + t (b - a)`` to the box).
     """
     a, d = L[:, 0:2], L[:, 2:4] - L[:, 0:2]
-    lo = np.full(len(L), -np.inf)
-    hi = np.full(len(L), np.inf)
+    mn, mx = np.array([view.u0, view.v0]), np.array([view.u1, view.v1])
     with np.errstate(divide="ignore", invalid="ignore"):
-        for j, (mn, mx) in enumerate(((view.u0, view.u1), (view.v0, view.v1))):
-            t1, t2 = (mn - a[:, j]) / d[:, j], (mx - a[:, j]) / d[:, j]
-            flat = d[:, j] == 0
-            t_lo = np.where(flat, np.where((a[:, j] >= mn) & (a[:, j] <= mx), -np.inf, np.inf), np.minimum(t1, t2))
-            t_hi = np.where(flat, np.where((a[:, j] >= mn) & (a[:, j] <= mx), np.inf, -np.inf), np.maximum(t1, t2))
-            lo, hi = np.maximum(lo, t_lo), np.minimum(hi, t_hi)
+        # Both axes at once: the same operations per coordinate as one axis after the other.
+        t1, t2 = (mn - a) / d, (mx - a) / d
+        flat = d == 0
+        inside = (a >= mn) & (a <= mx)
+        t_lo = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
+        t_hi = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
+        lo, hi = np.maximum(t_lo[:, 0], t_lo[:, 1]), np.minimum(t_hi[:, 0], t_hi[:, 1])
     ok = (hi > lo) & np.isfinite(lo) & np.isfinite(hi)
     out = np.full_like(L, np.nan)
     out[ok] = np.column_stack([a[ok] + lo[ok, None] * d[ok], a[ok] + hi[ok, None] * d[ok]])
@@ -993,8 +1004,22 @@ def _status_lines(plane: ImagePlane, n_points: int, n_in: int, show_labels: bool
 
 
 def _frame_svg(plane: ImagePlane, view: ViewBox, lay: PanelLayout, style: PanelStyle) -> list[str]:
-    """The image's border and the axes, then the group clipped to the view opened with the rim and the horizon."""
-    w, h = float(plane.width), float(plane.height)
+    """The image's border and the axes, then the group clipped to the view opened with the rim and the horizon.
+
+    Cached by what it draws: a drag step changes none of it (a mirror's rim and horizon are some hundred vertices).
+    """
+    rim = None if plane.rim is None else np.ascontiguousarray(plane.rim, float)
+    arcs = tuple(np.ascontiguousarray(arc, float) for arc in plane.horizon)
+    return list(_frame_parts(str(plane.camera), float(plane.width), float(plane.height), view, lay, style,
+                             None if rim is None else (rim.tobytes(), rim.shape),
+                             tuple((a.tobytes(), a.shape) for a in arcs)))
+
+
+@lru_cache(maxsize=32)
+def _frame_parts(camera: str, w: float, h: float, view: ViewBox, lay: PanelLayout, style: PanelStyle,
+                 rim: tuple[bytes, tuple[int, ...]] | None, horizon: tuple[tuple[bytes, tuple[int, ...]], ...]
+                 ) -> tuple[str, ...]:
+    """:func:`_frame_svg`'s text; ``rim`` and each horizon arc as their float64 bytes and shape."""
     k = lay.k
     lw = style.line_px * k
     out = [
@@ -1003,23 +1028,23 @@ def _frame_svg(plane: ImagePlane, view: ViewBox, lay: PanelLayout, style: PanelS
         axes_svg(lay, style),
     ]
     # Clip everything drawn on the image plane to the view.
-    clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in str(plane.camera))
-    clip_id += f"-{zlib.crc32(str(plane.camera).encode()):08x}"  # "a b" and "a_b" stay distinct
+    clip_id = "clip-" + "".join(ch if ch.isalnum() else "_" for ch in camera)
+    clip_id += f"-{zlib.crc32(camera.encode()):08x}"  # "a b" and "a_b" stay distinct
     out.append(f'<defs><clipPath id="{clip_id}"><rect x="{svg_number(view.u0)}" y="{svg_number(view.v0)}" width="{svg_number(view.width)}" '
                f'height="{svg_number(view.height)}"/></clipPath></defs><g clip-path="url(#{clip_id})">')
-    if plane.rim is not None:
-        for run in finite_runs(plane.rim):
+    if rim is not None:
+        for run in finite_runs(np.frombuffer(rim[0]).reshape(rim[1])):
             out.append(
                 f'<polygon data-kind="rim" points="{points_attr(run, integer=False)}" fill="none" '
                 f'stroke="{RIM_COLOUR}" '
                 f'stroke-width="{svg_number(lw)}" stroke-dasharray="{svg_number(lw * 5)} {svg_number(lw * 3)}"/>'
             )
-    for arc in plane.horizon:
+    for data, shape in horizon:
         out.append(
-            f'<polyline data-kind="horizon" points="{points_attr(np.asarray(arc, float), integer=False)}" '
+            f'<polyline data-kind="horizon" points="{points_attr(np.frombuffer(data).reshape(shape), integer=False)}" '
             f'fill="none" stroke="{RIM_COLOUR}" stroke-width="{svg_number(lw)}" stroke-dasharray="{svg_number(lw)} {svg_number(lw * 3)}"/>'
         )
-    return out
+    return tuple(out)
 
 
 def _lines_svg(plane: ImagePlane, view: ViewBox, image: ViewBox, selected_point: int | None, style: PanelStyle,
