@@ -354,6 +354,20 @@ class Classroom(ProjectorControls):
             old, self._state = self._state, state
         self._emit(changes_between(old, state))
 
+    def update(self, change: Callable[[ClassState], ClassState]) -> None:
+        """Replace the state with ``change(state)`` under the lock, and tell the listeners what changed.
+
+        Another process's changes are merged this way without losing one made here meanwhile (:meth:`adopt`
+        would). ``change`` must be quick and build a new state, leaving the one it is given as it was.
+        """
+        with self._lock:
+            old = self._state
+            new = change(old)
+            if not isinstance(new, ClassState):
+                raise ClassroomError(f"state: expected a ClassState, got {type(new).__name__}")
+            self._state = new
+        self._emit(changes_between(old, new))
+
     @classmethod
     def from_json(cls, text: str | bytes, progress: ProgressStore | None = None, **kwargs: Any) -> Classroom:
         """A classroom holding the state :meth:`to_json` wrote (``kwargs``: as for the constructor)."""

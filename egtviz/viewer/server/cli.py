@@ -98,9 +98,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--classroom", action="store_true",
                    help="teach a class: print the student URL (with its QR code) and a separate instructor URL "
                    "holding a secret token; students follow the instructor's scene (docs/classroom.md)")
+    p.add_argument("--workers", metavar="N", type=_workers, default=1,
+                   help="serve from N processes behind the one URL (the kernel shares the connections among them; "
+                   "one that dies is restarted and its tabs reconnect); default 1")
     p.add_argument("--allow-host", metavar="NAME", action="append", default=[], type=_allow_host,
                    help="a name the page is reached under through a proxy (a JupyterHub's, e.g. hub.example.edu), "
                    "whose pages may then connect; repeatable; EGTVIZ_ALLOWED_HOSTS adds comma-separated names")
+
+
+def _workers(text: str) -> int:
+    """argparse type of ``--workers``: a whole number 1..MAX_WORKERS."""
+    from .workers import MAX_WORKERS
+
+    try:
+        value = int(text, 10)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_WORKERS:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number 1 to {MAX_WORKERS}")
+    return value
 
 
 def _allow_host(text: str) -> str:
@@ -342,6 +358,12 @@ def run(args: argparse.Namespace) -> int:
     demo, lesson = getattr(args, "demo", None), getattr(args, "lesson", None)
     # Nothing chosen to open: the course's start page, from which the workbench is one click away.
     course = args.scene is None and demo is None and lesson is None
+    if getattr(args, "workers", 1) > 1:
+        from .workers import WorkerOptions, serve_workers
+
+        return serve_workers(args.workers, args.port, WorkerOptions(
+            args.host, args.scene, demo, lesson, bool(getattr(args, "present", False)), course,
+            tuple(getattr(args, "allow_host", None) or ()), bool(getattr(args, "classroom", False))))
     return serve(args.host, args.port, args.scene, demo=demo, present=bool(getattr(args, "present", False)),
                  lesson=lesson, course=course, allow_hosts=tuple(getattr(args, "allow_host", None) or ()),
                  classroom=bool(getattr(args, "classroom", False)))

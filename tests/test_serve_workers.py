@@ -1,0 +1,231 @@
+"""``egtviz serve --workers N``: one port served by N processes, a dead worker restarted, a class shared.
+
+Raw websocket tabs (:mod:`egtviz.bench.ws_client`'s protocol) are opened until one lands on each worker; which
+worker holds a connection is read from ``/proc`` (the server side of the connection is a socket of that process).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import re
+import signal
+import time
+from pathlib import Path
+
+import msgspec.msgpack
+import pytest
+import viser
+import websockets.asyncio.client
+from websockets.typing import Subprotocol
+
+from egtviz.bench.ws_client import CAMERA, decode_frame
+from egtviz.viewer.server.workers import Supervisor, WorkerOptions, reserve_port
+
+pytestmark = pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux's /proc")
+
+_PANEL = re.compile(r'data-egtviz="image-plane" data-camera="([^"]*)"')
+
+
+def _socket_inodes(pid: int) -> set[str]:
+    out = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        with contextlib.suppress(OSError):
+            link = os.readlink(fd)
+            if link.startswith("socket:["):
+                out.add(link[8:-1])
+    return out
+
+
+def owner_of(server_port: int, client_port: int, pids: list[int]) -> int | None:
+    """The worker pid holding the server side of the loopback connection from ``client_port``."""
+    inode = None
+    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
+        parts = line.split()
+        local, remote = parts[1], parts[2]
+        if int(local.split(":")[1], 16) == server_port and int(remote.split(":")[1], 16) == client_port:
+            inode = parts[9]
+    if inode is None:
+        return None
+    return next((pid for pid in pids if inode in _socket_inodes(pid)), None)
+
+
+class Tab:
+    """A raw tab that answers the local-storage question with ``name`` and keeps every panel SVG it is sent."""
+
+    def __init__(self, ws, name: str | None) -> None:
+        self.ws, self.name = ws, name
+        self.panels: dict[str, str] = {}
+        self.types: set[str] = set()
+        self.gizmo: dict | None = None
+        self.pose: dict = {}
+
+    async def send(self, message: dict) -> None:
+        await self.ws.send(msgspec.msgpack.encode(message))
+
+    def _take(self, message: dict) -> list[dict]:
+        replies = []
+        self.types.add(message["type"])
+        if message["type"] == "LocalStorageGetItemRequestMessage":
+            replies.append({"type": "LocalStorageGetItemResponseMessage", "value": self.name, "error": None,
+                            "request_uuid": message["request_uuid"]})
+        if message.get("name") == "/egt/cam_0":
+            if message["type"] == "TransformControlsMessage":
+                self.gizmo = message
+            elif message["type"] == "SetPositionMessage":
+                self.pose["position"] = message["position"]
+            elif message["type"] == "SetOrientationMessage":
+                self.pose["wxyz"] = message["wxyz"]
+        stack = [message]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, dict):
+                stack.extend(item.values())
+            elif isinstance(item, (list, tuple)):
+                stack.extend(item)
+            elif isinstance(item, str) and 'data-egtviz="image-plane"' in item:
+                self.panels[_PANEL.search(item).group(1)] = item
+        return replies
+
+    async def read(self, seconds: float) -> None:
+        deadline = time.monotonic() + seconds
+        while (left := deadline - time.monotonic()) > 0:
+            try:
+                frame = await asyncio.wait_for(self.ws.recv(decode=False), min(left, 0.2))
+            except TimeoutError:
+                continue
+            for message in decode_frame(frame):
+                for reply in self._take(message):
+                    await self.send(reply)
+
+
+@contextlib.asynccontextmanager
+async def open_tab(port: int, path: str = "", name: str | None = None):
+    async with websockets.asyncio.client.connect(
+            f"ws://127.0.0.1:{port}{path}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")],
+            max_size=None, open_timeout=20) as ws:
+        tab = Tab(ws, name)
+        await tab.send({**CAMERA, "image_width": 1366, "image_height": 768})
+        yield tab
+
+
+async def tabs_on_each_worker(stack: contextlib.AsyncExitStack, sup: Supervisor, name: str | None = None,
+                              tries: int = 24) -> dict[int, Tab]:
+    """Open tabs until one is on each worker (the extra ones are closed again)."""
+    pids = [p for p in sup.pids() if p is not None]
+    found: dict[int, Tab] = {}
+    for i in range(tries):
+        inner = contextlib.AsyncExitStack()
+        tab = await inner.enter_async_context(open_tab(sup.port, name=None if name is None else f"{name} {i}"))
+        pid = owner_of(sup.port, tab.ws.local_address[1], pids)
+        if pid is not None and pid not in found:
+            found[pid] = tab
+            stack.push_async_callback(inner.aclose)
+            if len(found) == len(pids):
+                return found
+        else:
+            await inner.aclose()
+    raise AssertionError(f"{tries} tabs never reached every worker: {sorted(found)} of {pids}")
+
+
+def test_a_reserved_port_is_busy_for_others_and_a_listened_port_is_passed_over() -> None:
+    import socket
+
+    port, held = reserve_port("127.0.0.1", 0)
+    try:
+        with socket.socket() as other, pytest.raises(OSError):  # as an asyncio server binds
+            other.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            other.bind(("127.0.0.1", port))
+        again, others = reserve_port("127.0.0.1", port)
+        for s in others:
+            s.close()
+        assert again != port
+    finally:
+        for s in held:
+            s.close()
+    with socket.socket() as listening:
+        listening.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        listening.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)  # a stranger's reuseport server
+        listening.bind(("127.0.0.1", 0))
+        listening.listen()
+        busy = listening.getsockname()[1]
+        chosen, socks = reserve_port("127.0.0.1", busy)
+        for s in socks:
+            s.close()
+        assert chosen != busy  # the workers never join someone else's listening port
+
+
+@pytest.fixture(scope="module")
+def sup():
+    """Two workers teaching a class (one start for the tests below: a worker takes seconds to start)."""
+    sup = Supervisor(2, 0, WorkerOptions(classroom=True))
+    sup.start()
+    yield sup
+    sup.stop()
+
+
+def test_a_follower_on_each_worker_sees_the_instructors_scene(sup: Supervisor) -> None:
+
+    async def scenario() -> None:
+        async with contextlib.AsyncExitStack() as stack:
+            teacher = await stack.enter_async_context(
+                open_tab(sup.port, path=f"/egtviz-instructor/{sup.token}"))
+            await teacher.read(3.0)
+            students = await tabs_on_each_worker(stack, sup, name="student")
+            for tab in students.values():
+                await tab.read(2.0)
+            assert teacher.gizmo is not None
+            x, y, z = [float(v) for v in teacher.pose["position"]]
+            base = {"name": "/egt/cam_0", "owner": teacher.gizmo["owner"]}
+            await teacher.send({"type": "TransformControlsDragStartMessage", **base})
+            for k in range(5):
+                await teacher.send({"type": "TransformControlsUpdateMessage", **base, "wxyz": teacher.pose["wxyz"],
+                                    "position": [x + 0.05 * (k + 1), y + 0.02, z]})
+                await teacher.read(0.1)
+            await teacher.send({"type": "TransformControlsDragEndMessage", **base})
+            await teacher.read(1.5)
+            await asyncio.gather(*(tab.read(2.5) for tab in students.values()))
+            assert teacher.panels, "the instructor's tab drew its panels"
+            for pid, tab in students.items():
+                assert tab.panels == teacher.panels, f"the follower on worker {pid} shows the instructor's panels"
+
+    asyncio.run(asyncio.wait_for(scenario(), 90))
+
+
+def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup: Supervisor) -> None:
+
+    async def scenario() -> None:
+        async with contextlib.AsyncExitStack() as stack:
+            tabs = await tabs_on_each_worker(stack, sup, name="restart")
+            for tab in tabs.values():
+                await tab.read(3.0)
+                assert "cam1" in "".join(tab.panels) or tab.panels, "each worker served the workbench's panels"
+            victim = sorted(tabs)[0]
+            os.kill(victim, signal.SIGKILL)
+            with pytest.raises(websockets.exceptions.ConnectionClosed):
+                for _ in range(100):
+                    await tabs[victim].ws.recv()
+            # The tab reconnects, retrying as viser's client does (a connection made while the dead worker's
+            # listening socket was still being closed is refused): a live worker takes it.
+            for attempt in range(20):
+                try:
+                    async with open_tab(sup.port, name="restart again") as again:
+                        await again.read(3.0)
+                        assert again.panels, "the reconnected tab was served"
+                    break
+                except (OSError, websockets.exceptions.InvalidMessage, websockets.exceptions.ConnectionClosed):
+                    assert attempt < 19
+                    await asyncio.sleep(0.25)
+            assert sup.wait_ready(60.0)
+            pids = sup.pids()
+            assert victim not in pids and None not in pids and len(set(pids)) == 2
+            assert sum(s.restarts for s in sup.slots) == 1
+            # The restarted worker is in the class: its followers show the room's frame, as the other's do.
+            fresh = await tabs_on_each_worker(stack, sup, name="after restart")
+            for tab in fresh.values():
+                await tab.read(3.0)
+            first, second = fresh.values()
+            assert first.panels and first.panels == second.panels
+
+    asyncio.run(asyncio.wait_for(scenario(), 90))
