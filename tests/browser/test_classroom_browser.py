@@ -216,7 +216,7 @@ def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
     (c1, p1), (c2, p2) = _join(browser, room.base, "<b>Dee</b>"), _join(browser, room.base, "Eve <i>x</i>")
     try:
         tabs = _wait(lambda: (t := host.student_tabs()) and len(t) >= 2 and t, what="two students")
-        host.ask("Where is e1 (u, in px)?")
+        host.room.ask("Where is e1 (u, in px)?")
         for p in (p1, p2):
             p.wait_for_selector('[data-egtviz="question"]', timeout=30_000)
         host.room.record_answer(tabs["<b>Dee</b>"], "Where is e1 (u, in px)?", 120.0)
@@ -250,7 +250,7 @@ def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
         for p in (p1, p2):
             p.wait_for_selector('[data-egtviz="paused"]', state="detached", timeout=30_000)
     finally:
-        host.ask(None)
+        host.room.ask(None)
         c1.close()
         c2.close()
 

@@ -15,14 +15,15 @@ student's tab shows, and the room's scene sent to every follower.
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from ...classroom import (
-    AnswersChanged, CamerasLocked, Classroom, FollowChanged, Mode, ModeChanged, PacingChanged, PauseChanged,
-    RosterChanged, SharedChanged, SnapshotShown,
+    AnswersChanged, CamerasLocked, Classroom, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged,
+    PauseChanged, QuestionAsked, RosterChanged, SharedChanged, SnapshotShown,
 )
 from ...scene import SceneModel
 from ..server.guard import handshake_of, serve_page_under
@@ -57,8 +58,6 @@ class ClassroomHost:
         progress = getattr(app.course, "progress", None)
         self.room = room if room is not None else Classroom(progress)
         self.student_url = student_url
-        #: The question the instructor asked (students see it in their bar); None: none.
-        self.question: str | None = None
         self._lock = threading.RLock()
         self._clients: dict[int, Any] = {}
         self._roles: dict[int, str] = {}
@@ -74,6 +73,11 @@ class ClassroomHost:
         self.sender = RoomSender(lambda: list(self.followers.values()))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
+        # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
+        self._log_filter = self.room.log_filter()
+        self._log_handlers = [h for h in (*logging.getLogger().handlers, logging.lastResort) if h is not None]
+        for handler in self._log_handlers:
+            handler.addFilter(self._log_filter)
         self._unsubscribe = self.room.subscribe(self._on_event)
         app.classroom = self
 
@@ -288,10 +292,10 @@ class ClassroomHost:
     def _sync_bar(self, cid: int) -> None:
         bar = self.bars.get(cid)
         if bar is not None:
-            bar.show(self.room.is_following(cid), self.question)
+            bar.show(self.room.is_following(cid), self.room.asked())
 
     def _answer(self, cid: int, text: Any) -> None:
-        question = self.question
+        question = self.room.asked()
         if question is None:
             raise FieldError("your answer: no question is asked at the moment")
         if not isinstance(text, str) or not text.strip():
@@ -344,21 +348,6 @@ class ClassroomHost:
         """Release the students to their own scenes (``EXPLORE``) or to the lesson step's tasks (``TASKS``)."""
         self.room.set_mode(mode)
 
-    def ask(self, question: Any) -> None:
-        """Ask every student ``question`` (None: take the question away)."""
-        if question is not None:
-            from ...classroom.text import plain_text
-
-            question = plain_text(question, "question", 120)
-        self.question = question
-        for cid in list(self.bars):
-            self._sync_bar(cid)
-        self._refresh.now()
-
-    def answers_by_name(self, question: str) -> dict[str, float | str]:
-        """Each student's answer to ``question`` (for the instructor's eyes: "show names")."""
-        answers = getattr(self.room, "answers", None)
-        return dict(answers(question)) if callable(answers) else {}
 
     def lesson_names(self) -> list[str]:
         course = self.app.course
@@ -414,8 +403,11 @@ class ClassroomHost:
                     view.set_camera(*self._instructor_camera)
         elif isinstance(event, SnapshotShown):
             self._snapshot_changed()
+        elif isinstance(event, QuestionAsked):
+            for cid in list(self.bars):
+                self._sync_bar(cid)
         if isinstance(event, (RosterChanged, AnswersChanged, ModeChanged, PauseChanged, PacingChanged,
-                              CamerasLocked, SharedChanged)):
+                              CamerasLocked, SharedChanged, QuestionAsked, NamesShown)):
             self._refresh.mark()
 
     def _refresh_panels(self) -> None:
@@ -439,6 +431,8 @@ class ClassroomHost:
     def close(self) -> None:
         """Stop the sender and the routing threads (the server is stopping)."""
         self._unsubscribe()
+        for handler in self._log_handlers:
+            handler.removeFilter(self._log_filter)
         self.sender.close()
         self._refresh.close()
         self._routes.shutdown(wait=False, cancel_futures=True)

@@ -81,7 +81,8 @@ class InstructorPanel:
         with gui.add_folder("Question", expand_by_default=True):
             self.question = gui.add_text("question", "")
             self.ask = gui.add_button_group("ask the room", ("ask", "clear"))
-            self.show_names = gui.add_checkbox("show names", False, hint="Off on a projector: only counts are shown.")
+            self.show_names = gui.add_checkbox("show names", self.room.names_shown(),
+                                               hint="Off on a projector: only counts are shown.")
             self.histogram = gui.add_html("")
 
     def _build_snapshot(self, gui: Any) -> None:
@@ -106,8 +107,9 @@ class InstructorPanel:
         on_event(self.pause.on_click, lambda _: self._toggle_pause(), rep)
         on_event(self.csv.on_click, lambda _: self.client.send_file_download(
             "egtviz-roster.csv", self.room.roster_csv().encode("utf-8"), save_immediately=True), rep)
-        on_event(self.ask.on_click, lambda e: host.ask(self.question.value if e.target.value == "ask" else None), rep)
-        on_event(self.show_names.on_update, lambda _: self.refresh(), rep)
+        on_event(self.ask.on_click,
+                 lambda e: self.room.ask(self.question.value if e.target.value == "ask" else None), rep)
+        on_event(self.show_names.on_update, lambda e: self.room.show_names(bool(e.target.value)), rep)
         on_event(self.snapshot.on_click, lambda e: self._snapshot(e.target.value), rep)
         on_event(self.apply_pacing.on_click, lambda _: self._apply_pacing(), rep)
 
@@ -170,6 +172,8 @@ class InstructorPanel:
                 self.follow_me.value = mode is Mode.FOLLOW
             if self.lock.value != self.room.cameras_locked:
                 self.lock.value = self.room.cameras_locked
+            if self.show_names.value != self.room.names_shown():
+                self.show_names.value = self.room.names_shown()
             self.roster.content = roster_html(rows)
             self._students = self.host.student_tabs()
             options = tuple(self._students) or (_NO_STUDENT,)
@@ -183,9 +187,9 @@ class InstructorPanel:
                                    + "</div>")
 
     def _histogram_html(self) -> str:
-        question = self.host.question
+        question = self.room.asked()
         if question is None:
             return '<div data-egtviz="histogram" data-n="0" style="padding:0 0.6em">No question asked.</div>'
         hist = self.room.histogram(question, HISTOGRAM_BINS)
-        names = self.host.answers_by_name(question) if self.show_names.value else None
+        names = self.room.answers(question) if self.room.names_shown() else None
         return histogram_html(hist, names=names)

@@ -1,0 +1,138 @@
+"""The classroom's viewer side without a browser: its links and QR code, the HTML it shows (names as text), the
+token kept out of logs, and ``egtviz serve --classroom``'s two URLs (a real subprocess)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from egtviz.classroom import Histogram, RosterRow
+from egtviz.viewer.classroom.links import (
+    INSTRUCTOR_PREFIX, instructor_url, qr_svg, qr_terminal, shown_url, token_from_path,
+)
+from egtviz.viewer.classroom.room_html import histogram_html, pause_html, roster_html, student_status_html
+
+TOKEN = "abcdefghijklmnop-0123456789_XYZ"
+
+
+@pytest.mark.parametrize(("path", "want"), [
+    ("/", None),
+    ("/?egtviz-instructor=" + TOKEN, None),  # a query never reaches the server's websocket: not a way in
+    (f"{INSTRUCTOR_PREFIX}/{TOKEN}", TOKEN),
+    (f"{INSTRUCTOR_PREFIX}/{TOKEN}/", TOKEN),
+    (f"{INSTRUCTOR_PREFIX}/{TOKEN}?websocket=x", TOKEN),
+    (INSTRUCTOR_PREFIX, ""),
+    (f"{INSTRUCTOR_PREFIX}x/{TOKEN}", None),
+    (f"/lessons{INSTRUCTOR_PREFIX}/{TOKEN}", None),
+])
+def test_the_token_is_read_from_the_path_only(path, want):
+    assert token_from_path(path) == want
+
+
+def test_links_and_qr_code():
+    url = instructor_url("http://127.0.0.1:8080/", TOKEN)
+    assert url == f"http://127.0.0.1:8080{INSTRUCTOR_PREFIX}/{TOKEN}"
+    assert token_from_path(url.removeprefix("http://127.0.0.1:8080")) == TOKEN
+    assert TOKEN not in shown_url(url, TOKEN) and shown_url(url, TOKEN).endswith("abcd\u2026")
+    text = qr_terminal("http://192.168.1.20:8080")
+    rows = text.splitlines()
+    import segno
+
+    size = segno.make("http://192.168.1.20:8080", error="m").symbol_size()[0]  # modules with the quiet zone
+    assert len(rows) == (size + 1) // 2 and all(len(r) == size for r in rows)
+    svg = ET.fromstring(qr_svg("http://192.168.1.20:8080", scale=5))
+    assert svg.tag.endswith("svg") and float(svg.get("width")) == 5 * size
+
+
+def _cells(html: str) -> list[ET.Element]:
+    return list(ET.fromstring(html).iter("td"))
+
+
+def test_names_are_text_in_the_roster_and_the_bar():
+    rows = [RosterRow("<b>Bob</b>", True, True, "01-frames", 2, 1, 4),
+            RosterRow('x" onmouseover="alert(1)', False, False, None, None, 0, 0)]
+    html = roster_html(rows)
+    root = ET.fromstring(html)
+    assert root.get("data-rows") == "2"
+    assert [c.text for c in _cells(html)][:6] == ["<b>Bob</b>", "yes", "yes", "01-frames", "3", "1/4"]
+    assert not list(root.iter("b")) and all(tr.get("onmouseover") is None for tr in root.iter("tr"))
+    bar = ET.fromstring(student_status_html("<i>Eve</i>", True, "Is <F> rank 2?"))
+    assert "".join(bar.itertext()).startswith("<i>Eve</i> ·") and "Is <F> rank 2?" in "".join(bar.itertext())
+    assert not list(bar.iter("i"))
+    assert "".join(ET.fromstring(pause_html("<script>x</script>")).itertext()) == "<script>x</script>"
+
+
+def test_the_histogram_counts_and_hides_names_unless_asked():
+    hist = Histogram("where is e1?", (100.0, 110.0, 120.0), (2, 1), (("left", 3),), 6, 4)
+    root = ET.fromstring(histogram_html(hist))
+    bars = [int(b.get("data-count")) for b in root.iter("{http://www.w3.org/2000/svg}rect")]
+    assert bars == [2, 1, 3] and root.get("data-n") == "6"
+    assert "Bob" not in "".join(root.itertext())
+    named = ET.fromstring(histogram_html(hist, names={"<b>Bob</b>": 110.0, "Ann": "left"}))
+    items = ["".join(li.itertext()) for li in named.iter("li")]
+    assert items == ["<b>Bob</b>: 110", "Ann: left"]  # by name, case folded
+
+
+def test_the_token_is_shortened_in_every_log_record(caplog):
+    import viser
+
+    from egtviz.classroom import Classroom
+    from egtviz.viewer.classroom import ClassroomHost
+    from egtviz.viewer.server.guard import install_guards
+    from egtviz.viewer.workbench.app import EgtvizApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        install_guards(server)
+        host = ClassroomHost(EgtvizApp(server, None, field_delay=0.0), Classroom(token=TOKEN))
+        with caplog.at_level(logging.INFO):
+            logging.getLogger("websockets.server").info("GET %s", instructor_url("http://h:1", TOKEN))
+        host.close()
+        with caplog.at_level(logging.INFO):
+            logging.getLogger("websockets.server").info("after %s", TOKEN)  # the host is gone: no filter left
+    finally:
+        server.stop()
+    assert TOKEN not in caplog.records[0].getMessage() and "abcd\u2026" in caplog.records[0].getMessage()
+    assert TOKEN in caplog.records[1].getMessage()
+
+
+def test_serve_classroom_prints_the_student_url_its_qr_code_and_the_instructor_url_once():
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "120"}
+    proc = subprocess.Popen([sys.executable, "-m", "egtviz.cli", "serve", "--classroom", "--port", "0",
+                             "--scene", "default"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        out = []
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            out.append(line)
+            if "instructor (keep this secret)" in line:
+                break
+        text = "".join(out)
+        instructor = re.search(r"instructor \(keep this secret\) (\S+)", text).group(1)
+        student = re.search(r"students open (\S+)", text).group(1)
+        token = instructor.rsplit("/", 1)[1]
+        assert instructor == f"{student}{INSTRUCTOR_PREFIX}/{token}" and len(token) >= 16
+        assert "\u2588" in text  # the QR code's blocks
+        # The instructor's page is served (the same page as the student's); the token is checked on connect.
+        page = urllib.request.urlopen(instructor, timeout=30).read()
+        assert page == urllib.request.urlopen(student, timeout=30).read()
+        proc.send_signal(signal.SIGINT)
+        rest, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    everything = text + rest + err
+    assert everything.count(token) == 1, everything
