@@ -20,6 +20,7 @@ import json
 import logging
 import os
 import secrets
+import socket
 import tempfile
 import threading
 import time
@@ -381,6 +382,13 @@ class ClassroomBus:
         unsubscribe = getattr(self, "_unsubscribe", None)
         if unsubscribe is not None:
             unsubscribe()
+        try:
+            # Shut the socket down first: closing it alone leaves the reading thread's recv waiting, and the
+            # hub would not hear that this worker went.
+            with socket.socket(fileno=os.dup(self._conn.fileno())) as sock:
+                sock.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
         try:
             self._conn.close()
         except OSError:
