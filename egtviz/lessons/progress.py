@@ -40,6 +40,9 @@ SCHEMA_VERSION = 2
 MAX_LEARNER_NAME = 40
 """Characters of a learner's name (after trimming)."""
 _TIMEOUT_S = 10.0
+#: Uses of a file that stays locked by another connection (each waiting up to :data:`_TIMEOUT_S`) before it counts
+#: as failed.
+_BUSY_TRIES = 6
 _log = logging.getLogger(__name__)
 _T = TypeVar("_T")
 
@@ -419,8 +422,13 @@ class ProgressStore:
             self._fall_back(f"{_shown(self.path)} could not be used any more ({_why(exc)})", seed)
 
     def _run(self, work: Callable[[sqlite3.Connection], _T], *, write: bool) -> _T:
-        """``work`` on the file (a write: one transaction, under the lock), or in memory once the file failed."""
-        if self._memory is None:
+        """``work`` on the file (a write: one transaction, under the lock), or in memory once the file failed.
+
+        A file another process holds locked past the busy timeout (several server processes share it) is
+        tried again, :data:`_BUSY_TRIES` times in all, before it counts as failed: a busy file is not a broken one.
+        """
+        tries = 0
+        while self._memory is None:
             try:
                 if not write:
                     with self._connect() as conn:
@@ -432,6 +440,10 @@ class ProgressStore:
             except (sqlite3.DatabaseError, OSError) as exc:
                 if isinstance(exc, (sqlite3.IntegrityError, sqlite3.ProgrammingError)):
                     raise  # a fault of this code, not of the file
+                tries += 1
+                if _busy(exc) and tries < _BUSY_TRIES:
+                    time.sleep(0.05 * tries)
+                    continue
                 self._degrade(exc)
         with self._lock:
             return self._in_memory(work)
@@ -559,6 +571,14 @@ class ProgressStore:
                LEFT JOIN task_state t ON t.learner = l.learner AND t.lesson = l.lesson
                GROUP BY l.learner, l.lesson ORDER BY l.learner, l.lesson""").fetchall(), write=False)
         return [ProgressRow(a, b, int(c), int(d), int(e)) for a, b, c, d, e in rows]
+
+
+def _busy(exc: BaseException) -> bool:
+    """Whether ``exc`` says the file is locked by another connection (it will be free again)."""
+    code = getattr(exc, "sqlite_errorcode", None)
+    if code is not None:
+        return code & 0xFF in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED)
+    return isinstance(exc, sqlite3.OperationalError) and "locked" in str(exc)
 
 
 def _why(exc: BaseException) -> str:
