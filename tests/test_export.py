@@ -109,3 +109,24 @@ def test_export_errors_name_the_argument():
         export_lesson("06-pinhole-epipolar", 5, "/nonexistent/never")
     with pytest.raises(ExportError, match="--lesson"):
         export_lesson("no-such", 1, "/nonexistent/never")
+
+
+def test_an_export_that_cannot_be_written_is_one_line_and_exit_1():
+    done = _run("--scene", "default", "--out", "/proc/egtviz-export-test")
+    assert done.returncode == 1, (done.stdout, done.stderr)
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert done.stderr.startswith("egtviz export: --out /proc/egtviz-export-test: ") and "Traceback" not in done.stderr
+
+
+def test_a_missing_client_page_is_an_export_failure_not_a_traceback(tmp_path, monkeypatch):
+    from viser.infra import StateSerializer
+
+    from egtviz.viewer.export import ExportFailed
+
+    def missing(self, dark_mode=False):
+        raise FileNotFoundError(2, "No such file or directory", "client/build/index.html")
+
+    monkeypatch.setattr(StateSerializer, "as_html", missing)
+    with pytest.raises(ExportFailed, match="cannot record the 3D scene: .*client/build/index.html"):
+        export_scene("default", tmp_path / "out")
+    assert not (tmp_path / "out").exists()

@@ -13,6 +13,6 @@ Nothing is downloaded when the page opens: every script, style and picture is in
 
 from __future__ import annotations
 
-from .writer import MARKER, ExportError, export_lesson, export_scene
+from .writer import MARKER, ExportError, ExportFailed, export_lesson, export_scene
 
-__all__ = ["MARKER", "ExportError", "export_lesson", "export_scene"]
+__all__ = ["MARKER", "ExportError", "ExportFailed", "export_lesson", "export_scene"]

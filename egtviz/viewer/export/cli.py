@@ -34,9 +34,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run a parsed ``export``; exit status 0, or 2 with one line on stderr for input that cannot be used."""
+    """Run a parsed ``export``; exit status 0, 2 for input that cannot be used, 1 for an export that could not be
+    finished (a file not written), each with one line on stderr."""
     from ...files import printable
-    from . import ExportError, export_lesson, export_scene
+    from . import ExportError, ExportFailed, export_lesson, export_scene
 
     try:
         if args.lesson is not None:
@@ -48,5 +49,8 @@ def run(args: argparse.Namespace) -> int:
     except ExportError as exc:
         print(f"egtviz export: {exc}", file=sys.stderr)
         return 2
+    except ExportFailed as exc:
+        print(f"egtviz export: {exc}", file=sys.stderr)
+        return 1
     print(f"wrote {printable(page)} (open it in a browser; no server needed)")
     return 0

@@ -13,7 +13,7 @@ from ... import __version__
 from ...files import FileSafetyError, printable, write_atomic
 from .page import SCENE_FRAME, markdown_to_html, page_html
 
-__all__ = ["MARKER", "ExportError", "export_lesson", "export_scene"]
+__all__ = ["MARKER", "ExportError", "ExportFailed", "export_lesson", "export_scene"]
 
 #: The file that marks a folder as an egtviz export (a later export may replace its files).
 MARKER = "egtviz-export.json"
@@ -22,7 +22,11 @@ PAGE = "index.html"
 
 
 class ExportError(ValueError):
-    """An export that cannot be made; the message is one line naming the argument and the reason."""
+    """An export refused for its input (lesson, step, scene, folder); one line naming the argument and the reason."""
+
+
+class ExportFailed(RuntimeError):
+    """An export that was begun and could not be finished (a file not written, the scene not recorded); one line."""
 
 
 def _check_out(out: str | os.PathLike) -> Path:
@@ -55,9 +59,19 @@ def _write(out: Path, page: str, scene_page: str, marker: dict[str, Any]) -> Non
         write_atomic(out / PAGE, page.encode("utf-8"))
         write_atomic(out / MARKER, (json.dumps(marker, indent=2) + "\n").encode("utf-8"))
     except FileSafetyError as exc:
-        raise ExportError(str(exc)) from None
+        raise ExportFailed(str(exc)) from None
     except OSError as exc:
-        raise ExportError(f"--out {printable(out)}: {exc.strerror or exc}") from None
+        raise ExportFailed(f"--out {printable(out)}: {exc.strerror or exc}") from None
+
+
+def _recorded(scene: Any) -> str:
+    """:func:`.recording.scene_page`, its failures (viser's client page missing, say) as :class:`ExportFailed`."""
+    from .recording import scene_page
+
+    try:
+        return scene_page(scene)
+    except OSError as exc:
+        raise ExportFailed(f"cannot record the 3D scene: {printable(exc)}") from None
 
 
 def export_lesson(name: str, step: int, out: str | os.PathLike) -> Path:
@@ -67,11 +81,10 @@ def export_lesson(name: str, step: int, out: str | os.PathLike) -> Path:
     step up to this one), drawn for an anonymous learner.
 
     Raises:
-        ExportError: no such lesson, a step out of range, or a folder that cannot be written (one line).
+        ExportError: no such lesson, a step out of range, or a folder that may not be written into (one line).
+        ExportFailed: the scene could not be recorded or a file not written (one line).
     """
     from ...lessons import LessonError, LessonRun, load
-    from .recording import scene_page
-
     try:
         lesson = load(name)
     except LessonError as exc:
@@ -88,7 +101,7 @@ def export_lesson(name: str, step: int, out: str | os.PathLike) -> Path:
         tasks_html=[markdown_to_html(t.prompt_html) for t in run.tasks()],
         how=f"A picture of the step, without a server. To try it live: egtviz lesson {lesson.name}",
     )
-    _write(path, page, scene_page(run.model.scene),
+    _write(path, page, _recorded(run.model.scene),
            {"egtviz": __version__, "kind": "lesson", "lesson": lesson.name, "step": step})
     return path / PAGE
 
@@ -103,11 +116,10 @@ def export_scene(argument: str, out: str | os.PathLike) -> Path:
     """Export a scene (a scene file, or a built-in scene's name) to the folder ``out``; returns the page's path.
 
     Raises:
-        ExportError: a scene that cannot be read, or a folder that cannot be written (one line).
+        ExportError: a scene that cannot be read, or a folder that may not be written into (one line).
+        ExportFailed: the scene could not be recorded or a file not written (one line).
     """
     from ...scene import SceneFileError, scene_from_argument
-    from .recording import scene_page
-
     try:
         scene = scene_from_argument(argument)
     except SceneFileError as exc:
@@ -116,5 +128,5 @@ def export_scene(argument: str, out: str | os.PathLike) -> Path:
     title = scene.title or Path(argument).name
     page = page_html(title=title, subtitle="egtviz scene", heading=title, body_html=_scene_description(scene),
                      how="A picture of the scene, without a server. To work with it live: egtviz --scene FILE")
-    _write(path, page, scene_page(scene), {"egtviz": __version__, "kind": "scene", "scene": Path(argument).name})
+    _write(path, page, _recorded(scene), {"egtviz": __version__, "kind": "scene", "scene": Path(argument).name})
     return path / PAGE
