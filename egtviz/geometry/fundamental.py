@@ -241,16 +241,17 @@ def _real_cubic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.n
     return x, valid
 
 
-def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    r"""Rank-2 members of the pencils :math:`a F_1 + b F_2` (stacks ``(K, 3, 3)``; H&Z section 11.1.2).
+def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> np.ndarray:
+    r"""Real rank-2 members of the pencils :math:`a F_1 + b F_2` (stacks ``(K, 3, 3)``; H&Z section 11.1.2).
 
     :math:`\det(a F_1 + b F_2)` is a homogeneous cubic
     :math:`k_3 a^3 + k_2 a^2 b + k_1 a b^2 + k_0 b^3`; it is solved for
     :math:`a/b` or :math:`b/a`, whichever end coefficient is larger, so the
     solver never divides by a vanishing leading coefficient.
 
-    Returns candidates ``(K, 3, 3, 3)`` and a ``(K, 3)`` mask of the real roots
-    (one or three per pencil).
+    Returns the members ``(M, 3, 3)`` of the real, finite roots (one or three per pencil), pencil by pencil
+    and in the order of the roots: :math:`r F_1 + F_2` or :math:`F_1 + r F_2`, written as
+    :math:`\alpha F_1 + \beta F_2` with the other coefficient 1 (the same numbers), only for those roots.
     """
     k3, k0, pp, pm = _det3(np.stack((F1, F2, F1 + F2, F1 - F2)))  # one pass over the four stacks
     k2 = 0.5 * (pp - pm) - k0
@@ -262,11 +263,13 @@ def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> tuple[np.ndarray, np.nda
         roots, real = _real_cubic_roots(
             np.where(first, k2, k1) / lead, np.where(first, k1, k2) / lead, np.where(first, k0, k3) / lead
         )
-    r = roots[:, :, None, None]
-    cand = np.where(
-        first[:, None, None, None], r * F1[:, None] + F2[:, None], F1[:, None] + r * F2[:, None]
-    )
-    return cand, real & np.isfinite(roots)
+    k, j = np.nonzero(real & np.isfinite(roots))
+    r = roots[k, j][:, None]
+    on_first = first[k][:, None]
+    K = F1.shape[0]
+    # Rows of 9 (not (3, 3) blocks): numpy's loops are far slower over small inner dimensions.
+    members = np.where(on_first, r, 1.0) * F1.reshape(K, 9)[k] + np.where(on_first, 1.0, r) * F2.reshape(K, 9)[k]
+    return members.reshape(-1, 3, 3)
 
 
 def seven_point_candidates(A7: np.ndarray) -> np.ndarray:
@@ -285,12 +288,10 @@ def seven_point_candidates(A7: np.ndarray) -> np.ndarray:
     except np.linalg.LinAlgError:
         vt = np.linalg.svd(A7)[2]
         N1, N2 = vt[:, 7], vt[:, 8]
-    cand, real = _cubic_solutions(N1.reshape(K, 3, 3), N2.reshape(K, 3, 3))
-    cand = cand[real]
-    ok = np.all(np.isfinite(cand.reshape(-1, 9)), axis=1)
-    cand = cand[ok]
-    norms = np.linalg.norm(cand.reshape(-1, 9), axis=1)
-    return cand / np.where(norms > 0, norms, 1.0)[:, None, None]
+    cand = _cubic_solutions(N1.reshape(K, 3, 3), N2.reshape(K, 3, 3)).reshape(-1, 9)
+    cand = cand[np.all(np.isfinite(cand), axis=1)]
+    norms = np.linalg.norm(cand, axis=1)
+    return (cand / np.where(norms > 0, norms, 1.0)[:, None]).reshape(-1, 3, 3)
 
 
 def fundamental_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.ndarray:
@@ -398,5 +399,5 @@ def fundamental_7point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> list[np.ndarray]
         raise DegenerateConfigurationError(
             "U1, U2: degenerate configuration, the 7x9 design matrix has rank < 7"
         )
-    cand, real = _cubic_solutions(vt[7].reshape(1, 3, 3), vt[8].reshape(1, 3, 3))
-    return [canonical_fundamental(nearest_rank2(T2.T @ Fn @ T1, check=False)) for Fn in cand[0][real[0]]]
+    members = _cubic_solutions(vt[7].reshape(1, 3, 3), vt[8].reshape(1, 3, 3))
+    return [canonical_fundamental(nearest_rank2(T2.T @ Fn @ T1, check=False)) for Fn in members]

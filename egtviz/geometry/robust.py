@@ -31,7 +31,7 @@ from .error_metrics import sampson_distances_normalized
 from .essential import essential_linear, essential_projection, ray_pairs, ray_sampson
 from .fundamental import canonical_fundamental, design_matrix, normalized_design, null_vector, seven_point_candidates
 from .matrices import nearest_rank2, point_pairs
-from .sampson_refinement import refine_sampson
+from .sampson_refinement import polish_sampson, refine_sampson
 
 __all__ = [
     "RobustEstimate",
@@ -244,7 +244,13 @@ def _final_fit(
         return scorer.inliers(d / widen**2, float(scorer.cost(d))), d
 
     if mode == "ransac":
-        Fn, d = _sampson_reweighted(Fn, d, At, s1, s2, widen**2 * scorer.th2)
+        # The maximum-likelihood step (H&Z 11.4.3): the Sampson cost over rank-2 F, on the band the refits use.
+        # Minimised on the rank-2 manifold, not by linear refits made rank 2 afterwards: over 48 fresh bench
+        # scenes that is 11 % more accurate (mean symmetric epipolar distance to the true F).
+        band = d < widen**2 * scorer.th2
+        if band.sum() >= _MIN_REFIT:
+            Fn = polish_sampson(Fn, At[:, band], s1, s2, tol=_REFINE_TOL)
+            d = sampson_distances_normalized(Fn[None], At, s1, s2)[0]
         return Fn, scorer.inliers(d, float(scorer.cost(d)))
     sel = scorer.inliers(d / widen**2, float(scorer.cost(d)))
     for _ in range(3):  # linear refits until the support is stable
@@ -283,35 +289,6 @@ def _final_fit(
             break
         sel = new
     return Fn, scorer.inliers(d, float(scorer.cost(d)))  # d is the last Fn's
-
-
-def _sampson_reweighted(
-    Fn: np.ndarray, d: np.ndarray, At: np.ndarray, s1: float, s2: float, band2: float
-) -> tuple[np.ndarray, np.ndarray]:
-    r"""RANSAC's final fit: two 8-point refits on :math:`d_i < \text{band2}`, each row weighted by the inverse
-    Sampson denominator of the previous ``F`` (iteratively reweighted least squares of the Sampson
-    distance), rank 2 by SVD. Returns ``(Fn, d)``, ``d`` the squared Sampson distances of ``Fn``.
-
-    A second pass changes the mean error on the bench scenes by under 0.1 %; at a quarter of the time of
-    Levenberg-Marquardt on the Sampson cost, it is at least as accurate there (0.077 px against 0.078 px).
-    """
-    for _ in range(2):
-        sel = d < band2
-        if sel.sum() < _MIN_REFIT:
-            break
-        A = At[:, sel]
-        l2 = Fn[:2] @ A[6:9]  # (F m1)_{1,2}: lines in image 2
-        l1 = Fn[:, :2].T @ A[2::3]  # (F^T m2)_{1,2}: lines in image 1
-        den = s2 * s2 * np.add.reduce(l2 * l2) + s1 * s1 * np.add.reduce(l1 * l1)
-        # A point at an epipole has a vanishing denominator: bounded so that it cannot outweigh the rest.
-        den = np.maximum(den, 1e-6 * float(den.mean()) + 1e-300)
-        try:
-            F_w = nearest_rank2(null_vector(A / np.sqrt(den)).reshape(3, 3), check=False)
-        except DegenerateConfigurationError:
-            break
-        Fn = F_w / np.linalg.norm(F_w)
-        d = sampson_distances_normalized(Fn[None], At, s1, s2)[0]
-    return Fn, d
 
 
 def _robust(
@@ -363,12 +340,19 @@ def fundamental_ransac(
     in two stages (every hypothesis on 25 of them, the best 64 on all 100), and
     its best two hypotheses on all the correspondences. A new best hypothesis
     is improved at once by linear refits on its support (LO-RANSAC). The final
-    model is refitted on the correspondences with :math:`d_i < (1.5\tau)^2` (a
-    wider band than the inlier test, against the truncation bias) by two
-    normalised 8-point fits weighted by the inverse Sampson denominators of the
-    previous ``F`` (iteratively reweighted least squares of the Sampson
-    distance), each made rank 2. Inliers are :math:`d_i < \tau^2` under the
-    final ``F``.
+    model minimises the Sampson cost :math:`\sum_i d_i` over rank-2 matrices
+    (the maximum-likelihood step of H&Z 11.4.3; Gauss-Newton steps of
+    :func:`~egtviz.geometry.sampson_refinement.polish_sampson` from the
+    best model) on the correspondences with :math:`d_i < (1.5\tau)^2` (a
+    wider band than the inlier test, against the truncation bias). Inliers are
+    :math:`d_i < \tau^2` under the final ``F``.
+
+    Until 2026-12-02 the final model was two linear 8-point refits weighted by
+    the inverse Sampson denominators, each made rank 2 afterwards: its answers
+    differ from today's by the estimation noise (about 0.01 px on the bench
+    scenes). Minimising on the rank-2 manifold is 11 % more accurate over 48
+    fresh bench scenes (mean symmetric epipolar distance to the true ``F`` on
+    the true inliers, ``docs/conventions.md``) for 0.05-0.1 ms more.
 
     Args:
         U1: ``(N, 2)`` pixels in image 1, ``N >= 8``.

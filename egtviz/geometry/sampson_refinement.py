@@ -22,7 +22,7 @@ from ._validate import GeometryError, as_up_to_scale
 from .fundamental import canonical_fundamental, normalized_design, null_vector
 from .matrices import nearest_rank2, point_pairs
 
-__all__ = ["fundamental_sampson", "refine_sampson"]
+__all__ = ["fundamental_sampson", "polish_sampson", "refine_sampson"]
 
 
 # The generators of so(3): [c]_x = sum_i c_i _GENERATORS[i]. A contraction with them builds a stack of
@@ -177,6 +177,61 @@ def refine_sampson(
     if not (np.all(np.isfinite(F)) and float(fvec @ fvec) <= cost0):
         return Fn0
     return F / np.linalg.norm(F)
+
+
+def polish_sampson(Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, *, max_steps: int = 3,
+                   tol: float = 1e-3) -> np.ndarray:
+    r"""Minimise the pixel Sampson distance over rank-2 ``F`` from a close start by Gauss-Newton steps (H&Z 11.4.3,
+    the parameterisation of :func:`refine_sampson`, unweighted).
+
+    Each step solves the normal equations :math:`(J^T J)\,\delta = -J^T r` (with the diagonal raised by
+    :math:`10^{-9}` of itself: the parameterisation has a gauge direction when the two singular values are
+    equal) and halves the step, at most four times, until the cost falls. It stops after ``max_steps`` steps,
+    when the cost falls by at most ``tol`` of itself, or when no step lowers it. From a start near the minimum
+    (a robust estimator's locally refitted model) it reaches the minimum that Levenberg-Marquardt reaches, to
+    the tolerance, without MINPACK's per-call cost.
+
+    Args:
+        Fn0: (3, 3) rank-2 start in normalised coordinates, unit Frobenius norm.
+        At: (9, N) design matrix of the normalised points, ``N >= 8``.
+        s1, s2: the normalisations' scales, so that the residuals are pixel distances.
+        max_steps: at most this many accepted steps.
+        tol: relative fall of the cost below which the iteration stops.
+
+    Returns:
+        The refined ``F`` (unit Frobenius norm); ``Fn0`` itself when no step lowered the cost.
+    """
+    prob = _SampsonProblem(Fn0, At, s1, s2)
+    p = prob.p0
+    r = prob.residuals(p)
+    cost = float(r @ r)
+    moved = False
+    for _ in range(max_steps):
+        J = prob.jacobian(p)
+        H = J.T @ J
+        H[_DIAGONAL_7] *= 1.0 + 1e-9
+        try:
+            delta = np.linalg.solve(H, -(J.T @ r))
+        except np.linalg.LinAlgError:
+            break
+        for _halving in range(4):
+            p_new = p + delta
+            r_new = prob.residuals(p_new)
+            cost_new = float(r_new @ r_new)
+            if cost_new < cost:
+                break
+            delta *= 0.5
+        else:
+            break
+        small = cost - cost_new <= tol * cost
+        p, r, cost, moved = p_new, r_new, cost_new, True
+        if small:
+            break
+    F = prob.F(p)
+    return F / np.linalg.norm(F) if moved and np.all(np.isfinite(F)) else Fn0
+
+
+_DIAGONAL_7 = np.diag_indices(7)
 
 
 def fundamental_sampson(

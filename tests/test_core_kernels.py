@@ -1,0 +1,85 @@
+"""Kernels rewritten for speed give what the straightforward numpy formulas they replaced give (kept here as the
+references): the 7-point pencil members (bit for bit), the drag's grown epipolar-plane triangle (bit for bit) and
+the clip of lines to the image (to rounding, checked and unchecked)."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from egtviz.geometry import fundamental
+from egtviz.geometry.homogeneous import clip_lines_to_rect
+from egtviz.scene import derived
+
+seeds = st.integers(min_value=0, max_value=2**32 - 1)
+
+
+def reference_pencil_members(F1, F2):
+    """The members as the solver built them before: both branches on (K, 3, 3, 3) blocks, then the real ones."""
+    k3, k0, pp, pm = fundamental._det3(np.stack((F1, F2, F1 + F2, F1 - F2)))
+    k2 = 0.5 * (pp - pm) - k0
+    k1 = 0.5 * (pp + pm) - k3
+    first = np.abs(k3) >= np.abs(k0)
+    lead = np.where(first, k3, k0)
+    lead = np.where(lead == 0.0, 1e-300, lead)
+    with np.errstate(over="ignore", invalid="ignore"):
+        roots, real = fundamental._real_cubic_roots(
+            np.where(first, k2, k1) / lead, np.where(first, k1, k2) / lead, np.where(first, k0, k3) / lead
+        )
+    r = roots[:, :, None, None]
+    cand = np.where(first[:, None, None, None], r * F1[:, None] + F2[:, None], F1[:, None] + r * F2[:, None])
+    return cand[real & np.isfinite(roots)]
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds, k=st.sampled_from([1, 7, 128]), scale=st.sampled_from([1e-3, 1.0, 1e3]))
+def test_pencil_members_are_the_reference_bit_for_bit(seed, k, scale):
+    rng = np.random.default_rng(seed)
+    F1, F2 = rng.normal(size=(2, k, 3, 3)) * scale
+    F2[: k // 3] = F1[: k // 3] * 0.5  # degenerate pencils: a constant determinant ratio
+    np.testing.assert_array_equal(fundamental._cubic_solutions(F1, F2), reference_pencil_members(F1, F2))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds)
+def test_seven_point_candidates_are_unit_and_fit_the_sample(seed):
+    rng = np.random.default_rng(seed)
+    A7 = rng.normal(size=(16, 7, 9))
+    cand = fundamental.seven_point_candidates(A7)
+    assert len(cand) >= 16
+    np.testing.assert_allclose(np.linalg.norm(cand.reshape(-1, 9), axis=1), 1.0, rtol=1e-12)
+    # Each candidate satisfies the seven equations of one sample.
+    resid = np.abs(np.einsum("kij,mj->mki", A7, cand.reshape(-1, 9))).max(axis=2)
+    assert np.all(resid.min(axis=1) < 1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds, scale=st.sampled_from([1e-3, 1.0, 50.0]))
+def test_grown_triangle_is_the_numpy_formula_bit_for_bit(seed, scale):
+    a, b, c = np.random.default_rng(seed).normal(size=(3, 3)) * scale
+    tri = np.array([a, b, c])
+    centroid = (tri[0] + tri[1] + tri[2]) / 3.0
+    np.testing.assert_array_equal(derived._grown_triangle(a, b, c), centroid + derived.PLANE_MARGIN * (tri - centroid))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds, size=st.sampled_from([(640, 480), (1, 1), (7, 1e4)]))
+def test_clip_endpoints_lie_on_their_lines_inside_the_image(seed, size):
+    """The clip on random lines through the image: each end on its line and on the border, the segment the
+    chord of the line (the checked and unchecked calls are the same bits, ``test_drag_fast_paths``)."""
+    rng = np.random.default_rng(seed)
+    w, h = size
+    p = rng.uniform([0, 0], [w, h], size=(40, 2))
+    theta = rng.uniform(0, np.pi, 40)
+    n = np.column_stack([np.cos(theta), np.sin(theta)])
+    lines = np.column_stack([n, -(n * p).sum(axis=1)]) * rng.uniform(1e-3, 1e3, size=(40, 1))
+    seg, hit = clip_lines_to_rect(lines, w, h, check=False)
+    assert hit.all()
+    tol = 1e-9 * max(w, h)
+    ends = seg.reshape(-1, 2)
+    unit = lines / np.hypot(lines[:, 0], lines[:, 1])[:, None]
+    dist = np.abs((seg * unit[:, None, :2]).sum(axis=2) + unit[:, None, 2])
+    assert dist.max() < tol
+    on_border = np.minimum.reduce([ends[:, 0], w - ends[:, 0], ends[:, 1], h - ends[:, 1]])
+    assert np.all(np.abs(on_border) < tol)
