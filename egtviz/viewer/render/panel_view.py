@@ -301,15 +301,15 @@ def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, 
         ``(near_boxes, reach_x, reach_y)``: per label the near obstacles as lists ``[x0, y0, x1, y1]`` in the
         given order, and the reach of its candidates along x and y.
     """
-    far = (R + gap) * PLACEMENT_RINGS[-1]
-    reach_x, reach_y = far + S[:, 0], far + S[:, 1]
+    reach = (R + gap)[:, None] * PLACEMENT_RINGS[-1] + S  # (n, 2): along x, along y
     if not len(O):
-        return [[] for _ in range(len(A))], reach_x, reach_y
-    ax_, ay_ = A[:, None, 0], A[:, None, 1]
-    near = ((O[None, :, 0] <= ax_ + reach_x[:, None]) & (O[None, :, 2] >= ax_ - reach_x[:, None])
-            & (O[None, :, 1] <= ay_ + reach_y[:, None]) & (O[None, :, 3] >= ay_ - reach_y[:, None]))
+        return [[] for _ in range(len(A))], reach[:, 0], reach[:, 1]
+    # Both axes at once: an obstacle is near when it starts before the rectangle's far side and ends after its near
+    # side, along x and along y.
+    hi, lo = (A + reach)[:, None, :], (A - reach)[:, None, :]
+    near = ((O[None, :, :2] <= hi) & (O[None, :, 2:] >= lo)).all(axis=2)
     rows = O.tolist()  # once: a list per label's near rows would copy the crowded ones again for each label
-    return [[row for row, hit in zip(rows, m) if hit] for m in near.tolist()], reach_x, reach_y
+    return [[row for row, hit in zip(rows, m) if hit] for m in near.tolist()], reach[:, 0], reach[:, 1]
 
 
 def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: list, bounds: tuple[float, ...]

@@ -523,17 +523,15 @@ def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np
     if len(B) == 0:
         return keep, far
     tiny = 1e-6 * (B[:, 2] - B[:, 0]) * (B[:, 3] - B[:, 1])  # rounding, not an overlap
-    if len(obstacles):
-        ow = np.minimum(B[:, None, 2], obstacles[None, :, 2]) - np.maximum(B[:, None, 0], obstacles[None, :, 0])
-        oh = np.minimum(B[:, None, 3], obstacles[None, :, 3]) - np.maximum(B[:, None, 1], obstacles[None, :, 1])
-        blocked = ((ow > 0) & (oh > 0) & (ow * oh > tiny[:, None])).any(axis=1).tolist()
-    else:
-        blocked = [False] * len(B)
-    # Which boxes overlap which (a number with every label before it): then drawn in order, each number tested
-    # against the labels drawn before it.
-    ow = np.minimum(B[:, None, 2], boxes[None, :, 2]) - np.maximum(B[:, None, 0], boxes[None, :, 0])
-    oh = np.minimum(B[:, None, 3], boxes[None, :, 3]) - np.maximum(B[:, None, 1], boxes[None, :, 1])
-    overlaps = ((ow > 0) & (oh > 0) & (ow * oh > tiny[:, None])).tolist()
+    # Each number's overlap with every mark and arrow, then with every label (itself and those after it included:
+    # only the labels drawn before it are read), in one pass.
+    others = np.concatenate([obstacles.reshape(-1, 4), boxes])
+    ow = np.minimum(B[:, None, 2], others[None, :, 2]) - np.maximum(B[:, None, 0], others[None, :, 0])
+    oh = np.minimum(B[:, None, 3], others[None, :, 3]) - np.maximum(B[:, None, 1], others[None, :, 1])
+    hits = (ow > 0) & (oh > 0) & (ow * oh > tiny[:, None])
+    m = len(others) - len(boxes)
+    blocked = hits[:, :m].any(axis=1).tolist()
+    overlaps = hits[:, m:].tolist()
     drawn = list(range(n_first))
     for j, (row, hit) in enumerate(zip(overlaps, blocked)):
         hit = hit or any(row[i] for i in drawn)
@@ -542,11 +540,10 @@ def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np
             drawn.append(n_first + j)
     # A number's distance to every drawn point does not depend on the others' fates: all at once.
     A = anchors[n_first:]
-    sx, sy = shown[None, :, 0], shown[None, :, 1]
-    dx = np.maximum(np.maximum(B[:, 0, None] - sx, sx - B[:, 2, None]), 0.0)
-    dy = np.maximum(np.maximum(B[:, 1, None] - sy, sy - B[:, 3, None]), 0.0)
-    others = (sx != A[:, 0, None]) | (sy != A[:, 1, None])
-    nearest = np.where(others, np.hypot(dx, dy), np.inf).min(axis=1, initial=np.inf).tolist()
+    S = shown[None, :, :]
+    D = np.maximum(np.maximum(B[:, None, :2] - S, S - B[:, None, 2:]), 0.0)
+    mine = (S == A[:, None, :]).all(axis=2)  # the number's own point (and any drawn on it)
+    nearest = np.where(mine, np.inf, np.hypot(D[..., 0], D[..., 1])).min(axis=1, initial=np.inf).tolist()
     for (x0, y0, x1, y1), (ax, ay), r, ok, d in zip(B.tolist(), A.tolist(), reach[n_first:].tolist(), keep, nearest):
         if not ok:
             far.append(False)
