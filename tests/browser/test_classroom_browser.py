@@ -258,3 +258,92 @@ def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
 def _edges_hit(hist):
     """The answers a histogram can hold: its range's ends (two distinct answers span exactly their range)."""
     return {hist.edges[0], hist.edges[-1]} if hist.edges else set()
+
+
+def test_a_student_gets_their_own_scene_back_on_reconnect_and_the_instructor_keeps_the_class(browser, room):
+    host = room.host
+    host.room.set_mode(Mode.EXPLORE)
+    ctx, page = _join(browser, room.base, "Fay")
+    try:
+        cid = _wait(lambda: next((c for c, n in host.student_tabs().items() if c == "Fay"), None) and
+                    host.student_tabs()["Fay"], what="Fay's tab")
+        view = _wait(lambda: room.app.views.get(cid), what="Fay's own workbench")
+        _drag(view, "cam2", 0.7)
+        moved = view.model.scene.camera("cam2").position
+        _wait(lambda: host.room.own_scene("Fay") is view.model.scene, what="Fay's scene kept")
+        # The tab reloads: the browser still holds the name, so the student is back without typing it.
+        page.reload()
+        page.wait_for_selector('[data-egtviz="student-bar"]', timeout=60_000)
+        assert page.locator("text=Join the class").count() == 0
+        new = _wait(lambda: host.student_tabs().get("Fay") not in (None, cid) and host.student_tabs()["Fay"],
+                    what="Fay's new tab")
+        again = _wait(lambda: room.app.views.get(new), what="Fay's workbench again")
+        assert np.array_equal(again.model.scene.camera("cam2").position, moved)
+        # The instructor reloads: the class carries on (mode, the room's scene) and the panel says so.
+        shared = host.room.shared().scene
+        room.page.reload()
+        room.page.wait_for_selector("text=follow me", timeout=60_000)
+        assert host.room.mode is Mode.EXPLORE and host.room.instructor_present()
+        room.view = _wait(lambda: next((v for c, v in room.app.views.items() if host.room.is_instructor(c)), None),
+                          what="the instructor's new workbench")
+        assert room.view.model.scene is shared
+        assert room.page.locator('[data-egtviz="room-status"]').first.inner_text().endswith("mode: explore")
+    finally:
+        host.room.set_mode(Mode.FOLLOW)
+        ctx.close()
+
+
+def test_snapshot_shown_to_the_room_without_the_name_and_roster_downloaded(browser, room):
+    host = room.host
+    host.room.set_mode(Mode.EXPLORE)
+    ctx, page = _join(browser, room.base, "Gus Secretname")
+    try:
+        cid = _wait(lambda: host.student_tabs().get("Gus Secretname"), what="Gus's tab")
+        _wait(lambda: host.room.own_scene("Gus Secretname") is not None, what="Gus's own scene")
+        host.room.show_snapshot(host.room.snapshot(cid))
+        for p in (room.page, page):
+            p.wait_for_selector('[data-egtviz="snapshot"]', timeout=30_000)
+            label = p.locator('[data-egtviz="snapshot"]').first
+            assert label.get_attribute("data-label").startswith("Student ")
+            assert "Secretname" not in label.inner_text()
+            assert label.locator('svg[data-egtviz="image-plane"]').count() == 1
+        host.room.show_snapshot(None)
+        page.wait_for_selector('[data-egtviz="snapshot"]', state="detached", timeout=30_000)
+        # The roster as a download (the server writes no file): a CSV naming the student.
+        room.page.get_by_text("Students", exact=True).first.click()
+        with room.page.expect_download(timeout=30_000) as download:
+            room.page.get_by_role("button", name="Download roster (CSV)").click()
+        text = open(download.value.path(), encoding="utf-8").read()
+        assert text.splitlines()[0].startswith("name,connected,following") and "Gus Secretname" in text
+    finally:
+        host.room.set_mode(Mode.FOLLOW)
+        ctx.close()
+
+
+def test_released_to_tasks_students_open_the_instructors_step_and_pacing_holds_next(browser, room):
+    host, app = room.host, room.app
+    lesson = "02-pinhole-projection"
+    instructor = room.view.client
+    panel = app.course.open_lesson(instructor, lesson, "")
+    panel.go_to(1)
+    _wait(lambda: host.room.shared().lesson == lesson and host.room.shared().step == 1, what="the step published")
+    host.room.pace(lesson, 1)
+    ctx, page = _join(browser, room.base, "Hal")
+    try:
+        host.release(Mode.TASKS)
+        cid = _wait(lambda: host.student_tabs().get("Hal"), what="Hal's tab")
+        student = _wait(lambda: getattr(app.course.tabs.get(cid), "run", None) and app.course.tabs[cid],
+                        what="Hal's lesson")
+        assert student.run.lesson.name == lesson and student.run.step_index == 1
+        page.get_by_role("button", name="next").click()
+        page.wait_for_selector("text=the instructor has not opened it yet", timeout=30_000)
+        assert student.run.step_index == 1
+        host.room.pace(lesson, None)
+        page.get_by_role("button", name="next").click()
+        _wait(lambda: student.run.step_index == 2, what="the next step once paced open")
+    finally:
+        host.room.pace(lesson, None)
+        host.room.set_mode(Mode.FOLLOW)
+        app.course.open_workbench(instructor)
+        room.view = _wait(lambda: app.views.get(instructor.client_id), what="the instructor's workbench")
+        ctx.close()

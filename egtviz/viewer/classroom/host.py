@@ -98,11 +98,7 @@ class ClassroomHost:
                     self._roles[cid] = "instructor"
                 self.room.instructor_join(cid)
                 client.camera.on_update(lambda cam: self._instructor_moved(cid, cam))
-                # The workbench first: its scene is what the students follow (the course is one click away).
-                if self.app.course is not None:
-                    self.app.course.open_workbench(client)
-                else:
-                    self.app.show_workbench(client)
+                self._open_instructor(client)
                 return True
             with self._lock:
                 self._roles[cid] = "refused"
@@ -119,6 +115,15 @@ class ClassroomHost:
                 pass
         JoinPage(client, lambda typed: self.join(client, typed), lambda exc: notify_error(client, exc))
         return True
+
+    def _open_instructor(self, client: Any) -> None:
+        """The instructor's workbench (the course one click away), on the room's scene if the class has one: an
+        instructor who reconnects carries on where the room is."""
+        view = self.app.course.open_workbench(client) if self.app.course is not None else \
+            self.app.show_workbench(client)
+        shared = self.room.shared().scene
+        if view is not None and shared is not None and view.model.scene is not shared:
+            view.model.load_scene(shared)
 
     def cleared(self, client: Any) -> None:
         """The app emptied the tab: put the instructor's panel or the student's bar back on top."""
@@ -151,6 +156,7 @@ class ClassroomHost:
             if not fresh:
                 self._build_bar(client)
                 self._show_snapshot_in(client)
+            self._student_rendered(view)
 
     def forget(self, client_id: int) -> None:
         """The tab left: the class keeps the student's scene and progress."""
@@ -248,8 +254,10 @@ class ClassroomHost:
         if (self.room.mode is Mode.TASKS and self.app.course is not None and shared.lesson is not None
                 and self.room.may_open(shared.lesson, shared.step or 0)):
             panel = self.app.course.open_lesson(client, shared.lesson, name)
-            if panel is not None and shared.step is not None and panel.run.step_index != shared.step:
-                panel.go_to(shared.step)
+            if panel is not None:
+                panel.may_enter = self.room.may_open
+                if shared.step is not None and panel.run.step_index != shared.step:
+                    panel.go_to(shared.step)
         else:
             self.app.show_workbench(client, self._own_model(name))
         self._sync_bar(cid)

@@ -304,6 +304,8 @@ class LessonPanel:
         self.run = run
         self.progress = progress
         self._on_learner = on_learner
+        #: ``may_enter(lesson, step)``: whether "next" may open that step (a class's pacing); None: always.
+        self.may_enter: Callable[[str, int], bool] | None = None
         self._typing = Debouncer(field_delay)
         self.rows: list[TaskRow] = []
         #: The lesson's summary under the last step's tasks (None on the other steps).
@@ -472,6 +474,10 @@ class LessonPanel:
             raise FieldError(f"step: no button {str(action)[:40]!r}")
         with self.view.client.atomic():
             if action == "next":
+                ahead = self.run.step_index + 1
+                if (self.may_enter is not None and ahead < len(self.run.lesson.steps)
+                        and not self.may_enter(self.run.lesson.name, ahead)):
+                    raise FieldError(f"step {ahead + 1}: the instructor has not opened it yet")
                 self.run.next()
             elif action == "previous":
                 self.run.previous()
