@@ -6,6 +6,12 @@ estimators, 30% of correspondences replaced by random pixel pairs. Accuracy is
 the mean symmetric epipolar distance (pixels) of the estimate, measured on the
 noise-free true inliers, averaged over ``_ACCURACY_SCENES`` scenes (one scene
 is too noisy a comparison: the estimators trade places from scene to scene).
+
+Per scene, the RANSAC row compares the error with OpenCV's as the mean over
+``_ACCURACY_DRAWS`` draws of the noise and the outliers on that scene's
+geometry (cameras and points): one draw decides nothing at these errors
+(0.04-0.12 px), where even the maximum-likelihood fit on the true inliers is
+less accurate than MAGSAC on a sixth of the draws.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from .core import median_ms, paired_median_ms
 
 
 _ACCURACY_SCENES = 8
+_ACCURACY_DRAWS = 20
 
 _NO_OPENCV = (
     "OpenCV is not installed: the estimation rows have no peer timing and no ratio "
@@ -38,7 +45,8 @@ def _rotvec(w: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(th) * k + (1.0 - np.cos(th)) * (k @ k)
 
 
-def _scene(n: int, noise: float, outlier_ratio: float, seed: int = 0) -> dict:
+def _scene(n: int, noise: float, outlier_ratio: float, seed: int = 0, draw: int | None = None) -> dict:
+    """Scene ``seed``; with ``draw``, its noise and outliers drawn afresh (the same cameras and points)."""
     rng = np.random.default_rng(seed)
     K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
     C2 = np.array([1.0, 0.1, 0.05])  # camera 2's centre in camera-1 coordinates
@@ -57,6 +65,8 @@ def _scene(n: int, noise: float, outlier_ratio: float, seed: int = 0) -> dict:
     U1t, U2t = x1[:, :2] / x1[:, 2:], x2[:, :2] / x2[:, 2:]
     tx = np.array([[0.0, -t[2], t[1]], [t[2], 0.0, -t[0]], [-t[1], t[0], 0.0]])
     F = np.linalg.inv(K).T @ tx @ R @ np.linalg.inv(K)
+    if draw is not None:
+        rng = np.random.default_rng([seed, draw])
     U1 = U1t + rng.normal(0, noise, U1t.shape)
     U2 = U2t + rng.normal(0, noise, U2t.shape)
     inl = np.ones(n, bool)
@@ -78,16 +88,27 @@ def _accuracy(F: np.ndarray, s: dict) -> float:
 
 def _per_scene(ours_fn, cv_fn, scenes: list[dict], repeats: int) -> str:
     """Per scene: the thread CPU ratio to OpenCV (medians of alternating calls) and whether our accuracy
-    on the true inliers is no worse; the mean over scenes hides a scene where OpenCV stops early."""
-    ratios, worse = [], []
+    on the true inliers is no worse; the mean over scenes hides a scene where OpenCV stops early.
+
+    Scene ``k`` is ``_scene(..., seed=k)``; its accuracy is the mean over ``_ACCURACY_DRAWS`` draws of its noise
+    and outliers (module docstring). The single-draw comparison is given too."""
+    ratios, worse, worse_one, acc_ratios = [], [], [], []
+    n = len(scenes[0]["inl"])
     for k, s in enumerate(scenes):
         a, b = paired_median_ms(lambda: ours_fn(s), lambda: cv_fn(s), repeats, timer=time.thread_time)
         ratios.append(a / b)
         if _accuracy(ours_fn(s).F, s) > _accuracy(cv_fn(s)[0], s):
+            worse_one.append(str(k))
+        draws = [_scene(n, 0.5, 0.3, k, draw) for draw in range(_ACCURACY_DRAWS)]
+        ours = float(np.mean([_accuracy(ours_fn(d).F, d) for d in draws]))
+        theirs = float(np.mean([_accuracy(cv_fn(d)[0], d) for d in draws]))
+        acc_ratios.append(ours / theirs)
+        if ours > theirs:
             worse.append(str(k))
     return (
         f"; per scene thread CPU ratio {min(ratios):.2f}-{max(ratios):.2f} (max scene {int(np.argmax(ratios))}),"
-        f" accuracy worse than OpenCV's on scenes [{', '.join(worse)}]"
+        f" accuracy ratio to OpenCV {min(acc_ratios):.2f}-{max(acc_ratios):.2f} per scene (mean of "
+        f"{_ACCURACY_DRAWS} draws), worse on scenes [{', '.join(worse)}] ([{', '.join(worse_one)}] on one draw)"
     )
 
 

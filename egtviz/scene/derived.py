@@ -234,9 +234,10 @@ def _new_camera_block(spec, points, check: bool) -> _CameraBlock:
     )
     ray = _frozen(cam.light_paths(X, check=check))
     overflow = None
-    if np.isinf(plane.points).any():
+    # logical_or.reduce: ndarray.any's Python wrapper costs more than the test on a few points (every drag).
+    if np.logical_or.reduce(np.isinf(plane.points), axis=None):
         overflow = f"camera {spec.name!r}: image coordinates overflow"
-    elif np.isinf(ray).any():
+    elif np.logical_or.reduce(np.isinf(ray), axis=None):
         overflow = f"camera {spec.name!r}: rays overflow"
     return _CameraBlock(cam, (_frozen(np.array(pose.quat_wxyz)), pose.t), ray, plane, overflow)
 
