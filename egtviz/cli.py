@@ -36,12 +36,18 @@ def _add_bench(subparsers) -> None:
     p.add_argument("--scene", default=None, help="classroom only: the scene the tabs drag (default: the default)")
     p.add_argument("--points", type=whole_number_in(1, 1000), default=None,
                    help="classroom only: give the scene that many random points (1..1000)")
+    p.add_argument("--workers", type=whole_number_in(1, 64), default=None,
+                   help="classroom only: serve from N worker processes (egtviz serve --workers N) and measure 30 "
+                        "tabs dragging at once, and with --followers one instructor and M followers")
+    p.add_argument("--followers", type=whole_number_in(1, 1000), default=None,
+                   help="classroom only: also measure one instructor dragging with this many students following")
 
 
 def _run_bench(args) -> int:
     from .bench.runner import run
 
-    return run(args.suite, repeats=args.repeats, json_path=args.json, scene=args.scene, points=args.points)
+    return run(args.suite, repeats=args.repeats, json_path=args.json, scene=args.scene, points=args.points,
+               workers=args.workers, followers=args.followers)
 
 
 def _add_scene(subparsers) -> None:

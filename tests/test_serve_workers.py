@@ -21,34 +21,11 @@ import websockets.asyncio.client
 from websockets.typing import Subprotocol
 
 from egtviz.bench.ws_client import CAMERA, decode_frame
-from egtviz.viewer.server.workers import Supervisor, WorkerOptions, reserve_port
+from egtviz.viewer.server.workers import Supervisor, WorkerOptions, reserve_port, worker_of_connection
 
 pytestmark = pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux's /proc")
 
 _PANEL = re.compile(r'data-egtviz="image-plane" data-camera="([^"]*)"')
-
-
-def _socket_inodes(pid: int) -> set[str]:
-    out = set()
-    for fd in Path(f"/proc/{pid}/fd").iterdir():
-        with contextlib.suppress(OSError):
-            link = os.readlink(fd)
-            if link.startswith("socket:["):
-                out.add(link[8:-1])
-    return out
-
-
-def owner_of(server_port: int, client_port: int, pids: list[int]) -> int | None:
-    """The worker pid holding the server side of the loopback connection from ``client_port``."""
-    inode = None
-    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
-        parts = line.split()
-        local, remote = parts[1], parts[2]
-        if int(local.split(":")[1], 16) == server_port and int(remote.split(":")[1], 16) == client_port:
-            inode = parts[9]
-    if inode is None:
-        return None
-    return next((pid for pid in pids if inode in _socket_inodes(pid)), None)
 
 
 class Tab:
@@ -118,7 +95,7 @@ async def tabs_on_each_worker(stack: contextlib.AsyncExitStack, sup: Supervisor,
     for i in range(tries):
         inner = contextlib.AsyncExitStack()
         tab = await inner.enter_async_context(open_tab(sup.port, name=None if name is None else f"{name} {i}"))
-        pid = owner_of(sup.port, tab.ws.local_address[1], pids)
+        pid = worker_of_connection(sup.port, tab.ws.local_address[1], pids)
         if pid is not None and pid not in found:
             found[pid] = tab
             stack.push_async_callback(inner.aclose)

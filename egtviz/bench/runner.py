@@ -42,11 +42,20 @@ def format_table(rows: list[dict]) -> str:
 
 
 def run(suite: str = "all", repeats: int = 20, *, json_path: str | None = None, scene: str | None = None,
-        points: int | None = None) -> int:
+        points: int | None = None, workers: int | None = None, followers: int | None = None) -> int:
     print(f"egtviz bench {suite}: Python {platform.python_version()}, {platform.machine()}, one run, medians", flush=True)
-    if suite != "classroom" and (json_path, scene, points) != (None, None, None):
-        print("egtviz bench: --json, --scene and --points are options of the classroom suite only", file=sys.stderr)
+    if suite != "classroom" and (json_path, scene, points, workers, followers) != (None,) * 5:
+        print("egtviz bench: --json, --scene, --points, --workers and --followers are options of the classroom "
+              "suite only", file=sys.stderr)
         return 2
+    if suite == "classroom" and (workers, followers) != (None, None):  # served by worker processes
+        if points is not None:
+            print("egtviz bench: --points is not an option of the --workers/--followers runs", file=sys.stderr)
+            return 2
+        from .classroom_room import run_room_bench
+
+        print(run_room_bench(workers or 1, followers, scene=scene, json_path=json_path), flush=True)
+        return 0
     if suite == "classroom":  # many tabs on one server: not part of "all" (about two minutes)
         from .classroom import run_classroom_bench
 

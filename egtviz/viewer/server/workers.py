@@ -18,6 +18,7 @@ import dataclasses
 import errno
 import json
 import os
+import queue
 import socket
 import subprocess
 import sys
@@ -25,8 +26,8 @@ import threading
 import time
 from typing import Any
 
-__all__ = ["MAX_WORKERS", "Supervisor", "WorkerOptions", "enable_reuse_port", "reserve_port", "serve_workers",
-           "worker_main"]
+__all__ = ["MAX_WORKERS", "REPLY", "Supervisor", "WorkerOptions", "enable_reuse_port", "reserve_port",
+           "serve_workers", "start_worker", "worker_main", "worker_of_connection"]
 
 #: The most workers ``--workers`` accepts.
 MAX_WORKERS = 64
@@ -36,6 +37,8 @@ START_TIMEOUT = 60.0
 HEALTHY_S = 30.0
 MAX_BACKOFF_S = 10.0
 _READY = "egtviz-worker-ready "
+#: A worker's answer to a command on its input (benchmarks' workers answer ``instrument`` and ``report``).
+REPLY = "egtviz-worker-reply "
 
 
 def enable_reuse_port() -> None:
@@ -129,10 +132,43 @@ class WorkerOptions:
     classroom: bool = False
 
 
+def _socket_inodes(pid: int) -> set[str]:
+    out: set[str] = set()
+    try:
+        fds = os.listdir(f"/proc/{pid}/fd")
+    except OSError:
+        return out
+    for fd in fds:
+        try:
+            link = os.readlink(f"/proc/{pid}/fd/{fd}")
+        except OSError:
+            continue
+        if link.startswith("socket:["):
+            out.add(link[8:-1])
+    return out
+
+
+def worker_of_connection(server_port: int, client_port: int, pids: list[int]) -> int | None:
+    """Which of ``pids`` holds the server side of the IPv4 connection from local port ``client_port`` to
+    ``server_port`` (read from Linux's ``/proc``; None if not found): tests and benchmarks see where a tab went."""
+    inode = None
+    try:
+        lines = open("/proc/net/tcp").read().splitlines()[1:]
+    except OSError:
+        return None
+    for line in lines:
+        parts = line.split()
+        if int(parts[1].split(":")[1], 16) == server_port and int(parts[2].split(":")[1], 16) == client_port:
+            inode = parts[9]
+    if inode is None:
+        return None
+    return next((pid for pid in pids if inode in _socket_inodes(pid)), None)
+
+
 # -- a worker ----------------------------------------------------------------------------------------------
 
 
-def _start_worker(config: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
+def start_worker(config: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
     """Start the server in this process as ``config`` says; returns ``(server, app, host, bus)``."""
     from .cli import start, student_url
 
@@ -161,7 +197,7 @@ def worker_main() -> int:
     """A worker process: its configuration is one JSON line on standard input; it serves until that input ends
     (the supervising process closed it, or ended)."""
     config = json.loads(sys.stdin.readline())
-    server, _app, host, bus = _start_worker(config)
+    server, _app, host, bus = start_worker(config)
     print(_READY + json.dumps({"index": config["index"], "pid": os.getpid(), "port": server.get_port()}),
           flush=True)
     try:
@@ -192,6 +228,7 @@ class _Slot:
         self.failures = 0
         self.restarts = 0
         self.retry_at = 0.0
+        self.replies: queue.Queue[dict] = queue.Queue()
 
 
 class Supervisor:
@@ -202,9 +239,11 @@ class Supervisor:
         port: the port asked for (0: any free one); :attr:`port` is the one served.
         options: what each worker serves.
         token: the instructor's token (default: a random one; :attr:`token`).
+        worker_module: the module each worker runs (``python -m``; a benchmark's instrumented worker).
     """
 
-    def __init__(self, workers: int, port: int, options: WorkerOptions, *, token: str | None = None) -> None:
+    def __init__(self, workers: int, port: int, options: WorkerOptions, *, token: str | None = None,
+                 worker_module: str = "egtviz.viewer.server.workers") -> None:
         if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
             raise ValueError(f"workers: expected a whole number 1 to {MAX_WORKERS}, got {workers!r}")
         self.options = options
@@ -218,6 +257,7 @@ class Supervisor:
             self.token = TokenGuard(token).token
             self.hub = ClassHub()
         self.slots = [_Slot(i) for i in range(workers)]
+        self.worker_module = worker_module
         self._lock = threading.Lock()
         self._stopping = False
         self.log = lambda text: print(f"egtviz: {text}", file=sys.stderr, flush=True)
@@ -231,7 +271,7 @@ class Supervisor:
     def _spawn(self, slot: _Slot) -> None:
         slot.ready.clear()
         slot.started = time.monotonic()
-        proc = subprocess.Popen([sys.executable, "-m", "egtviz.viewer.server.workers"], stdin=subprocess.PIPE,
+        proc = subprocess.Popen([sys.executable, "-m", self.worker_module], stdin=subprocess.PIPE,
                                 stdout=subprocess.PIPE, text=True)
         slot.proc = proc
         assert proc.stdin is not None
@@ -246,6 +286,8 @@ class Supervisor:
             if line.startswith(_READY):
                 slot.pid = int(json.loads(line[len(_READY):])["pid"])
                 slot.ready.set()
+            elif line.startswith(REPLY):
+                slot.replies.put(json.loads(line[len(REPLY):]))
             elif "(viser)" not in line and not line.startswith(("\u256d", "\u2502", "\u2570")):
                 # viser's banner and "server stopped" (every worker prints them) are the supervisor's to say
                 sys.stdout.write(line)
@@ -289,6 +331,15 @@ class Supervisor:
                         slot.retry_at = 0.0
                         slot.restarts += 1
                         self._spawn(slot)
+
+    def ask(self, index: int, command: str, timeout: float = 60.0) -> dict:
+        """Send ``command`` (one line) to worker ``index`` and wait for its reply (a worker that answers
+        commands: :mod:`egtviz.bench.classroom_room`'s)."""
+        slot = self.slots[index]
+        assert slot.proc is not None and slot.proc.stdin is not None
+        slot.proc.stdin.write(command + "\n")
+        slot.proc.stdin.flush()
+        return slot.replies.get(timeout=timeout)
 
     def pids(self) -> list[int | None]:
         """The workers' process ids now (None: one is starting)."""
