@@ -49,8 +49,9 @@ def test_links_and_qr_code():
 
     size = segno.make("http://192.168.1.20:8080", error="m").symbol_size()[0]  # modules with the quiet zone
     assert len(rows) == (size + 1) // 2 and all(len(r) == size for r in rows)
-    svg = ET.fromstring(qr_svg("http://192.168.1.20:8080", scale=5))
-    assert svg.tag.endswith("svg") and float(svg.get("width")) == 5 * size
+    svg = ET.fromstring(qr_svg("http://192.168.1.20:8080", max_px=300))
+    assert svg.tag.endswith("svg") and svg.get("viewBox") == f"0 0 {size} {size}" and svg.get("width") == "100%"
+    assert "max-width:300px" in svg.get("style")
 
 
 def _cells(html: str) -> list[ET.Element]:

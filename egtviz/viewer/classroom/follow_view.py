@@ -38,8 +38,9 @@ class RoomFrame:
         scene: the instructor's scene.
         derived: its derived geometry (:attr:`egtviz.scene.SceneModel.derived`).
         panels: ``(key, tab title, svg)`` of each panel, in the instructor's order.
-        readout: the F/E read-out's markdown.
+        readout: the F/E read-out's HTML.
         present: drawn in presentation mode.
+        caption: the lesson step the instructor is on (its title and text, HTML), ``""`` outside a lesson.
     """
 
     number: int
@@ -49,6 +50,7 @@ class RoomFrame:
     panels: tuple[tuple[str, str, str], ...]
     readout: str
     present: bool
+    caption: str = ""
 
 
 class FollowView:
@@ -75,6 +77,7 @@ class FollowView:
         with self.lock, client.atomic():
             self.style = client.gui.add_html("")
             self.note = client.gui.add_markdown("The instructor has not shown a scene yet." if frame is None else "")
+            self.caption = client.gui.add_html("")
             self.readout = client.gui.add_html("")
             self.scene3d = Scene3D(client.scene, self.camera_event, self.point_event, report=self.report)
             self._set_present(present)
@@ -123,6 +126,8 @@ class FollowView:
                     self.note.content = ""
                 if self.frame is None or self.frame.readout is not frame.readout:
                     self.readout.content = frame.readout
+                if self.frame is None or self.frame.caption != frame.caption:
+                    self.caption.content = frame.caption
                 self.scene3d.draw(frame.scene, frame.derived)
                 if first:
                     self._frame_camera(frame)

@@ -30,6 +30,7 @@ from ..server.guard import handshake_of, serve_page_under
 from ..workbench.fields import FieldError, notify_error
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
+from .room_html import step_caption
 from .room_sender import RoomSender, frame_of
 from .snapshot_pane import RoomSnapshots
 from .student_bar import JoinPage, StudentBar
@@ -280,9 +281,8 @@ class ClassroomHost:
         if name is None:
             return
         self.room.keep_scene(name, view.model.scene)
-        tab = self.app.course.tabs.get(cid) if self.app.course is not None else None
-        run = getattr(tab, "run", None)
-        if run is not None and getattr(run, "model", None) is view.model:
+        run = self._lesson_run(cid, view)
+        if run is not None:
             self.room.report_step(cid, run.lesson.name, run.step_index)
         else:
             self.room.report_step(cid, None, None)
@@ -330,16 +330,16 @@ class ClassroomHost:
         """The instructor's tab drew an update: while students follow, it is the room's new frame."""
         if self.room.mode is not Mode.FOLLOW:
             return
-        lesson, step = self._instructor_place(view.client.client_id, view)
+        run = self._lesson_run(view.client.client_id, view)
+        lesson, step = (run.lesson.name, run.step_index) if run is not None else (None, None)
         version = self.room.publish(view.model.scene, lesson=lesson, step=step)
-        self.sender.post(frame_of(view, version, self.sender.next_number()))
+        self.sender.post(frame_of(view, version, self.sender.next_number(), step_caption(run)))
 
-    def _instructor_place(self, cid: int, view: Any) -> tuple[str | None, int | None]:
+    def _lesson_run(self, cid: int, view: Any) -> Any:
+        """The lesson run the tab's view shows (None: the workbench)."""
         tab = self.app.course.tabs.get(cid) if self.app.course is not None else None
         run = getattr(tab, "run", None)
-        if run is not None and getattr(run, "model", None) is view.model:
-            return run.lesson.name, run.step_index
-        return None, None
+        return run if run is not None and getattr(run, "model", None) is view.model else None
 
     def set_follow_me(self, client: Any, on: bool) -> None:
         """Follow me (every student shows this tab's scene) or release them to explore."""

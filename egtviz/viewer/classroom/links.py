@@ -49,8 +49,11 @@ def qr_terminal(url: str) -> str:
     return out.getvalue()
 
 
-def qr_svg(url: str, *, scale: int = 5) -> str:
-    """The QR code of ``url`` as an inline SVG (dark modules on white, with its quiet zone)."""
+def qr_svg(url: str, *, max_px: int = 360) -> str:
+    """The QR code of ``url`` as an inline SVG as wide as its container up to ``max_px`` CSS pixels (dark modules
+    on white, with its quiet zone): large enough on a projector to be read from the back of a room."""
     import segno
 
-    return segno.make(url, error="m").svg_inline(scale=scale, dark="#000", light="#fff")
+    svg = segno.make(url, error="m").svg_inline(omitsize=True, dark="#000", light="#fff")
+    return svg.replace("<svg ", f'<svg data-egtviz="qr" width="100%" style="display:block;margin:auto;'
+                                f'max-width:{int(max_px)}px" ', 1)

@@ -10,7 +10,7 @@ from collections.abc import Mapping, Sequence
 from html import escape
 from typing import Any
 
-__all__ = ["histogram_html", "pause_html", "roster_html", "status_html", "student_status_html"]
+__all__ = ["histogram_html", "pause_html", "roster_html", "status_html", "step_caption", "student_status_html"]
 
 #: Bars of the histogram are drawn in this colour (the palette's blue, readable on a projector).
 BAR_COLOUR = "#0072B2"
@@ -98,3 +98,14 @@ def pause_html(message: str) -> str:
     """What a paused student's screen says (the instructor's message, as text)."""
     return (f'<div data-egtviz="paused" style="font-size:1.6em;line-height:1.4;padding:0.6em 0.2em">'
             f"{escape(message)}</div>")
+
+
+def step_caption(run: Any) -> str:
+    """The lesson step a :class:`~egtviz.lessons.LessonRun` is on, for followers: lesson and step titles (text)
+    and the step's text (the lesson's own HTML, made from its markup); ``""`` for None."""
+    if run is None:
+        return ""
+    i, n = run.step_index, len(run.lesson.steps)
+    return (f'<div data-egtviz="room-step" data-lesson="{escape(run.lesson.name)}" data-step="{i}" '
+            f'style="padding:0 0.6em"><div style="color:#555">{escape(run.lesson.title)}</div>'
+            f"<b>Step {i + 1} of {n}: {escape(run.step.title)}</b>{run.step.html}</div>")

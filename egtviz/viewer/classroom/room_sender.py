@@ -30,12 +30,13 @@ def panel_titles(scene: Any) -> dict[str, str]:
     return titles
 
 
-def frame_of(view: Any, version: int, number: int) -> RoomFrame:
-    """The room's frame of the instructor's :class:`~egtviz.viewer.workbench.app.ClientView` as just drawn."""
+def frame_of(view: Any, version: int, number: int, caption: str = "") -> RoomFrame:
+    """The room's frame of the instructor's :class:`~egtviz.viewer.workbench.app.ClientView` as just drawn
+    (``caption``: the lesson step's title and text, HTML)."""
     scene = view.model.scene
     titles = panel_titles(scene)
     panels = tuple((key, titles[key], svg) for key, svg in view.svgs.items() if key in titles)
-    return RoomFrame(number, version, scene, view.model.derived, panels, view.readout, bool(view.present))
+    return RoomFrame(number, version, scene, view.model.derived, panels, view.readout, bool(view.present), caption)
 
 
 class RoomSender:
