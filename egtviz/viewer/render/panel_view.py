@@ -282,8 +282,13 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
                                                   reach_x.tolist(), reach_y.tolist()):
         lo_x, hi_x, lo_y, hi_y = ax - rx, ax + rx, ay - ry, ay + ry
         # The obstacles, then the earlier labels, in the order given: the same sums as over all of them.
-        boxes = others + [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
-        box = _best_box(ax, ay, r + gap, w, h, boxes, box_bounds)
+        near_placed = [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
+        if isinstance(others, np.ndarray):  # many obstacles near (an epipole among 200 points): kept in numpy
+            if near_placed:
+                others = np.concatenate([others, np.array(near_placed, float)])
+            box = _best_box_many(ax, ay, r + gap, w, h, others, box_bounds)
+        else:
+            box = _best_box(ax, ay, r + gap, w, h, others + near_placed, box_bounds)
         if box is None:  # every cost compared false: a NaN anchor, radius or size
             raise ValueError(f"place_labels: label {len(placed) - len(earlier)} has no finite box")
         placed.append(box)
@@ -299,7 +304,8 @@ def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, 
 
     Returns:
         ``(near_boxes, reach_x, reach_y)``: per label the near obstacles as lists ``[x0, y0, x1, y1]`` in the
-        given order, and the reach of its candidates along x and y.
+        given order (above ``_MANY_BOXES`` of them, as an (m, 4) array), and the reach of its candidates along x
+        and y.
     """
     reach = (R + gap)[:, None] * PLACEMENT_RINGS[-1] + S  # (n, 2): along x, along y
     if not len(O):
@@ -308,8 +314,12 @@ def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, 
     # side, along x and along y.
     hi, lo = (A + reach)[:, None, :], (A - reach)[:, None, :]
     near = ((O[None, :, :2] <= hi) & (O[None, :, 2:] >= lo)).all(axis=2)
-    rows = O.tolist()  # once: a list per label's near rows would copy the crowded ones again for each label
-    return [[row for row, hit in zip(rows, m) if hit] for m in near.tolist()], reach[:, 0], reach[:, 1]
+    few = [count <= _MANY_BOXES for count in near.sum(axis=1).tolist()]
+    rows = O.tolist() if any(few) else []  # once: a list per label would copy the crowded rows again for each label
+    # Many near ones (an epipole among 200 points): their rows stay in numpy, for _best_box_many.
+    out = [[row for row, hit in zip(rows, m) if hit] if f else O[near[j]]
+           for j, (m, f) in enumerate(zip(near.tolist(), few))]
+    return out, reach[:, 0], reach[:, 1]
 
 
 def _best_box(ax: float, ay: float, reach: float, w: float, h: float, boxes: list, bounds: tuple[float, ...]
@@ -391,7 +401,7 @@ def _best_box_many(ax: float, ay: float, reach: float, w: float, h: float, boxes
             ih = (y1 if y1 < by1 else by1) - (y0 if y0 > by0 else by0)
             cands.append((x0, y0, x1, y1, area - (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)))
     C = np.array(cands)
-    O = np.array(boxes, float).reshape(-1, 4)
+    O = np.asarray(boxes, float).reshape(-1, 4)
     ow = np.minimum(C[:, 2, None], O[None, :, 2]) - np.maximum(C[:, 0, None], O[None, :, 0])
     oh = np.minimum(C[:, 3, None], O[None, :, 3]) - np.maximum(C[:, 1, None], O[None, :, 1])
     terms = np.where((ow > 0) & (oh > 0), ow * oh, 0.0)
