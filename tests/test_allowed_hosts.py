@@ -16,7 +16,8 @@ import pytest
 import viser
 
 from egtviz.viewer.server.cli import start
-from egtviz.viewer.server.guard import ALLOWED_HOSTS_ENV, GuardLimits, allowed_host, allowed_hosts
+from egtviz.hosts import ALLOWED_HOSTS_ENV, allowed_host, allowed_hosts
+from egtviz.viewer.server.guard import GuardLimits
 
 EGTVIZ = [sys.executable, "-m", "egtviz.cli"]
 

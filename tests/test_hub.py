@@ -1,4 +1,4 @@
-"""The jupyter-server-proxy entry (``egtviz.viewer.server.hub``) and a notebook figure's address behind the proxy."""
+"""The jupyter-server-proxy entry (``egtviz.jupyter_proxy``) and a notebook figure's address behind the proxy."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from egtviz.egt_figure._server import jupyter_base_url, notebook_url
-from egtviz.viewer.server.hub import ENTRY_NAME, hub_host_names, icon_path, page_at_index, setup_egtviz
+from egtviz.jupyter_proxy import ENTRY_NAME, hub_host_names, icon_path, page_at_index, setup_egtviz
 
 
 @pytest.mark.parametrize(("env", "names"), [
@@ -115,3 +115,13 @@ def test_without_jupyter_server_proxy_the_figure_keeps_its_loopback_address(monk
     env = {"JUPYTERHUB_SERVICE_PREFIX": "/user/ann/"}
     assert jupyter_base_url(env, _servers) is None
     assert notebook_url("http://127.0.0.1:8081", env, _servers) == "http://127.0.0.1:8081"
+
+
+def test_the_entry_imports_neither_the_viewer_nor_numpy():
+    """The proxy loads the entry in every user's Jupyter server at its start: it must stay light."""
+    import subprocess
+
+    done = subprocess.run([sys.executable, "-c", "import sys, egtviz.jupyter_proxy as j; j.setup_egtviz(); "
+                           "print(sorted(m for m in ('viser', 'numpy', 'egtviz.viewer', 'scipy') if m in sys.modules))"],
+                          capture_output=True, text=True, timeout=60, check=True)
+    assert done.stdout.strip() == "[]"

@@ -141,7 +141,7 @@ class FigureServer:
         started ``(server, app)`` pair instead (tests)."""
         if viewer is None:
             from ..viewer.server.cli import start
-            from ..viewer.server.hub import hub_host_names
+            from ..jupyter_proxy import hub_host_names
 
             # Behind a hub's proxy the page is reached under the hub's name (EGTVIZ_ALLOWED_HOSTS adds others).
             viewer = start("127.0.0.1", FIRST_PORT if port is None else port, allow_hosts=hub_host_names())
