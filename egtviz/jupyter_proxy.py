@@ -1,11 +1,11 @@
 """egtviz as a jupyter-server-proxy application: on a JupyterHub, each user opens their own egtviz from the launcher.
 
 ``pyproject.toml`` registers :func:`setup_egtviz` under the ``jupyter_serverproxy_servers`` entry points; the
-``hub`` extra installs jupyter-server and jupyter-server-proxy. The proxy loads this module inside every user's
-Jupyter server when it starts, so it imports only the standard library and egtviz's layer-0 modules, never the
-viewer. The first request to ``<base_url>/egtviz/``
+``hub`` extra installs jupyter-server and jupyter-server-proxy. The first request to ``<base_url>/egtviz/``
 starts ``egtviz serve`` (the course's start page) on a free loopback port chosen by the proxy, which then
-forwards that path prefix to it. ``docs/deploy.md`` has the hub's configuration.
+forwards that path prefix to it. ``docs/deploy.md`` has the hub's configuration. The proxy loads this module
+inside every user's Jupyter server when that starts, so it imports only the standard library and egtviz's
+layer-0 modules, never the viewer.
 
 Two things the proxy does not do by itself, and what this module does about them:
 
