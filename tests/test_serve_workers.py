@@ -65,9 +65,10 @@ class Tab:
                 self.panels[_PANEL.search(item).group(1)] = item
         return replies
 
-    async def read(self, seconds: float) -> None:
+    async def read(self, seconds: float, *, until_panels: bool = False) -> None:
+        """Read for ``seconds`` (``until_panels``: at most, stopping once a panel came)."""
         deadline = time.monotonic() + seconds
-        while (left := deadline - time.monotonic()) > 0:
+        while (left := deadline - time.monotonic()) > 0 and not (until_panels and self.panels):
             try:
                 frame = await asyncio.wait_for(self.ws.recv(decode=False), min(left, 0.2))
             except TimeoutError:
@@ -162,8 +163,15 @@ def test_a_follower_on_each_worker_sees_the_instructors_scene(sup: Supervisor) -
                 await teacher.read(0.1)
             await teacher.send({"type": "TransformControlsDragEndMessage", **base})
             await teacher.read(1.5)
-            await asyncio.gather(*(tab.read(2.5) for tab in students.values()))
             assert teacher.panels, "the instructor's tab drew its panels"
+
+            async def settle(tab: Tab) -> None:  # a loaded machine may take seconds: read until it matches
+                for _ in range(40):
+                    await tab.read(0.5)
+                    if tab.panels == teacher.panels:
+                        return
+
+            await asyncio.gather(*(settle(tab) for tab in students.values()))
             for pid, tab in students.items():
                 assert tab.panels == teacher.panels, f"the follower on worker {pid} shows the instructor's panels"
 
@@ -176,8 +184,8 @@ def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup:
         async with contextlib.AsyncExitStack() as stack:
             tabs = await tabs_on_each_worker(stack, sup, name="restart")
             for tab in tabs.values():
-                await tab.read(3.0)
-                assert "cam1" in "".join(tab.panels) or tab.panels, "each worker served the workbench's panels"
+                await tab.read(20.0, until_panels=True)
+                assert tab.panels, "each worker showed the room's frame"
             victim = sorted(tabs)[0]
             os.kill(victim, signal.SIGKILL)
             with pytest.raises(websockets.exceptions.ConnectionClosed):
@@ -188,7 +196,7 @@ def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup:
             for attempt in range(20):
                 try:
                     async with open_tab(sup.port, name="restart again") as again:
-                        await again.read(3.0)
+                        await again.read(20.0, until_panels=True)
                         assert again.panels, "the reconnected tab was served"
                     break
                 except (OSError, websockets.exceptions.InvalidMessage, websockets.exceptions.ConnectionClosed):
@@ -201,7 +209,7 @@ def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup:
             # The restarted worker is in the class: its followers show the room's frame, as the other's do.
             fresh = await tabs_on_each_worker(stack, sup, name="after restart")
             for tab in fresh.values():
-                await tab.read(3.0)
+                await tab.read(20.0, until_panels=True)
             first, second = fresh.values()
             assert first.panels and first.panels == second.panels
 

@@ -349,7 +349,11 @@ class Supervisor:
     def wait_ready(self, timeout: float = START_TIMEOUT) -> bool:
         """Wait until every worker serves (after a restart); False if one does not within ``timeout``."""
         deadline = time.monotonic() + timeout
-        return all(s.ready.wait(max(0.0, deadline - time.monotonic())) for s in self.slots)
+        while None in self.pids():  # a worker that has died counts as not ready before it is restarted
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.05)
+        return True
 
     def stop(self, timeout: float = 10.0) -> None:
         """Stop every worker (their input is closed; one that does not end in ``timeout`` s is killed)."""
