@@ -214,3 +214,16 @@ def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup:
             assert first.panels and first.panels == second.panels
 
     asyncio.run(asyncio.wait_for(scenario(), 90))
+
+
+def test_options_a_worker_would_refuse_are_refused_before_any_worker_starts(capsys) -> None:
+    from egtviz.viewer.server.workers import serve_workers
+
+    assert serve_workers(2, 0, WorkerOptions(scene="/nonexistent/scene.json")) == 2
+    assert serve_workers(2, 0, WorkerOptions(lesson="no-such-lesson")) == 2
+    assert serve_workers(2, 0, WorkerOptions(allow_hosts=("http://bad:1",))) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 3
+    assert err[0].startswith("egtviz: cannot read the scene file: ") and "/nonexistent/scene.json" in err[0]
+    assert err[1].startswith("egtviz: cannot open the lesson: ")
+    assert err[2].startswith("egtviz: cannot use ")

@@ -379,6 +379,28 @@ class Supervisor:
             self.hub.close()
 
 
+def _options_problem(options: WorkerOptions) -> str | None:
+    """What is wrong with ``options`` (as ``egtviz serve`` says it, before any worker starts), None if nothing."""
+    from ...lessons import LessonError, load
+    from ...scene import SceneFileError, scene_from_argument
+    from .guard import allowed_hosts
+
+    try:
+        allowed_hosts(options.allow_hosts)
+    except ValueError as exc:
+        return f"cannot use {exc}"
+    try:
+        if options.scene is not None:
+            scene_from_argument(options.scene)
+        if options.lesson is not None:
+            load(options.lesson)
+    except SceneFileError as exc:
+        return f"cannot read the scene file: {exc}"
+    except LessonError as exc:
+        return f"cannot open the lesson: {exc}"
+    return None
+
+
 def _is_wildcard(host: str) -> bool:
     import ipaddress
 
@@ -394,6 +416,10 @@ def serve_workers(workers: int, port: int, options: WorkerOptions, *,
     ``stop_event``); returns the exit status (1: the port or a worker could not be started)."""
     from .cli import reachable_urls, student_url
 
+    problem = _options_problem(options)
+    if problem is not None:
+        print(f"egtviz: {problem}", file=sys.stderr)
+        return 2
     try:
         sup = Supervisor(workers, port, options)
         sup.start()
