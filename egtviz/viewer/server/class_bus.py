@@ -145,7 +145,10 @@ class ClassHub:
         except (EOFError, OSError, ValueError, KeyError, TypeError):
             pass
         finally:
-            conn.close()
+            try:
+                conn.close()
+            except OSError:  # closed by close() meanwhile
+                pass
             if worker is not None:
                 with self._lock:
                     mine = self._outboxes.get(worker)
@@ -228,7 +231,8 @@ def frame_message(frame: Any) -> dict[str, Any]:
     from ...scene.io import scene_to_dict
 
     return {"kind": "frame", "version": frame.version, "scene": scene_to_dict(frame.scene),
-            "panels": [list(p) for p in frame.panels], "readout": frame.readout, "present": frame.present}
+            "panels": [list(p) for p in frame.panels], "readout": frame.readout, "present": frame.present,
+            "caption": str(getattr(frame, "caption", ""))}
 
 
 class _RelaySender:
@@ -352,13 +356,13 @@ class ClassroomBus:
         sender = self._inner_sender
         sender.post(RoomFrame(sender.next_number(), int(message["version"]), scene, derived,
                               tuple((str(k), str(t), str(s)) for k, t, s in message["panels"]),
-                              str(message["readout"]), bool(message["present"])))
+                              str(message["readout"]), bool(message["present"]), str(message.get("caption", ""))))
 
     def _read(self) -> None:
         while not self._closed:
             try:
                 message = json.loads(self._conn.recv_bytes())
-            except (EOFError, OSError, ValueError):
+            except (EOFError, OSError, ValueError, TypeError):  # TypeError: the connection closed under recv
                 if not self._closed:
                     _log.warning("egtviz worker %d: the supervising process's hub went away", self.worker)
                 return

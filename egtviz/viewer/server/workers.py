@@ -308,8 +308,8 @@ class Supervisor:
                 if slot.proc.poll() is not None or time.monotonic() > deadline:
                     status = slot.proc.poll()
                     self.stop()
-                    raise RuntimeError(f"worker {slot.index} did not start "
-                                       f"({'it ended with status ' + str(status) if status is not None else 'timeout'})")
+                    why = f"it ended with status {status}" if status is not None else f"not serving after {timeout:g} s"
+                    raise RuntimeError(f"worker {slot.index} did not start ({why})")
         threading.Thread(target=self._watch, name="egtviz-supervisor", daemon=True).start()
 
     def _watch(self) -> None:
