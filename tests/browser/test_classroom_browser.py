@@ -24,6 +24,7 @@ from egtviz.viewer.workbench.fields import safe_callback
 pytestmark = pytest.mark.browser
 
 WINDOW = {"width": 1366, "height": 768}
+REV_JS = """(camera) => document.querySelector(`svg[data-egtviz="image-plane"][data-camera="${camera}"]`)?.dataset.rev"""
 PANEL_JS = """(camera) => { const s = document.querySelector(
   `svg[data-egtviz="image-plane"][data-camera="${camera}"]`); return s ? s.outerHTML : null; }"""
 
@@ -349,3 +350,36 @@ def test_released_to_tasks_students_open_the_instructors_step_and_pacing_holds_n
         app.course.open_workbench(instructor)
         room.view = _wait(lambda: app.views.get(instructor.client_id), what="the instructor's workbench")
         ctx.close()
+
+
+def test_a_follower_on_another_server_process_shows_the_instructors_scene(browser, room, tmp_path):
+    """What ``--workers`` builds on: a second server shares the class's state (adopted as another process would
+    read it) and draws the published scene once for its own followers."""
+    from egtviz.classroom import ClassState
+    from egtviz.viewer.server.browser import LINES_JS
+
+    host_a = room.host
+    host_a.room.set_mode(Mode.FOLLOW)
+    server_b, app_b, host_b, base_b = _serve(tmp_path)
+    ctx, page = _join(browser, base_b, "Ivy")
+    try:
+        follower = _wait(lambda: next(iter(host_b.followers.values()), None), what="a follower on server B")
+        _drag(room.view, "cam2", -0.6)
+        version = _wait(lambda: host_a.room.shared().scene is room.view.model.scene and host_a.room.shared().version,
+                        what="the drag published")
+        state = ClassState.from_json(host_a.room.to_json())
+        state.tabs = ClassState.from_json(host_b.room.to_json()).tabs  # B keeps its own tabs
+        host_b.room.adopt(state)
+        _wait(lambda: follower.frame is not None and follower.frame.version == version, what="B's frame")
+        # The class's state is JSON: the pose comes back equal to rounding (R from the stored angles).
+        there, here = follower.frame.scene.camera("cam2").pose, room.view.model.scene.camera("cam2").pose
+        assert np.allclose(there.t, here.t, atol=1e-12) and np.allclose(there.R, here.R, atol=1e-12)
+        for camera in ("cam1", "cam2"):
+            theirs, ours = follower.frame.derived.image_planes[camera], room.view.model.derived.image_planes[camera]
+            assert np.allclose(theirs.lines, ours.lines, atol=1e-9) and all(
+                np.allclose(a.xy, b.xy) for a, b in zip(theirs.epipoles, ours.epipoles, strict=True))
+            _wait(lambda c=camera: page.evaluate(REV_JS, c) == str(version), what=f"{camera}'s panel of the version")
+    finally:
+        ctx.close()
+        host_b.close()
+        server_b.stop()

@@ -28,10 +28,11 @@ from ...classroom import (
 from ...scene import SceneModel
 from ..server.guard import handshake_of, serve_page_under
 from ..workbench.fields import FieldError, notify_error
+from .camera_lock import CameraLock
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
 from .room_html import step_caption
-from .room_sender import RoomSender, frame_of
+from .room_sender import RoomSender, frame_from_scene, frame_of
 from .snapshot_pane import RoomSnapshots
 from .student_bar import JoinPage, StudentBar
 from .instructor_panel import InstructorPanel
@@ -68,10 +69,11 @@ class ClassroomHost:
         self.panels: dict[int, InstructorPanel] = {}
         self.snapshots = RoomSnapshots()
         self._models: dict[str, SceneModel] = {}
-        self._instructor_camera: tuple | None = None
         self._tab_locks: dict[int, threading.RLock] = {}
+        self._publishing = threading.local()
         self._routes = ThreadPoolExecutor(max_workers=2, thread_name_prefix="egtviz-class-route")
         self.sender = RoomSender(lambda: list(self.followers.values()))
+        self.cameras = CameraLock(self.room, lambda: dict(self.followers))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
         # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
@@ -98,7 +100,7 @@ class ClassroomHost:
                 with self._lock:
                     self._roles[cid] = "instructor"
                 self.room.instructor_join(cid)
-                client.camera.on_update(lambda cam: self._instructor_moved(cid, cam))
+                client.camera.on_update(self.cameras.instructor_moved)
                 self._open_instructor(client)
                 return True
             with self._lock:
@@ -235,9 +237,8 @@ class ClassroomHost:
                 return
             self.followers[cid] = view
         self._sync_bar(cid)
-        client.camera.on_update(lambda cam: self._follower_moved(cid))
-        if self.room.cameras_locked and self._instructor_camera is not None:
-            view.set_camera(*self._instructor_camera)
+        client.camera.on_update(lambda cam: self.cameras.follower_moved(cid))
+        self.cameras.hold(view)
 
     def _show_own(self, client: Any) -> None:
         cid = client.client_id
@@ -332,7 +333,11 @@ class ClassroomHost:
             return
         run = self._lesson_run(view.client.client_id, view)
         lesson, step = (run.lesson.name, run.step_index) if run is not None else (None, None)
-        version = self.room.publish(view.model.scene, lesson=lesson, step=step)
+        self._publishing.on = True
+        try:
+            version = self.room.publish(view.model.scene, lesson=lesson, step=step)
+        finally:
+            self._publishing.on = False
         self.sender.post(frame_of(view, version, self.sender.next_number(), step_caption(run)))
 
     def _lesson_run(self, cid: int, view: Any) -> Any:
@@ -372,28 +377,6 @@ class ClassroomHost:
                 out.setdefault(name, cid)
         return out
 
-    def _instructor_moved(self, cid: int, camera: Any) -> None:
-        try:
-            pose = (tuple(camera.position), tuple(camera.look_at), tuple(camera.up_direction))
-        except (AssertionError, AttributeError):
-            return
-        self._instructor_camera = pose
-        if self.room.cameras_locked:
-            for view in list(self.followers.values()):
-                view.set_camera(*pose)
-
-    def _follower_moved(self, cid: int) -> None:
-        view = self.followers.get(cid)
-        pose = self._instructor_camera
-        if view is None or pose is None or not self.room.cameras_locked:
-            return
-        try:
-            now = tuple(view.client.camera.position)
-        except (AssertionError, AttributeError):
-            return
-        if max(abs(a - b) for a, b in zip(now, pose[0])) > 1e-3:
-            view.set_camera(*pose)
-
     # -- the classroom's events --------------------------------------------------------------------------
 
     def _on_event(self, event: Any) -> None:
@@ -406,17 +389,30 @@ class ClassroomHost:
             for bar in list(self.bars.values()):
                 bar.set_paused(event.message)
         elif isinstance(event, CamerasLocked):
-            if event.locked and self._instructor_camera is not None:
-                for view in list(self.followers.values()):
-                    view.set_camera(*self._instructor_camera)
+            if event.locked:
+                self.cameras.hold_all()
         elif isinstance(event, SnapshotShown):
             self._snapshot_changed()
+        elif isinstance(event, SharedChanged):
+            self._shared_changed(event.version)
         elif isinstance(event, QuestionAsked):
             for cid in list(self.bars):
                 self._sync_bar(cid)
         if isinstance(event, (RosterChanged, AnswersChanged, ModeChanged, PauseChanged, PacingChanged,
                               CamerasLocked, SharedChanged, QuestionAsked, NamesShown)):
             self._refresh.mark()
+
+    def _shared_changed(self, version: int) -> None:
+        """A scene published by an instructor on another server process (the class's state was adopted): draw
+        its frame here, once, for this process's followers. The instructor's own tab sends its frames itself."""
+        if getattr(self._publishing, "on", False):
+            return
+        latest = self.sender.latest
+        shared = self.room.shared()
+        if shared.scene is None or shared.version != version or (latest is not None and latest.version >= version):
+            return
+        present = bool(getattr(self.app, "present", False))
+        self.sender.post(frame_from_scene(shared.scene, version, self.sender.next_number(), present=present))
 
     def _refresh_panels(self) -> None:
         for panel in list(self.panels.values()):

@@ -16,7 +16,7 @@ from typing import Any
 
 from .follow_view import FollowView, RoomFrame
 
-__all__ = ["RoomSender", "frame_of", "panel_titles"]
+__all__ = ["RoomSender", "frame_from_scene", "frame_of", "panel_titles"]
 
 _log = logging.getLogger(__name__)
 
@@ -37,6 +37,34 @@ def frame_of(view: Any, version: int, number: int, caption: str = "") -> RoomFra
     titles = panel_titles(scene)
     panels = tuple((key, titles[key], svg) for key, svg in view.svgs.items() if key in titles)
     return RoomFrame(number, version, scene, view.model.derived, panels, view.readout, bool(view.present), caption)
+
+
+def frame_from_scene(scene: Any, version: int, number: int, *, present: bool = False) -> RoomFrame:
+    """The room's frame of a shared scene that no tab of this process drew (the instructor works on another
+    server process): its derived geometry and panels made here, once, each panel fitted as a new one is, for a
+    window of the default size."""
+    from ...scene import compute_derived
+    from ..render.panels import DEFAULT_WINDOW, PanelView, initial_view, plan_grid
+    from ..render.svg import NORMAL, PRESENT, image_plane_svg
+    from ..workbench.readout import pair_html
+
+    derived = compute_derived(scene)
+    style = PRESENT if present else NORMAL
+    grid = plan_grid([(c.name, float(c.width), float(c.height)) for c in scene.cameras], DEFAULT_WINDOW, style=style)
+    titles = panel_titles(scene)
+    marked = {int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")}
+    panels = []
+    for spec in scene.cameras:
+        plane = derived.image_planes.get(spec.name)
+        if plane is None:
+            continue
+        svg = image_plane_svg(plane, selected_point=scene.selected_point, highlighted=marked,
+                              show_labels=scene.options.show_labels, revision=version,
+                              view=PanelView(initial_view(plane)).resolve(plane), style=style,
+                              panel_px=grid.column_px if grid.columns else None,
+                              max_height=f"{grid.svg_max_height_px(spec.name):.0f}px" if grid.columns else None)
+        panels.append((spec.name, titles[spec.name], svg))
+    return RoomFrame(number, version, scene, derived, tuple(panels), pair_html(derived), present)
 
 
 class RoomSender:
