@@ -227,3 +227,19 @@ def test_options_a_worker_would_refuse_are_refused_before_any_worker_starts(caps
     assert err[0].startswith("egtviz: cannot read the scene file: ") and "/nonexistent/scene.json" in err[0]
     assert err[1].startswith("egtviz: cannot open the lesson: ")
     assert err[2].startswith("egtviz: cannot use ")
+
+
+def test_a_worker_that_cannot_start_stops_the_start_with_its_status() -> None:
+    sup = Supervisor(2, 0, WorkerOptions(), worker_module="egtviz.no_such_worker_module")
+    with pytest.raises(RuntimeError, match=r"worker 0 did not start \(it ended with status 1\)"):
+        sup.start(timeout=30.0)
+    assert all(s.proc is not None and s.proc.poll() is not None for s in sup.slots)  # none left running
+
+
+def test_the_installed_viser_starts_its_server_the_way_the_workers_share_a_port() -> None:
+    import inspect
+
+    import viser.infra._infra as infra
+
+    # enable_reuse_port relies on this call (it passes reuse_port through serve's keywords to asyncio).
+    assert "websockets.asyncio.server.serve(" in inspect.getsource(infra.WebsockServer._background_worker)

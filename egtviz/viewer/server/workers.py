@@ -48,10 +48,16 @@ def enable_reuse_port() -> None:
     ``serve`` hands unknown keywords to asyncio's ``create_server``, whose ``reuse_port`` this sets. Called only
     in a worker process (this is process-wide).
     """
+    import inspect
+
+    import viser.infra._infra as infra
     import websockets.asyncio.server as ws_server
 
     if getattr(ws_server.serve, "egtviz_reuse_port", False):
         return
+    if "websockets.asyncio.server.serve(" not in inspect.getsource(infra.WebsockServer._background_worker):
+        raise RuntimeError(f"viser {viser_version()} no longer starts its server with websockets.asyncio.server.serve: "
+                           "the workers cannot share one port (run without --workers)")
     base = ws_server.serve
 
     class serve(base):  # type: ignore[valid-type,misc]  # noqa: N801 - it replaces websockets' ``serve``
@@ -62,6 +68,12 @@ def enable_reuse_port() -> None:
             super().__init__(*args, **kwargs)
 
     ws_server.serve = serve  # type: ignore[misc]
+
+
+def viser_version() -> str:
+    import viser
+
+    return str(viser.__version__)
 
 
 def _addresses(host: str, port: int) -> list[tuple]:
