@@ -243,3 +243,34 @@ def test_the_installed_viser_starts_its_server_the_way_the_workers_share_a_port(
 
     # enable_reuse_port relies on this call (it passes reuse_port through serve's keywords to asyncio).
     assert "websockets.asyncio.server.serve(" in inspect.getsource(infra.WebsockServer._background_worker)
+
+
+def test_serve_workers_says_where_it_serves_and_stops_its_workers(capsys) -> None:
+    import socket
+    import threading
+
+    from egtviz.viewer.server.workers import serve_workers
+
+    stop = threading.Event()
+    status: list[int] = []
+    out = err = ""
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        runner = threading.Thread(target=lambda: status.append(
+            serve_workers(1, port, WorkerOptions(classroom=True), stop_event=stop)))
+        runner.start()
+        deadline = time.monotonic() + 60
+        while "instructor (keep this secret)" not in out:
+            assert time.monotonic() < deadline and runner.is_alive()
+            time.sleep(0.2)
+            more = capsys.readouterr()
+            out, err = out + more.out, err + more.err
+        stop.set()
+        runner.join(30)
+    assert status == [0]
+    assert f"egtviz: port {port} is busy on 127.0.0.1; using " in err
+    served = re.search(r"egtviz running at http://127\.0\.0\.1:(\d+) \(1 workers\)", out)
+    assert served and int(served.group(1)) != port
+    assert out.count("/egtviz-instructor/") == 1  # the token is printed once, on loopback

@@ -438,12 +438,14 @@ def serve_workers(workers: int, port: int, options: WorkerOptions, *,
     except (OSError, RuntimeError) as exc:
         print(f"egtviz: cannot start the server: {exc}", file=sys.stderr)
         return 1
+    if port and sup.port != port:
+        print(f"egtviz: port {port} is busy on {options.host}; using {sup.port}", file=sys.stderr, flush=True)
     stop = stop_event or threading.Event()
     try:
         if _is_wildcard(options.host):
             print(f"egtviz: warning: --host {options.host} opens the app to the network: anyone who can reach this "
                   "machine can use it (each tab has its own scene; see docs/server.md)", file=sys.stderr, flush=True)
-        print(f"egtviz running at {' '.join(reachable_urls(options.host, sup.port))} ({workers} workers)", flush=True)
+        print(f"egtviz running at {' '.join(reachable_urls(options.host, sup.port))} ({workers} worker{'' if workers == 1 else 's'})", flush=True)
         if sup.token is not None:
             from ..classroom import instructor_url, qr_terminal
 
