@@ -83,3 +83,20 @@ def test_clip_endpoints_lie_on_their_lines_inside_the_image(seed, size):
     assert dist.max() < tol
     on_border = np.minimum.reduce([ends[:, 0], w - ends[:, 0], ends[:, 1], h - ends[:, 1]])
     assert np.all(np.abs(on_border) < tol)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds, size=st.sampled_from([(640, 480), (1, 1), (8192, 3)]))
+def test_in_image_is_the_per_coordinate_test(seed, size):
+    from egtviz.geometry.pinhole import PinholeProjection
+
+    rng = np.random.default_rng(seed)
+    w, h = size
+    px = rng.uniform(-0.5, 1.5, size=(50, 2)) * [w, h]
+    px[:6] = [[0, 0], [w, h], [w, 0], [0, h], [np.nextafter(w, np.inf), 1e-3], [-0.0, np.nextafter(h, 0)]]
+    px[6] = np.nan  # behind the camera
+    proj = PinholeProjection(px, np.ones(50), np.ones(50, bool), (w, h))
+    u, v = px[:, 0], px[:, 1]
+    with np.errstate(invalid="ignore"):
+        expected = (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
+    np.testing.assert_array_equal(proj.in_image, expected)
