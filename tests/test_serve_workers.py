@@ -271,6 +271,6 @@ def test_serve_workers_says_where_it_serves_and_stops_its_workers(capsys) -> Non
         runner.join(30)
     assert status == [0]
     assert f"egtviz: port {port} is busy on 127.0.0.1; using " in err
-    served = re.search(r"egtviz running at http://127\.0\.0\.1:(\d+) \(1 workers\)", out)
+    served = re.search(r"egtviz running at http://127\.0\.0\.1:(\d+) \(1 worker\)", out)
     assert served and int(served.group(1)) != port
     assert out.count("/egtviz-instructor/") == 1  # the token is printed once, on loopback
