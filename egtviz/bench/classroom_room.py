@@ -262,6 +262,7 @@ class RoomRun:
         cpu_s: CPU seconds of each worker over the run.
         rss_mb: resident memory (MB) of the workers and the supervising process, summed, after the run.
         tabs_cpu_share: the tabs' process's CPU over the run's wall time (near 1: the client was the limit).
+        p99_by_worker_ms: the lag's p99 at the tabs of each worker.
     """
 
     kind: str
@@ -276,6 +277,7 @@ class RoomRun:
     cpu_s: tuple[float, ...]
     rss_mb: float
     tabs_cpu_share: float
+    p99_by_worker_ms: tuple[float, ...] = ()
 
 
 def _seq_of_rev(drawn: list, start: Sequence[float], j: int) -> dict[int, int]:
@@ -328,7 +330,6 @@ def _run(kind: str, workers: int, count: int, seconds: float, rate: float, scene
         joined = _line(proc, "every tab joined")
         pids = [p for p in sup.pids() if p is not None]
         where = [worker_of_connection(sup.port, port, pids) for port in joined["ports"]]
-        index = {pid: i for i, pid in enumerate(pids)}
         for i in range(workers):
             sup.ask(i, "instrument")
         time.sleep(0.5)
@@ -347,12 +348,29 @@ def _run(kind: str, workers: int, count: int, seconds: float, rate: float, scene
             proc.kill()
             proc.wait(10)
         sup.stop()
-    lags: list[float] = []
-    unanswered = 0
-    tabs = result["tabs"]
+    lag, unanswered, by_worker = _lag_summary(kind, result["tabs"], joined, where, pids, reports)
     draggers = len(joined["owners"])
+    per_worker = tuple(sum(1 for pid in where if pid == p) for p in pids)
+    return RoomRun(kind, workers, count, seconds, sum(len(t["sends"]) for t in result["tabs"][:draggers]),
+                   sum(r["applied"] for r in reports), lag, unanswered, per_worker,
+                   tuple(r["cpu_s"] for r in reports), rss / 2**20, result["cpu_s"] / wall if wall > 0 else 0.0,
+                   by_worker)
+
+
+def _p(lags: list[float], q: float) -> float:
+    return float(np.percentile(lags, q) * 1e3) if lags else float("nan")
+
+
+def _lag_summary(kind: str, tabs: list[dict], joined: dict, where: list[int | None], pids: list[int],
+                 reports: list[dict]) -> tuple[tuple[float, float], int, tuple[float, ...]]:
+    """``((p50, p99) ms, unanswered, p99 ms of the tabs of each worker)`` over the dragging tabs (or followers)."""
+    index = {pid: i for i, pid in enumerate(pids)}
+    draggers = len(joined["owners"])
+    lags: list[float] = []
+    by_worker: dict[int | None, list[float]] = {pid: [] for pid in pids}
+    unanswered = 0
     for n, tab in enumerate(tabs):
-        j = n if n < draggers else 0
+        j = n if n < draggers else 0  # a follower answers the instructor's (tab 0's) sends
         pid = where[j]
         w = index.get(pid) if pid is not None else None
         drawn = reports[w]["drawn"].get(str(joined["owners"][j]), []) if w is not None else []
@@ -360,13 +378,9 @@ def _run(kind: str, workers: int, count: int, seconds: float, rate: float, scene
         if kind == "follow" and n == 0:
             continue  # the instructor's own tab: not a follower
         lags += tab_lags
+        by_worker.setdefault(where[n], []).extend(tab_lags)
         unanswered += tab_unanswered
-    lag = (float(np.percentile(lags, 50) * 1e3), float(np.percentile(lags, 99) * 1e3)) if lags else (
-        float("nan"), float("nan"))
-    per_worker = tuple(sum(1 for pid in where if pid == p) for p in pids)
-    return RoomRun(kind, workers, count, seconds, sum(len(t["sends"]) for t in tabs[:draggers]),
-                   sum(r["applied"] for r in reports), lag, unanswered, per_worker,
-                   tuple(r["cpu_s"] for r in reports), rss / 2**20, result["cpu_s"] / wall if wall > 0 else 0.0)
+    return (_p(lags, 50), _p(lags, 99)), unanswered, tuple(_p(by_worker[pid], 99) for pid in pids)
 
 
 def run_drag(workers: int, tabs: int = DRAG_TABS, *, seconds: float = DRAG_SECONDS, rate: float = RATE_HZ,
@@ -383,11 +397,13 @@ def run_followers(workers: int, followers: int, *, seconds: float = DRAG_SECONDS
 
 def format_room(runs: Sequence[RoomRun]) -> str:
     head = (f"{'run':<7} {'workers':>7} {'tabs':>5} {'sent':>6} {'drawn':>6} {'lag p50':>8} {'lag p99':>8} "
-            f"{'unanswered':>10} {'per worker':>12} {'worker CPU s':>14} {'RSS MB':>7} {'tabs CPU %':>10}")
+            f"{'unanswered':>10} {'per worker':>12} {'p99 by worker':>14} {'worker CPU s':>14} {'RSS MB':>7} "
+            f"{'tabs CPU %':>10}")
     lines = [head, "-" * len(head)]
     for r in runs:
         lines.append(f"{r.kind:<7} {r.workers:>7} {r.tabs:>5} {r.sent:>6} {r.applied:>6} {r.lag_ms[0]:>8.1f} "
                      f"{r.lag_ms[1]:>8.1f} {r.unanswered:>10} {'/'.join(map(str, r.per_worker)):>12} "
+                     f"{'/'.join(f'{p:.0f}' for p in r.p99_by_worker_ms):>14} "
                      f"{'/'.join(f'{c:.1f}' for c in r.cpu_s):>14} {r.rss_mb:>7.0f} {100 * r.tabs_cpu_share:>10.0f}")
     return "\n".join(lines)
 
