@@ -240,8 +240,10 @@ def _final_fit(
     Fn: np.ndarray, d: np.ndarray, At: np.ndarray, s1: float, s2: float, scorer: _Scorer, mode: str,
     threshold: float, widen: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Linear refits on the support, then the Sampson refinement: ``(Fn, inliers)``; ``d`` are ``Fn``'s
-    squared Sampson distances."""
+    """The final model and its inliers ``(Fn, inliers)``; ``d`` are ``Fn``'s squared Sampson distances.
+
+    RANSAC: one Gauss-Newton step on the Sampson cost over rank-2 F (its band). LMedS and MAPSAC: linear refits
+    on the support, then the Levenberg-Marquardt Sampson refinement."""
 
     def support(Fn: np.ndarray, widen: float) -> tuple[np.ndarray, np.ndarray]:
         d = sampson_distances_normalized(Fn[None], At, s1, s2)[0]
