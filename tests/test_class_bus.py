@@ -110,3 +110,19 @@ def test_a_patch_carries_only_what_changed_and_applies_back() -> None:
     assert apply_patch(before, patch) == after
     after["tabs"][str(TAB_SPAN + 4)] = ["Bob", True, None, None]  # another worker's tab: not this one's to send
     assert str(TAB_SPAN + 4) not in diff(before, after)["tabs"]["set"]
+
+
+def test_update_replaces_the_state_at_once_and_says_what_changed() -> None:
+    import dataclasses
+
+    from egtviz.classroom import ClassroomError, PauseChanged
+
+    room = Classroom(None, token="t" * 20)
+    heard = []
+    room.subscribe(heard.append)
+    room.update(lambda old: dataclasses.replace(old, pause="Eyes to the front"))
+    assert room.paused() == "Eyes to the front"
+    assert heard == [PauseChanged("Eyes to the front")]
+    with pytest.raises(ClassroomError, match="expected a ClassState"):
+        room.update(lambda old: None)
+    assert room.paused() == "Eyes to the front"
