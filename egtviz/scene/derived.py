@@ -337,7 +337,8 @@ def _grown_triangle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
 def _clipped_lines(sides: list[tuple[EpipolarCurves, ImagePlane]]) -> list[np.ndarray | None]:
     """Per camera of the pair, its epipolar lines clipped to its image, (N, 2, 2) with NaN rows where a line misses
     it, or None for a camera that does not draw lines (no exact lines, or a drawn region other than the image
-    rectangle). Images of one size are clipped in one call (the lines are independent)."""
+    rectangle). Images of one size are clipped in one call (the lines are independent). The clip clamps the
+    segments into the image: they are finite or NaN, never infinite (nothing for ``compute_derived`` to refuse)."""
     drawn = [k for k, (curves, plane) in enumerate(sides) if curves.lines is not None and plane.rim is None]
     out: list[np.ndarray | None] = [None] * len(sides)
     groups: dict[tuple[int, int], list[int]] = {}
