@@ -188,7 +188,13 @@ class Pose:
             return NotImplemented
         return bool(np.array_equal(self.R, other.R) and np.array_equal(self.t, other.t))
 
-    __hash__ = None  # type: ignore[assignment]
+    def __hash__(self) -> int:
+        # Hashed by value as floats (``-0.0`` and ``0.0`` hash alike, as ``__eq__`` finds them equal), so
+        # specs that differ only in their pose do not all share one hash; R and t are read-only.
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = self.__dict__["_hash"] = hash((*self.R.ravel().tolist(), *self.t.tolist()))
+        return h
 
 
 def quat_wxyz_from_matrix(R: npt.ArrayLike) -> np.ndarray:

@@ -138,7 +138,7 @@ class CameraSpecBase:
     """
 
     name: str
-    pose: Pose = field(default_factory=Pose, hash=False)
+    pose: Pose = field(default_factory=Pose)
     """The camera's place: the truth of the spec (``position`` and ``ypr_deg`` are its views)."""
 
     if TYPE_CHECKING:
