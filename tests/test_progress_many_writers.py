@@ -29,7 +29,7 @@ print(json.dumps({"problem": store.problem, "persistent": store.persistent}))
 """
 
 PROCESSES = 4
-ATTEMPTS = 600
+ATTEMPTS = 500
 
 
 def test_four_processes_writing_at_once_lose_no_attempt(tmp_path: Path) -> None:
