@@ -61,6 +61,7 @@ from .readout import PairReadout, pair_html
 from ..render.svg import NORMAL, PRESENT, empty_svg
 from ..render.svg import warm_up as svg_warm_up
 from .workbench_controls import WorkbenchControls
+from ..server.viser_adapter import assign_text
 
 if TYPE_CHECKING:
     from ...scene.derived import Derived, ImagePlane
@@ -390,7 +391,7 @@ class ClientView:
 
     def _show_panel(self, name: str, svg: str) -> None:
         self.svgs[name] = svg
-        self.dock.html[name].content = svg
+        assign_text(self.dock.html[name], "content", svg)  # the same text is not sent again
 
     def _record(self, wall: list[float], cpu: list[float]) -> None:
         """Keep the update's timing and hand it to :attr:`on_update_timed`."""

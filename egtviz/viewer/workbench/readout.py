@@ -9,6 +9,7 @@ import numpy as np
 
 from ...scene.derived import shown_value
 from ...scene.shown_numbers import format_value, format_vector
+from ..server.viser_adapter import assign_text
 from .models import SHORT_LABELS
 
 if TYPE_CHECKING:
@@ -91,4 +92,4 @@ class PairReadout:
 
     def _write(self, text: str) -> None:
         self.text = text
-        self.handle.content = text
+        assign_text(self.handle, "content", text)
