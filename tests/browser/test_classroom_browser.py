@@ -43,14 +43,14 @@ def _serve(tmp_path, room=None):
     return server, app, host, base
 
 
-def _wait(predicate, timeout=30.0, what="condition"):
+def _wait(predicate, timeout=30.0, what="condition", on_fail=None):
     deadline = time.time() + timeout
     while time.time() < deadline:
         value = predicate()
         if value:
             return value
         time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
+    raise AssertionError(f"timed out waiting for {what}" + (f": {on_fail()}" if on_fail is not None else ""))
 
 
 def _instructor(browser, base, token):
@@ -378,7 +378,9 @@ def test_a_follower_on_another_server_process_shows_the_instructors_scene(browse
             theirs, ours = follower.frame.derived.image_planes[camera], room.view.model.derived.image_planes[camera]
             assert np.allclose(theirs.lines, ours.lines, atol=1e-9) and all(
                 np.allclose(a.xy, b.xy) for a, b in zip(theirs.epipoles, ours.epipoles, strict=True))
-            _wait(lambda c=camera: page.evaluate(REV_JS, c) == str(version), what=f"{camera}'s panel of the version")
+            _wait(lambda c=camera: page.evaluate(REV_JS, c) == str(version),
+                  what=f"{camera}'s panel of the version", on_fail=lambda c=camera: (page.evaluate(REV_JS, c), version,
+                  [(k, t) for k, t, _ in follower.frame.panels]))
     finally:
         ctx.close()
         host_b.close()

@@ -60,9 +60,12 @@ class FollowView:
         client: the tab's viser client.
         frame: the room's frame at the start (None: the instructor has shown nothing yet).
         present: start in presentation mode (large type); a frame drawn in presentation mode turns it on too.
+        window: the tab's window as a workbench it showed before measured it (None: from the canvas it reports
+            now, before this view docks its controls).
     """
 
-    def __init__(self, client: Any, frame: RoomFrame | None, *, present: bool = False) -> None:
+    def __init__(self, client: Any, frame: RoomFrame | None, *, present: bool = False,
+                 window: Any = None) -> None:
         from ..workbench.scene3d import Scene3D
 
         self.client = client
@@ -74,7 +77,13 @@ class FollowView:
         self._panels: list[Any] = []
         self._layout_key: tuple | None = None
         self.present = False
+        # Measured once, before the controls dock and narrow the canvas (as the workbench's panel dock does).
+        self.window = window if window is not None else self._canvas_window()
         with self.lock, client.atomic():
+            try:  # docked on the left, as in the workbench: the scene in the middle, the panels on the right
+                client.gui.main_panel.dock_left()
+            except Exception:  # noqa: BLE001 - placement is cosmetic
+                pass
             self.style = client.gui.add_html("")
             self.note = client.gui.add_markdown("The instructor has not shown a scene yet." if frame is None else "")
             self.caption = client.gui.add_html("")
@@ -143,7 +152,7 @@ class FollowView:
         self.style.content = PRESENT_GUI_CSS if present else ""
         self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if present else 1.0)
 
-    def _window(self) -> Any:
+    def _canvas_window(self) -> Any:
         try:
             return window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
         except (AssertionError, AttributeError):
@@ -162,7 +171,7 @@ class FollowView:
         cells = [(k, *sizes.get(k, (640.0, 480.0))) for k, _t, _s in frame.panels]
         titles = {k: t for k, t, _ in frame.panels}
         if cells:
-            grid = plan_grid(cells, self._window(), style=PRESENT if frame.present else NORMAL)
+            grid = plan_grid(cells, self.window, style=PRESENT if frame.present else NORMAL)
             gui = self.client.gui
             for column in grid.columns:
                 steps, _ = dock_plan(len(column))
@@ -188,7 +197,7 @@ class FollowView:
     def _frame_camera(self, frame: RoomFrame) -> None:
         extent = scene_extent(frame.scene, frame.derived)
         self.scene3d.set_glyph(extent.glyph)
-        window = self._window()
+        window = self.window
         framed = framed_camera(extent.points, max(window.width * 0.5, 120.0) / window.height, pad=extent.glyph,
                                min_radius=3.0 * extent.glyph)
         try:

@@ -116,7 +116,8 @@ class ClassroomHost:
                 return True
             except Exception:  # noqa: BLE001 - a name the class refuses now: ask again
                 pass
-        JoinPage(client, lambda typed: self.join(client, typed), lambda exc: notify_error(client, exc))
+        JoinPage(client, lambda typed: self.join(client, typed), lambda exc: notify_error(client, exc),
+                 present=bool(getattr(self.app, "present", False)))
         return True
 
     def _open_instructor(self, client: Any) -> None:
@@ -229,8 +230,11 @@ class ClassroomHost:
         with self._lock:
             if cid in self.followers or cid not in self._clients:
                 return
+        own = self.app.views.get(cid)
+        window = own.window[0] if own is not None else None
         self.app.clear_tab(client)
-        view = FollowView(client, self.sender.latest, present=bool(getattr(self.app, "present", False)))
+        view = FollowView(client, self.sender.latest, present=bool(getattr(self.app, "present", False)),
+                          window=window)
         with self._lock:
             if cid not in self._clients:
                 view.close()

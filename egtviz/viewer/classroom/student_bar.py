@@ -13,6 +13,7 @@ from typing import Any
 
 import viser
 
+from ..render.palette import PRESENT_GUI_CSS
 from ..workbench.fields import on_event
 from .room_html import pause_html, student_status_html
 
@@ -20,6 +21,9 @@ __all__ = ["BAR_ORDER", "JoinPage", "StudentBar"]
 
 #: GUI order of the bar: above everything a workbench or a lesson adds.
 BAR_ORDER = -1000.0
+#: The join page's width and margin (CSS pixels).
+JOIN_WIDTH_PX = 480
+JOIN_MARGIN_PX = 16
 
 
 class JoinPage:
@@ -29,12 +33,20 @@ class JoinPage:
         client: the tab.
         on_join: called with the typed name (it raises what is wrong with it).
         report: shows an exception in the tab.
+        present: presentation mode (large type).
     """
 
-    def __init__(self, client: Any, on_join: Callable[[str], None], report: Callable[[BaseException], None]) -> None:
+    def __init__(self, client: Any, on_join: Callable[[str], None], report: Callable[[BaseException], None], *,
+                 present: bool = False) -> None:
         gui = client.gui
         with client.atomic():
             gui.configure_theme(dark_mode=False, show_logo=False)
+            try:  # a page of its own: floating at the top left, as the course's start page is
+                gui.main_panel.float(x=JOIN_MARGIN_PX, y=JOIN_MARGIN_PX, width=JOIN_WIDTH_PX)
+            except Exception:  # noqa: BLE001 - placement is cosmetic
+                pass
+            if present:
+                gui.add_html(PRESENT_GUI_CSS)
             self.title = gui.add_html('<div data-egtviz="join" style="padding:0 0.6em"><h2 style="margin:0.3em 0">'
                                       "Join the class</h2>Type your name: your work and progress are kept under "
                                       "it, and come back if you reconnect.</div>")
