@@ -71,6 +71,18 @@ def _join(browser, base, name):
     return context, page
 
 
+def _field(page, label):
+    """The input of the GUI field labelled ``label`` (a text box or a checkbox)."""
+    return page.locator(f'xpath=//label[normalize-space(.)="{label}"]/following::input[1]').first
+
+
+def _open_folder(page, title, inside):
+    """Open the GUI folder ``title`` unless ``inside`` (a locator in it) is already visible."""
+    if not inside.is_visible():
+        page.get_by_text(title, exact=True).first.click()
+    inside.wait_for(state="visible", timeout=30_000)
+
+
 def _drag(view, name, dx):
     """Drag camera ``name`` of a workbench view by ``dx`` metres along x, as viser delivers a gizmo message."""
     gizmo = view.scene3d.gizmo(name)
@@ -172,7 +184,7 @@ def test_release_lock_and_rejoin_with_three_tabs(browser, room):
     try:
         _wait(lambda: len(host.followers) >= 2, what="two followers")
         # Released: each student works on their own scene; the instructor's drags no longer reach them.
-        host.release(Mode.EXPLORE)
+        room.page.get_by_role("button", name="explore").click()  # the instructor's "release to" button
         _wait(lambda: _bar(p1) == "false" and _bar(p2) == "false", what="both released")
         _wait(lambda: len(host.followers) == 0, what="no follower")
         own = {cid: v for cid, v in room.app.views.items() if v is not room.view}
@@ -187,19 +199,21 @@ def test_release_lock_and_rejoin_with_three_tabs(browser, room):
         _wait(lambda: a.model.scene.camera("cam1").position[0] != b.model.scene.camera("cam1").position[0],
               what="one student's own scene to move")
         # Follow me again: both follow, and show the instructor's panels.
-        host.set_follow_me(room.view.client, True)
+        _field(room.page, "follow me").click()
         _wait(lambda: _bar(p1) == "true" and _bar(p2) == "true", what="both following")
         for p in (p1, p2):
             _wait(lambda p=p: p.evaluate(PANEL_JS, "cam1") == room.page.evaluate(PANEL_JS, "cam1"),
                   what="the instructor's panel")
         # Locked cameras: the followers' view cameras go where the instructor's is.
-        host.room.lock_cameras(True)
+        _field(room.page, "lock students' cameras").click()
+        _wait(lambda: host.room.cameras_locked, what="cameras locked from the panel")
         room.view.client.camera.position = (9.0, -7.0, 5.0)
         room.view.client.camera.look_at = (0.0, 0.0, 1.0)
         for v in list(host.followers.values()):
             _wait(lambda v=v: np.allclose(v.client.camera.position, (9.0, -7.0, 5.0), atol=1e-3),
                   what="a follower's camera at the instructor's")
-        host.room.lock_cameras(False)
+        _field(room.page, "lock students' cameras").click()
+        _wait(lambda: not host.room.cameras_locked, what="cameras unlocked from the panel")
         # A student leaves follow with their button, and comes back to it.
         p1.get_by_role("button", name="Leave follow (my own scene)").click()
         _wait(lambda: _bar(p1) == "false", what="left follow")
@@ -223,7 +237,7 @@ def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
         host.room.record_answer(tabs["<b>Dee</b>"], "Where is e1 (u, in px)?", 120.0)
         host.room.record_answer(tabs["Eve <i>x</i>"], "Where is e1 (u, in px)?", 120.0)
         page = room.page
-        page.get_by_text("Students", exact=True).click()
+        _open_folder(page, "Students", page.locator('[data-egtviz="roster"]').first)
         _wait(lambda: page.locator('[data-egtviz="histogram"]').first.get_attribute("data-n") == "2",
               what="two answers in the histogram")
         counts = [int(c) for c in page.locator('[data-egtviz="histogram"] [data-kind="bar"]').evaluate_all(
@@ -231,6 +245,12 @@ def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
         assert sorted(counts, reverse=True)[0] == 2 and sum(counts) == 2
         hist_text = page.locator('[data-egtviz="histogram"]').first.inner_text()
         assert "Dee" not in hist_text and "Eve" not in hist_text  # names hidden by default
+        _field(page, "show names").click()
+        page.wait_for_selector('[data-egtviz="answers-by-name"]', timeout=30_000)
+        items = page.locator('[data-egtviz="answers-by-name"] li').all_inner_texts()
+        assert items == ["<b>Dee</b>: 120", "Eve <i>x</i>: 120"] and host.room.names_shown()
+        _field(page, "show names").click()
+        page.wait_for_selector('[data-egtviz="answers-by-name"]', state="detached", timeout=30_000)
         roster = page.locator('[data-egtviz="roster"]').first
         _wait(lambda: roster.get_attribute("data-rows") is not None and int(roster.get_attribute("data-rows")) >= 2,
               what="the roster")
@@ -243,11 +263,12 @@ def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
         _wait(lambda: host.room.histogram("Where is e1 (u, in px)?").n == 2
               and 130.0 in _edges_hit(host.room.histogram("Where is e1 (u, in px)?")), what="the typed answer")
         # Pause every screen: each student's page shows the message.
-        host.room.pause("Look at the board <now>")
+        _field(room.page, "pause message").fill("Look at the board <now>")
+        room.page.get_by_role("button", name="Pause every screen").click()
         for p in (p1, p2):
             p.wait_for_selector('[data-egtviz="paused"]', timeout=30_000)
             assert p.locator('[data-egtviz="paused"]').inner_text().strip() == "Look at the board <now>"
-        host.room.pause(None)
+        room.page.get_by_role("button", name="Resume every screen").click()
         for p in (p1, p2):
             p.wait_for_selector('[data-egtviz="paused"]', state="detached", timeout=30_000)
     finally:
@@ -311,7 +332,7 @@ def test_snapshot_shown_to_the_room_without_the_name_and_roster_downloaded(brows
         host.room.show_snapshot(None)
         page.wait_for_selector('[data-egtviz="snapshot"]', state="detached", timeout=30_000)
         # The roster as a download (the server writes no file): a CSV naming the student.
-        room.page.get_by_text("Students", exact=True).first.click()
+        _open_folder(room.page, "Students", room.page.get_by_role("button", name="Download roster (CSV)"))
         with room.page.expect_download(timeout=30_000) as download:
             room.page.get_by_role("button", name="Download roster (CSV)").click()
         text = open(download.value.path(), encoding="utf-8").read()
@@ -328,6 +349,14 @@ def test_released_to_tasks_students_open_the_instructors_step_and_pacing_holds_n
     panel = app.course.open_lesson(instructor, lesson, "")
     panel.go_to(1)
     _wait(lambda: host.room.shared().lesson == lesson and host.room.shared().step == 1, what="the step published")
+    # Pacing from the panel: the first lesson in the list, up to step 2 (the one asked is paced below).
+    _open_folder(room.page, "Pacing", _field(room.page, "up to step"))
+    _field(room.page, "up to step").fill("2")
+    room.page.get_by_role("button", name="Apply pacing").click()
+    first = next(iter(app.course.lessons))
+    _wait(lambda: host.room.pacing() == (None, {first: 1}), what="the pacing applied from the panel")
+    room.page.wait_for_selector(f'[data-egtviz="pacing"]:has-text("{first}: up to step 2")', timeout=30_000)
+    host.room.pace(first, None)
     host.room.pace(lesson, 1)
     ctx, page = _join(browser, room.base, "Hal")
     try:
