@@ -148,7 +148,8 @@ def test_the_token_decides_who_is_the_instructor(browser, tmp_path):
 
 
 def test_a_follower_shows_the_instructors_panels_and_cannot_change_them(browser, room):
-    room.host.room.set_mode(Mode.FOLLOW)
+    host_room = room.host.room
+    host_room.set_mode(Mode.FOLLOW)
     ctx, page = _join(browser, room.base, "Ada")
     try:
         cid = _wait(lambda: next((c for c in room.host.followers), None), what="a follower")
@@ -169,7 +170,27 @@ def test_a_follower_shows_the_instructors_panels_and_cannot_change_them(browser,
         assert float(room.view.model.scene.camera("cam1").position[0]) == moved
         assert np.allclose(gizmo.position, room.view.model.scene.camera("cam1").position)
         assert page.evaluate(PANEL_JS, "cam1") == room.page.evaluate(PANEL_JS, "cam1")
+        # Locked: the follower's view camera goes where the instructor's is, and back there if it turns away.
+        _field(room.page, "lock students' cameras").click()
+        room.view.client.camera.position = (-8.0, -6.0, 4.0)
+        room.view.client.camera.look_at = (0.0, 0.0, 1.0)
+        _wait(lambda: np.allclose(follower.client.camera.position, (-8.0, -6.0, 4.0), atol=1e-3),
+              what="the follower's camera at the instructor's")
+        follower.client.camera.position = (3.0, 3.0, 9.0)  # as if the student turned their view
+        _wait(lambda: np.allclose(follower.client.camera.position, (-8.0, -6.0, 4.0), atol=1e-3),
+              what="the follower's camera put back")
+        _field(room.page, "lock students' cameras").click()
+        _wait(lambda: not host_room.cameras_locked, what="unlocked")
+        # Released: the student's own scene, no longer the instructor's.
+        room.page.get_by_role("button", name="explore").click()
+        _wait(lambda: _bar(page) == "false" and cid not in room.host.followers, what="released")
+        own = _wait(lambda: room.app.views.get(cid), what="the student's own workbench")
+        _drag(room.view, "cam1", 0.2)
+        time.sleep(0.5)
+        assert own.model.scene is not room.view.model.scene
+        assert own.model.scene.camera("cam1").position[0] != room.view.model.scene.camera("cam1").position[0]
     finally:
+        room.host.room.set_mode(Mode.FOLLOW)
         ctx.close()
 
 
