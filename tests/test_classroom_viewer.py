@@ -137,3 +137,20 @@ def test_serve_classroom_prints_the_student_url_its_qr_code_and_the_instructor_u
             proc.wait(10)
     everything = text + rest + err
     assert everything.count(token) == 1, everything
+
+
+@pytest.mark.parametrize(("typed", "value"), [("12", 12.0), (" 1,5 ", 1.5), ("-3e2", -300.0),
+                                              ("parallel", "parallel"), (" e1 is left ", "e1 is left")])
+def test_an_answer_is_a_number_when_it_reads_as_one(typed, value):
+    from egtviz.viewer.classroom.student_bar import typed_answer
+
+    assert typed_answer(typed) == value
+
+
+@pytest.mark.parametrize("typed", ["", "   ", None, 3])
+def test_an_empty_answer_is_refused(typed):
+    from egtviz.viewer.classroom.student_bar import typed_answer
+    from egtviz.viewer.workbench.fields import FieldError
+
+    with pytest.raises(FieldError, match="type it first"):
+        typed_answer(typed)

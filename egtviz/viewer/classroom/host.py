@@ -72,8 +72,8 @@ class ClassroomHost:
         self._tab_locks: dict[int, threading.RLock] = {}
         self._publishing = threading.local()
         self._routes = ThreadPoolExecutor(max_workers=2, thread_name_prefix="egtviz-class-route")
-        self.sender = RoomSender(lambda: list(self.followers.values()))
-        self.cameras = CameraLock(self.room, lambda: dict(self.followers))
+        self.sender = RoomSender(lambda: list(self._copy(self.followers).values()))
+        self.cameras = CameraLock(self.room, lambda: self._copy(self.followers))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
         # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
@@ -83,6 +83,11 @@ class ClassroomHost:
             handler.addFilter(self._log_filter)
         self._unsubscribe = self.room.subscribe(self._on_event)
         app.classroom = self
+
+    def _copy(self, tabs: dict[int, Any]) -> dict[int, Any]:
+        """A copy of one of the tab registries, taken under the lock (routing threads change them)."""
+        with self._lock:
+            return dict(tabs)
 
     # -- the app's hooks ------------------------------------------------------------------------------
 
@@ -140,7 +145,7 @@ class ClassroomHost:
             self._build_panel(client)
         elif role == "student":
             self._build_bar(client)
-        self._show_snapshot_in(client)
+        self.snapshots.show_in(client)
 
     def built(self, client: Any, view: Any) -> None:
         """The app built a workbench in the tab: the instructor's feeds the room, a student's keeps their scene."""
@@ -153,13 +158,13 @@ class ClassroomHost:
             view.on_rendered = self._instructor_rendered
             if not fresh:
                 self._build_panel(client)
-                self._show_snapshot_in(client)
+                self.snapshots.show_in(client)
             self._instructor_rendered(view)
         elif role == "student":
             view.on_rendered = self._student_rendered
             if not fresh:
                 self._build_bar(client)
-                self._show_snapshot_in(client)
+                self.snapshots.show_in(client)
             self._student_rendered(view)
 
     def forget(self, client_id: int) -> None:
@@ -296,7 +301,7 @@ class ClassroomHost:
         cid = client.client_id
         name = self.room.name_of(cid) or ""
         bar = StudentBar(client, name, on_follow=lambda on: self.room.follow(cid, on),
-                         on_answer=lambda text: self._answer(cid, text), report=lambda exc: notify_error(client, exc))
+                         on_answer=lambda question, value: self.room.record_answer(cid, question, value), report=lambda exc: notify_error(client, exc))
         with self._lock:
             self.bars[cid] = bar
         self._sync_bar(cid)
@@ -306,23 +311,6 @@ class ClassroomHost:
         bar = self.bars.get(cid)
         if bar is not None:
             bar.show(self.room.is_following(cid), self.room.asked())
-
-    def _answer(self, cid: int, text: Any) -> None:
-        question = self.room.asked()
-        if question is None:
-            raise FieldError("your answer: no question is asked at the moment")
-        if not isinstance(text, str) or not text.strip():
-            raise FieldError("your answer: type it first")
-        value: float | str = text.strip()
-        try:
-            value = float(str(value).replace(",", "."))
-        except ValueError:
-            pass
-        self.room.record_answer(cid, question, value)
-        client = self._clients.get(cid)
-        if client is not None:
-            client.add_notification("Answer sent", "The instructor sees it (without your name).", color="green",
-                                    auto_close_seconds=3.0)
 
     # -- the instructor ---------------------------------------------------------------------------------
 
@@ -390,7 +378,7 @@ class ClassroomHost:
             if event.mode is not Mode.FOLLOW:
                 self.sender.clear_pending()
         elif isinstance(event, PauseChanged):
-            for bar in list(self.bars.values()):
+            for bar in self._copy(self.bars).values():
                 bar.set_paused(event.message)
         elif isinstance(event, CamerasLocked):
             if event.locked:
@@ -400,7 +388,7 @@ class ClassroomHost:
         elif isinstance(event, SharedChanged):
             self._shared_changed(event.version)
         elif isinstance(event, QuestionAsked):
-            for cid in list(self.bars):
+            for cid in self._copy(self.bars):
                 self._sync_bar(cid)
         if isinstance(event, (RosterChanged, AnswersChanged, ModeChanged, PauseChanged, PacingChanged,
                               CamerasLocked, SharedChanged, QuestionAsked, NamesShown)):
@@ -419,7 +407,7 @@ class ClassroomHost:
         self.sender.post(frame_from_scene(shared.scene, version, self.sender.next_number(), present=present))
 
     def _refresh_panels(self) -> None:
-        for panel in list(self.panels.values()):
+        for panel in self._copy(self.panels).values():
             try:
                 panel.refresh()
             except Exception as exc:  # noqa: BLE001 - shown in that tab; the other panels still refresh
@@ -431,10 +419,7 @@ class ClassroomHost:
             clients = [self._clients[cid] for cid, role in self._roles.items()
                        if role in ("instructor", "student") and cid in self._clients]
         for client in clients:
-            self._show_snapshot_in(client)
-
-    def _show_snapshot_in(self, client: Any) -> None:
-        self.snapshots.show_in(client)
+            self.snapshots.show_in(client)
 
     def close(self) -> None:
         """Stop the sender and the routing threads (the server is stopping)."""

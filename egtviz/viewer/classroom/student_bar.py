@@ -14,16 +14,30 @@ from typing import Any
 import viser
 
 from ..render.palette import PRESENT_GUI_CSS
-from ..workbench.fields import on_event
+from ..workbench.fields import FieldError, on_event
 from .room_html import pause_html, student_status_html
 
-__all__ = ["BAR_ORDER", "JoinPage", "StudentBar"]
+__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "typed_answer"]
 
 #: GUI order of the bar: above everything a workbench or a lesson adds.
 BAR_ORDER = -1000.0
 #: The join page's width and margin (CSS pixels).
 JOIN_WIDTH_PX = 480
 JOIN_MARGIN_PX = 16
+
+
+def typed_answer(text: Any) -> float | str:
+    """An answer as typed: a number (``1,5`` reads as 1.5) or, failing that, the text.
+
+    Raises:
+        FieldError: nothing typed.
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise FieldError("your answer: type it first")
+    try:
+        return float(text.strip().replace(",", "."))
+    except ValueError:
+        return text.strip()
 
 
 class JoinPage:
@@ -62,12 +76,12 @@ class StudentBar:
         client: the tab.
         name: the student's name (shown as text).
         on_follow: ``on_follow(True)`` to follow the instructor, ``False`` to leave follow.
-        on_answer: called with the text of an answer.
+        on_answer: ``on_answer(question, value)`` records the student's answer (:func:`typed_answer`'s value).
         report: shows an exception in the tab.
     """
 
     def __init__(self, client: Any, name: str, *, on_follow: Callable[[bool], None],
-                 on_answer: Callable[[str], None], report: Callable[[BaseException], None]) -> None:
+                 on_answer: Callable[[str, float | str], None], report: Callable[[BaseException], None]) -> None:
         self.client = client
         self.name = name
         self.following = False
@@ -81,7 +95,15 @@ class StudentBar:
             self.answer = gui.add_text("your answer", "", order=BAR_ORDER + 0.2, visible=False)
             self.btn_answer = gui.add_button("Send my answer", order=BAR_ORDER + 0.3, visible=False)
         on_event(self.btn_follow.on_click, lambda _: on_follow(not self.following), report)
-        on_event(self.btn_answer.on_click, lambda _: on_answer(self.answer.value), report)
+        on_event(self.btn_answer.on_click, lambda _: self._send(on_answer), report)
+
+    def _send(self, on_answer: Callable[[str, float | str], None]) -> None:
+        question = self.question
+        if question is None:
+            raise FieldError("your answer: no question is asked at the moment")
+        on_answer(question, typed_answer(self.answer.value))
+        self.client.add_notification("Answer sent", "The instructor sees it (without your name).", color="green",
+                                     auto_close_seconds=3.0)
 
     def show(self, following: bool, question: str | None) -> None:
         """Say whether the tab follows the instructor, and show the question asked (None: none)."""
