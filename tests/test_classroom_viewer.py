@@ -154,3 +154,37 @@ def test_an_empty_answer_is_refused(typed):
 
     with pytest.raises(FieldError, match="type it first"):
         typed_answer(typed)
+
+
+def test_the_page_under_the_instructor_prefix_and_the_handshake_path():
+    import urllib.error
+
+    import viser
+
+    from egtviz.viewer.server.guard import handshake_of, install_guards, serve_page_under
+    from egtviz.viewer.server.headless import FakeTab
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        install_guards(server)
+        with pytest.raises(ValueError, match="prefix"):
+            serve_page_under(server, "egtviz-instructor/")
+        serve_page_under(server, INSTRUCTOR_PREFIX)
+        base = f"http://127.0.0.1:{server.get_port()}"
+        page = urllib.request.urlopen(base + "/", timeout=30).read()
+        for path in (f"{INSTRUCTOR_PREFIX}/{TOKEN}", f"{INSTRUCTOR_PREFIX}/{TOKEN}/", f"{INSTRUCTOR_PREFIX}/"):
+            assert urllib.request.urlopen(base + path, timeout=30).read() == page
+        for path in (f"{INSTRUCTOR_PREFIX}/a/../../pyproject.toml", f"{INSTRUCTOR_PREFIX}x/{TOKEN}"):
+            with pytest.raises(urllib.error.HTTPError, match="404"):
+                urllib.request.urlopen(base + path, timeout=30)
+        student = FakeTab(server.get_port())
+        deadline = time.monotonic() + 30
+        while not server.get_clients() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        (cid,) = server.get_clients()
+        shake = handshake_of(server, cid)
+        assert shake is not None and shake.path == "/" and shake.peer == "127.0.0.1"
+        student.close()
+        assert handshake_of(server, 10_000) is None
+    finally:
+        server.stop()
