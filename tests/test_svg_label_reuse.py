@@ -156,3 +156,15 @@ def test_number_fates_are_decided_as_one_number_at_a_time(n, n_first, m, seed):
     reach = rng.uniform(1, 4, n_first + n)
     assert svg.number_fates(boxes, n_first, anchors, reach, obstacles, shown) == _fates_by_label(
         boxes, n_first, anchors, reach, obstacles, shown)
+
+
+@settings(max_examples=300, deadline=None)
+@given(box=st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=4, max_size=4),
+       size=st.floats(0.1, 100.0), mark_x=st.floats(-1e6, 1e6))
+def test_a_label_is_written_with_the_panels_number_format(box, size, mark_x):
+    x0, y0, x1, y1 = box
+    got = svg.label_text(box, size, "7", ' fill="#000"', mark_x)
+    x = x1 if x1 <= mark_x else x0 if x0 >= mark_x else (x0 + x1) / 2
+    n = svg.svg_number
+    assert f'x="{n(x)}" y="{n(y1 - 0.17 * size)}" ' in got
+    assert f'data-box="{n(x0)} {n(y0)} {n(x1)} {n(y1)}" fill="#000">7</text>' in got

@@ -479,6 +479,10 @@ def numbered_points(n_in_image: int, show_labels: bool | str) -> bool:
     return bool(show_labels) and show_labels != "marked" and n_in_image <= MAX_NUMBERED_POINTS
 
 
+#: A placed label's text in one %-format: ``"%.5g"`` writes a float as :func:`svg_number` does, for every float.
+_LABEL_TEXT = '<text x="%.5g" y="%.5g" text-anchor="%s" data-box="%.5g %.5g %.5g %.5g"%s>%s</text>'
+
+
 def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> str:
     """A text written in its placed box, on the side towards its mark (``mark_x``), baseline near the bottom.
 
@@ -493,11 +497,7 @@ def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> s
         x, anchor = x0, "start"
     else:
         x, anchor = (x0 + x1) / 2, "middle"
-    # One %-format: "%.5g" writes a float as svg_number does (the same text for every float).
     return _LABEL_TEXT % (x, y1 - 0.17 * size, anchor, x0, y0, x1, y1, attrs, text)
-
-
-_LABEL_TEXT = '<text x="%.5g" y="%.5g" text-anchor="%s" data-box="%.5g %.5g %.5g %.5g"%s>%s</text>'
 
 
 def number_fates(boxes: np.ndarray, n_first: int, anchors: np.ndarray, reach: np.ndarray,
