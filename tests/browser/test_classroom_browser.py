@@ -210,6 +210,10 @@ def test_release_lock_and_rejoin_with_three_tabs(browser, room):
         _wait(lambda: len(host.followers) == 0, what="no follower")
         own = {cid: v for cid, v in room.app.views.items() if v is not room.view}
         assert len(own) == 2
+        # Their workbench is laid out for the whole window (not the canvas the follow view's controls left):
+        # both image planes side by side in view, as in the instructor's tab of the same size.
+        for v in own.values():
+            assert v.window[0] == room.view.window[0] and v.grid.columns == room.view.grid.columns
         before = [p.evaluate(PANEL_JS, "cam1") for p in (p1, p2)]
         _drag(room.view, "cam1", 0.3)
         time.sleep(1.0)

@@ -60,8 +60,8 @@ class FollowView:
         client: the tab's viser client.
         frame: the room's frame at the start (None: the instructor has shown nothing yet).
         present: start in presentation mode (large type); a frame drawn in presentation mode turns it on too.
-        window: the tab's window as a workbench it showed before measured it (None: from the canvas it reports
-            now, before this view docks its controls).
+        window: the tab's window and device pixel ratio as a workbench it showed before measured them (None:
+            from the canvas it reports now, before this view docks its controls).
     """
 
     def __init__(self, client: Any, frame: RoomFrame | None, *, present: bool = False,
@@ -78,7 +78,9 @@ class FollowView:
         self._layout_key: tuple | None = None
         self.present = False
         # Measured once, before the controls dock and narrow the canvas (as the workbench's panel dock does).
-        self.window = window if window is not None else self._canvas_window()
+        #: The tab's window (CSS pixels) and its device pixels per CSS pixel.
+        measured: tuple[Any, float] = window if window is not None else self._canvas_window()
+        self.window, self.pixel_ratio = measured
         with self.lock, client.atomic():
             try:  # docked on the left, as in the workbench: the scene in the middle, the panels on the right
                 client.gui.main_panel.dock_left()
@@ -152,11 +154,13 @@ class FollowView:
         self.style.content = PRESENT_GUI_CSS if present else ""
         self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if present else 1.0)
 
-    def _canvas_window(self) -> Any:
+    def _canvas_window(self) -> tuple[Any, float]:
         try:
-            return window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
+            width = self.client.camera.image_width
+            window = window_from_canvas(width, self.client.camera.image_height)
         except (AssertionError, AttributeError):
-            return DEFAULT_WINDOW
+            return DEFAULT_WINDOW, 1.0
+        return window, (float(width) / window.width if window is not DEFAULT_WINDOW else 1.0)
 
     def _layout(self, frame: RoomFrame) -> None:
         """Dock one panel per image plane, as the grid for this tab's window places them (again only when the

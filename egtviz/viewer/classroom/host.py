@@ -236,7 +236,7 @@ class ClassroomHost:
             if cid in self.followers or cid not in self._clients:
                 return
         own = self.app.views.get(cid)
-        window = own.window[0] if own is not None else None
+        window = own.window if own is not None else None
         self.app.clear_tab(client)
         view = FollowView(client, self.sender.latest, present=bool(getattr(self.app, "present", False)),
                           window=window)
@@ -261,6 +261,7 @@ class ClassroomHost:
             return  # already on their own scene
         if follower is not None:
             follower.close()
+            self.app.remember_window(cid, (follower.window, follower.pixel_ratio))
         shared = self.room.shared()
         if (self.room.mode is Mode.TASKS and self.app.course is not None and shared.lesson is not None
                 and self.room.may_open(shared.lesson, shared.step or 0)):

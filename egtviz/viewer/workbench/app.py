@@ -703,6 +703,12 @@ class EgtvizApp:
             self.views[client.client_id] = view
         return view
 
+    def remember_window(self, client_id: int, window: tuple[WindowSize, float]) -> None:
+        """The tab's window (CSS pixels, device pixels per CSS pixel) as a view it showed measured it: the tab's
+        next workbench lays its panels out for it (the canvas it reports meanwhile is narrowed by what is docked)."""
+        with self._lock:
+            self._windows[client_id] = window
+
     def clear_tab(self, client: viser.ClientHandle) -> None:
         """Close the tab's workbench or servo demo and empty its GUI and 3D scene."""
         cid = client.client_id
