@@ -398,6 +398,12 @@ def test_released_to_tasks_students_open_the_instructors_step_and_pacing_holds_n
         host.room.pace(lesson, None)
         page.get_by_role("button", name="next").click()
         _wait(lambda: student.run.step_index == 2, what="the next step once paced open")
+        # Released to explore from the tasks: the student leaves the lesson for their own scene.
+        room.page.get_by_role("button", name="explore").click()
+        _wait(lambda: cid in app.views and app.views[cid].model is not student.run.model
+              and _bar(page) == "false", what="back on their own scene")
+        _wait(lambda: app.views[cid].model.scene is host.room.own_scene("Hal"), what="their own scene kept")
+        assert host.room.own_scene("Hal") is not student.run.model.scene
     finally:
         host.room.pace(lesson, None)
         host.room.set_mode(Mode.FOLLOW)

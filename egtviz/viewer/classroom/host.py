@@ -256,15 +256,18 @@ class ClassroomHost:
         name = self.room.name_of(cid)
         if name is None:
             return
-        if follower is None and cid in self.app.views:
+        shared = self.room.shared()
+        tasks = (self.room.mode is Mode.TASKS and self.app.course is not None and shared.lesson is not None
+                 and self.room.may_open(shared.lesson, shared.step or 0))
+        view = self.app.views.get(cid)
+        if follower is None and view is not None and (self._lesson_run(cid, view) is not None) == tasks:
             self._sync_bar(cid)
-            return  # already on their own scene
+            return  # already where the class wants them: their scene, or the lesson's tasks
         if follower is not None:
             follower.close()
             self.app.remember_window(cid, (follower.window, follower.pixel_ratio))
-        shared = self.room.shared()
-        if (self.room.mode is Mode.TASKS and self.app.course is not None and shared.lesson is not None
-                and self.room.may_open(shared.lesson, shared.step or 0)):
+        if tasks:
+            assert shared.lesson is not None and self.app.course is not None
             panel = self.app.course.open_lesson(client, shared.lesson, name)
             if panel is not None:
                 panel.may_enter = self.room.may_open
@@ -291,11 +294,11 @@ class ClassroomHost:
         name = self.room.name_of(cid)
         if name is None:
             return
-        self.room.keep_scene(name, view.model.scene)
         run = self._lesson_run(cid, view)
-        if run is not None:
+        if run is not None:  # a lesson's scene is the lesson's: their own scene stays as they left it
             self.room.report_step(cid, run.lesson.name, run.step_index)
         else:
+            self.room.keep_scene(name, view.model.scene)
             self.room.report_step(cid, None, None)
 
     def _build_bar(self, client: Any) -> None:
@@ -342,7 +345,8 @@ class ClassroomHost:
     def set_follow_me(self, client: Any, on: bool) -> None:
         """Follow me (every student shows this tab's scene) or release them to explore."""
         if not on:
-            self.release(Mode.EXPLORE)
+            if self.room.mode is Mode.FOLLOW:  # already released (to the tasks, say): stays so
+                self.release(Mode.EXPLORE)
             return
         self.room.set_mode(Mode.FOLLOW)
         view = self.app.views.get(client.client_id)
@@ -378,6 +382,11 @@ class ClassroomHost:
         elif isinstance(event, ModeChanged):
             if event.mode is not Mode.FOLLOW:
                 self.sender.clear_pending()
+            # Released students move too (explore <-> tasks): no FollowChanged tells them.
+            with self._lock:
+                students = [cid for cid, role in self._roles.items() if role == "student"]
+            for cid in students:
+                self._routes.submit(self._route, cid)
         elif isinstance(event, PauseChanged):
             for bar in self._copy(self.bars).values():
                 bar.set_paused(event.message)

@@ -8,6 +8,7 @@ The panel only reads the classroom and calls it; what each control does to the s
 
 from __future__ import annotations
 
+import threading
 from html import escape
 from typing import TYPE_CHECKING, Any
 
@@ -47,6 +48,8 @@ class InstructorPanel:
         self.room = host.room
         self._report = report
         self._students: dict[str, int] = {}
+        # Per thread: a value written back by refresh() calls its callbacks at once, in the refreshing thread.
+        self._syncing = threading.local()
         gui = client.gui
         with client.atomic(), gui.add_folder("Classroom", order=-1000.0, expand_by_default=True):
             self.status = gui.add_html("")
@@ -101,19 +104,27 @@ class InstructorPanel:
 
     def _wire(self) -> None:
         host, rep = self.host, self._report
-        on_event(self.follow_me.on_update, lambda e: host.set_follow_me(self.client, bool(e.target.value)), rep)
+        on_event(self.follow_me.on_update, lambda e: self._unless_syncing(
+            lambda: host.set_follow_me(self.client, bool(e.target.value))), rep)
         on_event(self.release.on_click, lambda e: host.release(self._release_mode(e.target.value)), rep)
-        on_event(self.lock.on_update, lambda e: self.room.lock_cameras(bool(e.target.value)), rep)
+        on_event(self.lock.on_update, lambda e: self._unless_syncing(
+            lambda: self.room.lock_cameras(bool(e.target.value))), rep)
         on_event(self.pause.on_click, lambda _: self._toggle_pause(), rep)
         on_event(self.csv.on_click, lambda _: self.client.send_file_download(
             "egtviz-roster.csv", self.room.roster_csv().encode("utf-8"), save_immediately=True), rep)
         on_event(self.ask.on_click,
                  lambda e: self.room.ask(self.question.value if e.target.value == "ask" else None), rep)
-        on_event(self.show_names.on_update, lambda e: self.room.show_names(bool(e.target.value)), rep)
+        on_event(self.show_names.on_update, lambda e: self._unless_syncing(
+            lambda: self.room.show_names(bool(e.target.value))), rep)
         on_event(self.snapshot.on_click, lambda e: self._snapshot(e.target.value), rep)
         on_event(self.apply_pacing.on_click, lambda _: self._apply_pacing(), rep)
 
     # -- actions ---------------------------------------------------------------------------------------
+
+    def _unless_syncing(self, action: Any) -> None:
+        """Run a checkbox's action, unless the change is :meth:`refresh` writing the class's state back."""
+        if not getattr(self._syncing, "on", False):
+            action()
 
     @staticmethod
     def _release_mode(label: Any) -> Mode:
@@ -168,12 +179,16 @@ class InstructorPanel:
             self.status.content = status_html(len(connected), sum(r.following for r in connected), mode.value,
                                               paused)
             self.pause.label = "Resume every screen" if paused is not None else "Pause every screen"
-            if self.follow_me.value != (mode is Mode.FOLLOW):
-                self.follow_me.value = mode is Mode.FOLLOW
-            if self.lock.value != self.room.cameras_locked:
-                self.lock.value = self.room.cameras_locked
-            if self.show_names.value != self.room.names_shown():
-                self.show_names.value = self.room.names_shown()
+            self._syncing.on = True
+            try:
+                if self.follow_me.value != (mode is Mode.FOLLOW):
+                    self.follow_me.value = mode is Mode.FOLLOW
+                if self.lock.value != self.room.cameras_locked:
+                    self.lock.value = self.room.cameras_locked
+                if self.show_names.value != self.room.names_shown():
+                    self.show_names.value = self.room.names_shown()
+            finally:
+                self._syncing.on = False
             self.roster.content = roster_html(rows)
             self._students = self.host.student_tabs()
             options = tuple(self._students) or (_NO_STUDENT,)
