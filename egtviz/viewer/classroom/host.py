@@ -34,7 +34,7 @@ from .links import INSTRUCTOR_PREFIX, token_from_path
 from .room_html import step_caption
 from .room_sender import RoomSender, frame_from_scene, frame_of
 from .snapshot_pane import RoomSnapshots
-from .student_bar import JoinPage, StudentBar
+from .student_bar import JoinPage, StudentBar, stored_name
 from .instructor_panel import InstructorPanel
 
 __all__ = ["NAME_KEY", "ClassroomHost"]
@@ -43,6 +43,8 @@ __all__ = ["NAME_KEY", "ClassroomHost"]
 NAME_KEY = "egtviz-classroom-name"
 #: Seconds a new tab is given to say whether it holds a name.
 NAME_TIMEOUT = 3.0
+#: Seconds to wait for the instructor's own frame of a scene published on another process before drawing it here.
+SHARED_GRACE_S = 0.2
 _REFUSED_PAGE = ('<div data-egtviz="refused" style="padding:0.6em;font-size:1.2em">This link is not valid.</div>')
 
 
@@ -72,7 +74,9 @@ class ClassroomHost:
         self._tab_locks: dict[int, threading.RLock] = {}
         self._publishing = threading.local()
         self._routes = ThreadPoolExecutor(max_workers=2, thread_name_prefix="egtviz-class-route")
-        self.sender = RoomSender(lambda: list(self._copy(self.followers).values()))
+        #: Sends the room's frames to this process's followers (a relay between processes may wrap it).
+        self.sender: Any = RoomSender(lambda: list(self._copy(self.followers).values()))
+        self._own_sender = self.sender
         self.cameras = CameraLock(self.room, lambda: self._copy(self.followers))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
@@ -114,7 +118,7 @@ class ClassroomHost:
             return True
         with self._lock:
             self._roles[cid] = "joining"
-        name = self._stored_name(client)
+        name = stored_name(client, NAME_KEY, NAME_TIMEOUT)
         if name:
             try:
                 self.join(client, name)
@@ -186,13 +190,6 @@ class ClassroomHost:
             self.room.leave(client_id)
 
     # -- students ---------------------------------------------------------------------------------------
-
-    def _stored_name(self, client: Any) -> str | None:
-        try:
-            value = client.local_storage.get_item(NAME_KEY, timeout=NAME_TIMEOUT)
-        except Exception:  # noqa: BLE001 - no storage, or no answer in time: the student types their name
-            return None
-        return value if isinstance(value, str) and value.strip() else None
 
     def join(self, client: Any, name: Any) -> None:
         """The student on ``client`` joins the class as ``name`` (refused names raise, and the tab says why)."""
@@ -405,16 +402,22 @@ class ClassroomHost:
             self._refresh.mark()
 
     def _shared_changed(self, version: int) -> None:
-        """A scene published by an instructor on another server process (the class's state was adopted): draw
-        its frame here, once, for this process's followers. The instructor's own tab sends its frames itself."""
+        """A scene published by an instructor on another server process (the class's state was adopted): unless
+        that instructor's own frame of it arrives within :data:`SHARED_GRACE_S` (a relay of frames between
+        processes), draw it here, once, for this process's followers only."""
         if getattr(self._publishing, "on", False):
-            return
-        latest = self.sender.latest
-        shared = self.room.shared()
+            return  # this process's instructor tab: it sends its own frames
+        timer = threading.Timer(SHARED_GRACE_S, self._draw_shared, args=(version,))
+        timer.daemon = True
+        timer.start()
+
+    def _draw_shared(self, version: int) -> None:
+        sender = self._own_sender  # never a relay: a frame drawn here is this process's
+        latest, shared = sender.latest, self.room.shared()
         if shared.scene is None or shared.version != version or (latest is not None and latest.version >= version):
             return
         present = bool(getattr(self.app, "present", False))
-        self.sender.post(frame_from_scene(shared.scene, version, self.sender.next_number(), present=present))
+        sender.post(frame_from_scene(shared.scene, version, sender.next_number(), present=present))
 
     def _refresh_panels(self) -> None:
         for panel in self._copy(self.panels).values():

@@ -17,13 +17,23 @@ from ..render.palette import PRESENT_GUI_CSS
 from ..workbench.fields import FieldError, on_event
 from .room_html import pause_html, student_status_html
 
-__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "typed_answer"]
+__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "stored_name", "typed_answer"]
 
 #: GUI order of the bar: above everything a workbench or a lesson adds.
 BAR_ORDER = -1000.0
 #: The join page's width and margin (CSS pixels).
 JOIN_WIDTH_PX = 480
 JOIN_MARGIN_PX = 16
+
+
+def stored_name(client: Any, key: str, timeout: float) -> str | None:
+    """The name the tab's browser keeps under ``key`` (a student back after a reconnect); None if it keeps none,
+    or does not answer within ``timeout`` seconds."""
+    try:
+        value = client.local_storage.get_item(key, timeout=timeout)
+    except Exception:  # noqa: BLE001 - no storage, or no answer in time: the student types their name
+        return None
+    return value if isinstance(value, str) and value.strip() else None
 
 
 def typed_answer(text: Any) -> float | str:
