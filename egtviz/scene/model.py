@@ -421,12 +421,16 @@ class SceneModel:
             raise SceneError(f"options: {name}: expected true or false, got {_short(value)}")
         self._replace(Change("options", (name,)), options=dataclasses.replace(opts, **{name: bool(value)}))
 
-    def lock(self, name: str, locked: bool = True) -> None:
-        """Lock (or unlock) a gizmo: a camera name or ``"point:<i>"``."""
+    def lock(self, name: str, locked: bool = True, *, undoable: bool = True) -> None:
+        """Lock (or unlock) a gizmo: a camera name or ``"point:<i>"``. ``undoable=False``: a lock the learner's
+        undo must not lift (the class's), kept out of the undo history."""
         if type(name) is not str:
             raise SceneError(f"locked: expected a camera name or 'point:<i>', got {_short(name)}")
         new = self._scene.locked | {name} if locked else self._scene.locked - {name}
-        self._replace(Change("lock", (name,)), locked=new)
+        if undoable:
+            self._replace(Change("lock", (name,)), locked=new)
+            return
+        self._commit(self._scene.replace(locked=new), Change("lock", (name,)), undoable=False)
 
     def highlight(self, names: Any) -> None:
         """Draw attention to these camera names and ``"point:<i>"`` (a list; replaces the previous ones)."""

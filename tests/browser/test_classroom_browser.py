@@ -17,7 +17,7 @@ import pytest
 from egtviz.classroom import Classroom, Mode
 from egtviz.lessons import ProgressStore
 from egtviz.viewer.classroom import ClassroomHost, instructor_url
-from egtviz.viewer.server.browser import chromium
+from egtviz.viewer.server.browser import chromium, folder_field
 from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client
 from egtviz.viewer.workbench.fields import safe_callback
 
@@ -248,6 +248,54 @@ def test_release_lock_and_rejoin_with_three_tabs(browser, room):
     finally:
         c1.close()
         c2.close()
+
+
+def _drag_to_end(view, name, dx):
+    """A whole gizmo drag of camera ``name`` by ``dx`` metres along x: its updates, then its end."""
+    _drag(view, name, dx)
+    gizmo = view.scene3d.gizmo(name)
+    try:
+        view.drag.camera_event(name, types.SimpleNamespace(target=gizmo, phase="end", client=None, client_id=None))
+    except Exception:  # noqa: BLE001 - a locked camera's drag ends refused: the camera stays
+        pass
+
+
+def test_the_class_lock_holds_a_released_students_own_cameras_until_unlocked(browser, room):
+    host = room.host
+    host.room.set_mode(Mode.EXPLORE)
+    ctx, page = _join(browser, room.base, "Gil")
+    try:
+        cid = _wait(lambda: host.student_tabs().get("Gil"), what="Gil's tab")
+        view = _wait(lambda: room.app.views.get(cid), what="Gil's own workbench")
+        page.wait_for_selector('svg[data-egtviz="image-plane"][data-camera="cam1"]', timeout=60_000)
+        _field(room.page, "lock students' cameras").click()
+        _wait(lambda: host.room.cameras_locked, what="cameras locked from the panel")
+        _wait(lambda: set(view.model.scene.camera_names) <= view.model.scene.locked, what="Gil's cameras locked")
+        page.get_by_text("The instructor has locked the cameras").first.wait_for(timeout=30_000)
+        time.sleep(0.5)  # the lock's own redraw settles
+        where, panel = tuple(view.model.scene.camera("cam1").position), page.evaluate(PANEL_JS, "cam1")
+        # A gizmo drag (as the browser sends it) and a typed position are both refused.
+        _drag_to_end(view, "cam1", 0.8)
+        field = folder_field(page, "cam1 (pin-hole)", "position x, y, z (m)")
+        field.click()
+        field.fill("1.5, -6, 2")
+        field.press("Enter")
+        time.sleep(1.5)  # a field is judged when the typing stops
+        assert tuple(view.model.scene.camera("cam1").position) == where
+        assert page.evaluate(PANEL_JS, "cam1") == panel
+        # Unlocked: the same drag moves the camera, and the panel shows it.
+        _field(room.page, "lock students' cameras").click()
+        _wait(lambda: not host.room.cameras_locked, what="cameras unlocked from the panel")
+        _wait(lambda: not view.model.scene.locked, what="Gil's cameras unlocked")
+        _drag_to_end(view, "cam1", 0.8)
+        _wait(lambda: abs(view.model.scene.camera("cam1").position[0] - (where[0] + 0.8)) < 1e-9,
+              what="the drag to move Gil's camera")
+        _wait(lambda: page.evaluate(PANEL_JS, "cam1") != panel, what="Gil's panel to show the move")
+    finally:
+        if host.room.cameras_locked:
+            host.room.lock_cameras(False)
+        host.room.set_mode(Mode.FOLLOW)
+        ctx.close()
 
 
 def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):

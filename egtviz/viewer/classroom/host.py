@@ -77,7 +77,8 @@ class ClassroomHost:
         #: Sends the room's frames to this process's followers (a relay between processes may wrap it).
         self.sender: Any = RoomSender(lambda: list(self._copy(self.followers).values()))
         self._own_sender = self.sender
-        self.cameras = CameraLock(self.room, lambda: self._copy(self.followers))
+        self.cameras = CameraLock(self.room, lambda: self._copy(self.followers),
+                                  released=lambda: (self._copy(self._roles), dict(self.app.views)))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
         # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
@@ -259,6 +260,7 @@ class ClassroomHost:
         view = self.app.views.get(cid)
         if follower is None and view is not None and (self._lesson_run(cid, view) is not None) == tasks:
             self._sync_bar(cid)
+            self.cameras.released(view, shown=False)
             return  # already where the class wants them: their scene, or the lesson's tasks
         if follower is not None:
             follower.close()
@@ -273,6 +275,7 @@ class ClassroomHost:
         else:
             self.app.show_workbench(client, self._own_model(name))
         self._sync_bar(cid)
+        self.cameras.released(self.app.views.get(cid), shown=True)  # its cameras locked with the class's
 
     def _own_model(self, name: str) -> SceneModel:
         """The student's own scene: kept in this process, else the class's copy, else the room's scene."""
@@ -295,7 +298,7 @@ class ClassroomHost:
         if run is not None:  # a lesson's scene is the lesson's: their own scene stays as they left it
             self.room.report_step(cid, run.lesson.name, run.step_index)
         else:
-            self.room.keep_scene(name, view.model.scene)
+            self.room.keep_scene(name, self.cameras.scenes.without_class_locks(view.model, view.model.scene))
             self.room.report_step(cid, None, None)
 
     def _build_bar(self, client: Any) -> None:
@@ -355,7 +358,6 @@ class ClassroomHost:
         """Release the students to their own scenes (``EXPLORE``) or to the lesson step's tasks (``TASKS``)."""
         self.room.set_mode(mode)
 
-
     def lesson_names(self) -> list[str]:
         course = self.app.course
         return list(course.lessons) if course is not None else []
@@ -387,9 +389,8 @@ class ClassroomHost:
         elif isinstance(event, PauseChanged):
             for bar in self._copy(self.bars).values():
                 bar.set_paused(event.message)
-        elif isinstance(event, CamerasLocked):
-            if event.locked:
-                self.cameras.hold_all()
+        elif isinstance(event, CamerasLocked):  # on every server process, as it adopts the class's state
+            self._routes.submit(self.cameras.class_changed)  # many scenes redrawn: not on the sender's thread
         elif isinstance(event, SnapshotShown):
             self._snapshot_changed()
         elif isinstance(event, SharedChanged):
