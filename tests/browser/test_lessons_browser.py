@@ -208,7 +208,7 @@ def test_screenshots_of_a_lesson(browser, course):
         _open_lesson(page, "6. Pin-hole epipolar geometry")
         panel = _panel(app)
         panel.view.present_checkbox.value = True  # as the "presentation mode" box does
-        page.wait_for_function(f"() => document.querySelector('{PANEL_SELECTOR}').dataset.style === 'present'",
+        page.wait_for_function(f"() => document.querySelector('{PANEL_SELECTOR}')?.dataset.style === 'present'",
                                timeout=TIMEOUT_MS)
         time.sleep(1.0)
         page.screenshot(path=str(ASSETS / "screenshot-lesson-present.png"))

@@ -27,7 +27,7 @@ from ...classroom import (
 )
 from ...scene import SceneModel
 from ..server.guard import handshake_of, serve_page_under
-from ..workbench.fields import FieldError, notify_error
+from ..workbench.fields import FieldError, notify_error, on_event
 from .camera_lock import CameraLock
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
@@ -110,7 +110,7 @@ class ClassroomHost:
                 with self._lock:
                     self._roles[cid] = "instructor"
                 self.room.instructor_join(cid)
-                client.camera.on_update(self.cameras.instructor_moved)
+                on_event(client.camera.on_update, self.cameras.instructor_moved, lambda exc: notify_error(client, exc))
                 self._open_instructor(client)
                 return True
             with self._lock:
@@ -244,7 +244,8 @@ class ClassroomHost:
                 return
             self.followers[cid] = view
         self._sync_bar(cid)
-        client.camera.on_update(lambda cam: self.cameras.follower_moved(cid))
+        on_event(client.camera.on_update, lambda cam: self.cameras.follower_moved(cid),
+                 lambda exc: notify_error(client, exc))
         self.cameras.hold(view)
 
     def _show_own(self, client: Any) -> None:
