@@ -57,6 +57,7 @@ from .models.common import EMPTY_SEG as _EMPTY_SEG
 from .models.common import colours as _colours
 from .models.common import pair_colours as _pair_colours
 from .models.common import segments as _segments
+from .models.shared import SHARED, frozen
 from ..render.palette import BASELINE_COLOUR, CAMERA_COLOURS, hex_to_rgb, point_rgb
 from ..render.svg import MAX_NUMBERED_POINTS
 from ..server.viser_adapter import assign as _put
@@ -105,6 +106,16 @@ def _fan(k: int) -> np.ndarray:
     return out
 
 
+def _ray_segments(rays: np.ndarray, rows: tuple[int, ...] | None, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """Read-only float32 (S, 2, 3) segments and colours of the drawn rows of a camera's rays; None: none."""
+    seg, point = _segments(rays, rows)
+    return (frozen(seg), frozen(_pair_colours(n)[point])) if len(seg) else None
+
+
+def _baseline_segment(baseline: Any) -> np.ndarray:
+    return frozen(np.array(baseline, np.float32)[None])
+
+
 class Scene3D:
     """Owns one client's 3D nodes; :meth:`draw` brings them up to date with a scene snapshot."""
 
@@ -139,6 +150,9 @@ class Scene3D:
         self._points_key: Any = None
         self._points_prev = np.zeros((0, 3))
         self._surf_pts = np.zeros((0, 3))
+        #: The derived baseline and epipolar polygon last assigned (the same objects: nothing to send).
+        self._baseline_src: Any = None
+        self._epiplane_src: Any = None
         self._static()
         self.points = api.add_point_cloud(
             "/egt/points", _EMPTY_PTS, (0, 0, 0), point_size=0.12, point_shape="circle", visible=False
@@ -392,28 +406,35 @@ class Scene3D:
             ))
             rays = self._rays[name]
             src = derived.rays.get(name)
-            if src is None or nodes.get("_rays_src") is not src or nodes.get("_rays_rows") != ray_rows:
-                # An unchanged camera brings the same array: same rows, same node.
-                seg, point = _segments(src, ray_rows) if src is not None else _segments(np.zeros((0, 2, 3)))
-                if len(seg):
-                    _put_array(rays, "points", seg)
-                    _put_array(rays, "colors", _pair_colours(n)[point])
-                nodes["_rays_src"], nodes["_rays_rows"], nodes["_rays_n"] = src, ray_rows, len(seg)
-            _put(rays, "visible", opts.show_rays and nodes["_rays_n"] > 0)
+            # An unchanged camera brings the same array, hence the same prepared segments: the node is not touched.
+            seg = None if src is None else SHARED.get("scene3d.rays", (src,), (ray_rows, n),
+                                                      lambda: _ray_segments(src, ray_rows, n))
+            if "_rays_seg" not in nodes or nodes["_rays_seg"] is not seg:
+                if seg is not None:
+                    _put_array(rays, "points", seg[0])
+                    _put_array(rays, "colors", seg[1])
+                nodes["_rays_seg"] = seg
+            _put(rays, "visible", opts.show_rays and seg is not None)
 
         self._sync_points(scene)
 
         if derived.baseline is not None:
-            _put_array(self.baseline, "points", np.asarray(derived.baseline, np.float32)[None])
+            if self._baseline_src is not derived.baseline:
+                _put_array(self.baseline, "points", SHARED.get("scene3d.baseline", (derived.baseline,), None,
+                                                               lambda: _baseline_segment(derived.baseline)))
+                self._baseline_src = derived.baseline
             _put(self.baseline, "visible", True)
         else:
             _put(self.baseline, "visible", False)
 
         polygon = derived.epipolar_plane
         if polygon is not None and opts.show_planes:
-            V = np.asarray(polygon, np.float32)
-            _put_array(self.epiplane, "vertices", V)
-            _put_array(self.epiplane, "faces", _fan(len(V)))
+            if self._epiplane_src is not polygon:
+                V = SHARED.get("scene3d.epiplane", (polygon,), None,
+                               lambda: frozen(np.asarray(polygon, np.float32)))
+                _put_array(self.epiplane, "vertices", V)
+                _put_array(self.epiplane, "faces", _fan(len(V)))
+                self._epiplane_src = polygon
             _put(self.epiplane, "color", point_rgb(sel) if sel is not None else (120, 120, 120))
             _put(self.epiplane, "visible", True)
         else:

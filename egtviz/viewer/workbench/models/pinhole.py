@@ -10,6 +10,7 @@ import numpy as np
 from ...server.viser_adapter import assign, assign_array
 from . import CameraDrawing, DrawContext
 from .common import EMPTY_PTS, EMPTY_SEG, colours, pair_colours, segments
+from .shared import SHARED, frozen
 
 if TYPE_CHECKING:
     from ....geometry.pinhole import PinholeCamera
@@ -30,9 +31,9 @@ class PinholeDrawing(CameraDrawing["PinholeCamera"]):
                                            point_shape="circle", visible=False)
         self.img_lines = api.add_line_segments(f"/egt/img3d_{k}_lines", EMPTY_SEG, (0, 0, 0), thickness=0.006,
                                                visible=False)
-        self._shape: tuple[float, float] | None = None
-        self._pts_src: Any = None
-        self._lines_key: Any = None
+        self._shape: tuple[float, float, float] | None = None
+        self._pts_src: Any = False  # the prepared arrays last assigned (None: nothing to draw)
+        self._lines_key: Any = False
 
     def named_nodes(self) -> dict[str, Any]:
         return {"frustum": self.frustum, "img_pts": self.img_pts, "img_lines": self.img_lines}
@@ -42,46 +43,68 @@ class PinholeDrawing(CameraDrawing["PinholeCamera"]):
         return self.frustum
 
     def update(self, camera: PinholeCamera, plane: ImagePlane, ctx: DrawContext) -> None:
-        K = camera.projective_calibration
-        shape = (2.0 * math.atan2(camera.height / 2.0, float(K[1, 1])), camera.width / camera.height)
+        # Each array is prepared once per derived camera and plane (SHARED: a classroom's followers draw the
+        # instructor's), and assigned only when this drawing holds another one.
+        shape = SHARED.get("pinhole.shape", (camera,), None, lambda: _frustum_shape(camera))
         if shape != self._shape:
-            fov, aspect = shape
-            y = math.tan(fov / 2.0)
-            # viser normalises the frustum to unit volume; undo that so the image plane sits at IMAGE_PLANE_DEPTH.
-            scale = IMAGE_PLANE_DEPTH * float(np.cbrt(y * aspect * y / 3.0))
+            fov, aspect, scale = shape
             assign(self.frustum, "fov", fov)
             assign(self.frustum, "aspect", aspect)
             assign(self.frustum, "scale", scale)
             self._shape = shape
-        n = len(plane.points)
-        if self._pts_src is not plane.points:  # an unchanged camera brings the same array
-            ok = np.flatnonzero(plane.visible)
-            if len(ok):
-                P = camera.image_to_world(plane.points[ok], IMAGE_PLANE_DEPTH, check=False)  # derived pixels
-                assign_array(self.img_pts, "points", P.astype(np.float32))
-                assign_array(self.img_pts, "colors", np.ascontiguousarray(colours(n)[ok]))
-            assign(self.img_pts, "visible", len(ok) > 0)
-            self._pts_src = plane.points
-        old = self._lines_key
-        if old is None or old[0] is not plane.lines or old[1] is not camera or old[2] != ctx.line_rows:
-            L = plane.lines
-            seg: np.ndarray | tuple[()] = ()
-            point: np.ndarray | tuple[()] = ()
-            if L is not None and len(L):
-                # Only the drawn rows (above MAX_RAY_POINTS points, the selected point's) go to the image plane in 3D.
-                rows = np.arange(len(L)) if ctx.line_rows is None else np.asarray(ctx.line_rows, np.intp)
-                hit = rows[np.isfinite(L[rows]).all(axis=(1, 2))]
-                lines3 = np.full((len(L), 2, 3), np.nan)
-                if len(hit):
-                    lines3[hit] = camera.image_to_world(L[hit].reshape(-1, 2), IMAGE_PLANE_DEPTH,
-                                                        check=False).reshape(-1, 2, 3)
-                seg, point = segments(lines3, ctx.line_rows)
-                if len(seg):
-                    assign_array(self.img_lines, "points", seg)
-                    assign_array(self.img_lines, "colors", np.ascontiguousarray(pair_colours(n)[point]))
-            assign(self.img_lines, "visible", len(seg) > 0)
-            self._lines_key = (plane.lines, camera, ctx.line_rows)
+        pts = SHARED.get("pinhole.points", (camera, plane.points, plane.visible), None,
+                         lambda: _image_points(camera, plane))
+        if pts is not self._pts_src:
+            if pts is not None:
+                assign_array(self.img_pts, "points", pts[0])
+                assign_array(self.img_pts, "colors", pts[1])
+            assign(self.img_pts, "visible", pts is not None)
+            self._pts_src = pts
+        lines = SHARED.get("pinhole.lines", (camera, plane.lines, plane.points), ctx.line_rows,
+                           lambda: _image_lines(camera, plane, ctx.line_rows))
+        if lines is not self._lines_key:
+            if lines is not None:
+                assign_array(self.img_lines, "points", lines[0])
+                assign_array(self.img_lines, "colors", lines[1])
+            assign(self.img_lines, "visible", lines is not None)
+            self._lines_key = lines
 
     def remove(self) -> None:
         self.img_pts.remove()
         self.img_lines.remove()
+
+
+def _frustum_shape(camera: PinholeCamera) -> tuple[float, float, float]:
+    """``(fov, aspect, scale)`` of the frustum node that puts the image plane at ``IMAGE_PLANE_DEPTH``."""
+    K = camera.projective_calibration
+    fov, aspect = 2.0 * math.atan2(camera.height / 2.0, float(K[1, 1])), camera.width / camera.height
+    y = math.tan(fov / 2.0)
+    # viser normalises the frustum to unit volume; undo that so the image plane sits at IMAGE_PLANE_DEPTH.
+    return fov, aspect, IMAGE_PLANE_DEPTH * float(np.cbrt(y * aspect * y / 3.0))
+
+
+def _image_points(camera: PinholeCamera, plane: ImagePlane) -> tuple[np.ndarray, np.ndarray] | None:
+    """float32 (M, 3) points and (M, 3) colours of the imaged points on the image plane in 3D; None: none."""
+    ok = np.flatnonzero(plane.visible)
+    if not len(ok):
+        return None
+    P = camera.image_to_world(plane.points[ok], IMAGE_PLANE_DEPTH, check=False)  # derived pixels
+    return frozen(P.astype(np.float32)), frozen(np.ascontiguousarray(colours(len(plane.points))[ok]))
+
+
+def _image_lines(camera: PinholeCamera, plane: ImagePlane,
+                 line_rows: tuple[int, ...] | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """float32 (S, 2, 3) segments and (S, 2, 3) colours of the drawn epipolar lines on the image plane in 3D
+    (above MAX_RAY_POINTS points, the selected point's only: ``line_rows``); None: none."""
+    L = plane.lines
+    if L is None or not len(L):
+        return None
+    rows = np.arange(len(L)) if line_rows is None else np.asarray(line_rows, np.intp)
+    hit = rows[np.isfinite(L[rows]).all(axis=(1, 2))]
+    lines3 = np.full((len(L), 2, 3), np.nan)
+    if len(hit):
+        lines3[hit] = camera.image_to_world(L[hit].reshape(-1, 2), IMAGE_PLANE_DEPTH, check=False).reshape(-1, 2, 3)
+    seg, point = segments(lines3, line_rows)
+    if not len(seg):
+        return None
+    return frozen(seg), frozen(np.ascontiguousarray(pair_colours(len(plane.points))[point]))

@@ -14,6 +14,7 @@ import numpy as np
 from ...server.viser_adapter import assign, assign_array
 from . import CameraDrawing, DrawContext
 from .common import EMPTY_SEG
+from .shared import SHARED
 
 if TYPE_CHECKING:
     from ....geometry.unified import UnifiedCamera
@@ -49,8 +50,8 @@ class UnifiedDrawing(CameraDrawing["UnifiedCamera"]):
 
     def update(self, camera: UnifiedCamera, plane: ImagePlane, ctx: DrawContext) -> None:
         # The camera and its derived arrays were checked when the scene was: the core's unchecked calls (every drag).
-        centre = camera.pose.to_local(camera.projection_centre(SPHERE_RADIUS, check=False), check=False)
-        assign(self.centre, "position", tuple(centre[0]))
+        # Once per derived camera (SHARED: a classroom's followers draw the instructor's).
+        assign(self.centre, "position", SHARED.get("unified.centre", (camera,), None, lambda: _centre(camera)))
         sel, normal = ctx.selected_point, ctx.selected_normal
         show = sel is not None and normal is not None and ctx.in_pair
         if sel is not None and normal is not None and ctx.in_pair:
@@ -67,3 +68,10 @@ class UnifiedDrawing(CameraDrawing["UnifiedCamera"]):
     def remove(self) -> None:
         self.on_sphere.remove()
         self.circle.remove()
+
+
+def _centre(camera: UnifiedCamera) -> tuple[float, ...]:
+    """The projection centre of the sphere drawn with radius ``SPHERE_RADIUS``, in the model frame."""
+    # The camera and its derived arrays were checked when the scene was: the core's unchecked calls (every drag).
+    centre = camera.pose.to_local(camera.projection_centre(SPHERE_RADIUS, check=False), check=False)
+    return tuple(centre[0])
