@@ -72,7 +72,7 @@ def test_the_class_lock_refuses_every_edit_of_a_pose_and_unlock_keeps_the_lesson
         model.update_camera(second, position=(1.0, 2.0, 3.0))
 
 
-def test_a_camera_unlocked_by_undo_or_added_while_locked_is_locked_again() -> None:
+def test_a_camera_unlocked_by_a_loaded_scene_or_added_while_locked_is_locked_again() -> None:
     model = SceneModel()
     model.update_camera(model.scene.camera_names[0], focal_length=0.02)
     flag = _Flag()
@@ -80,7 +80,8 @@ def test_a_camera_unlocked_by_undo_or_added_while_locked_is_locked_again() -> No
     locks = SceneLocks(flag)
     locks.watch(model)  # a student released while the class locks: locked at once
     assert model.scene.locked == set(model.scene.camera_names)
-    assert model.undo()  # the focal length's step: the scene before it had no lock
+    assert not model.undo()  # the lock ended the student's history (see the test below)
+    model.load_scene(model.scene.replace(locked=frozenset()))  # an uploaded scene file has no locks
     _until(lambda: model.scene.locked == set(model.scene.camera_names))
     name = model.add_camera()
     _until(lambda: name in model.scene.locked)
@@ -128,3 +129,19 @@ def test_the_lock_adopted_from_another_worker_locks_this_workers_released_studen
         for bus in buses:
             bus.close()
         hub.close()
+
+
+def test_undo_cannot_put_a_camera_back_where_it_was_before_the_class_locked_it() -> None:
+    model = SceneModel()
+    first = model.scene.camera_names[0]
+    model.update_camera(first, position=(1.0, 2.0, 3.0))  # the student's own move, undoable until the lock
+    assert model.can_undo
+    flag = _Flag()
+    locks = SceneLocks(flag)
+    locks.watch(model)
+    flag.on = True
+    locks.set_locked(True)
+    assert not model.undo()  # undo swaps whole scenes: before the lock it would have moved the camera back
+    assert _position(model, first) == (1.0, 2.0, 3.0)
+    model.set_point(0, (0.1, 0.2, 3.0))  # what a locked class may still change stays undoable
+    assert model.undo() and _position(model, first) == (1.0, 2.0, 3.0)

@@ -453,6 +453,13 @@ class SceneModel:
     def can_undo(self) -> bool:
         return bool(self._undo)
 
+    def forget_undo(self) -> None:
+        """The changes made so far can no longer be undone; an undo barrier, if set, stays. A classroom's camera
+        lock calls it, so that undo cannot put a locked camera back where the student had it before the lock."""
+        with self._lock:
+            self._undo.clear()
+            self._merge_key = None
+
     def set_undo_barrier(self, note: str) -> None:
         """Undo stops here and :meth:`reset` comes back here: a lesson sets one as a step is entered, so the
         learner cannot undo its changes (a lock, a value it sets). ``note``: what undo says there."""

@@ -79,7 +79,7 @@ class SceneLocks:
 
     # The model is changed outside this registry's lock: its listeners (a view drawing under its own lock) may
     # read the registry meanwhile.
-    def _apply(self, model: SceneModel) -> None:
+    def _apply(self, model: SceneModel, *, forget: bool = True) -> None:
         with self._lock:
             held = self._held.get(model)
             if held is None:
@@ -90,6 +90,8 @@ class SceneLocks:
                 with self._lock:
                     held.added.add(name)  # first: a reader never keeps a class lock as the student's
                 model.lock(name, True, undoable=False)
+        if forget:
+            model.forget_undo()  # undo swaps whole scenes: it must not put a camera back where it was before the lock
 
     def _release(self, model: SceneModel) -> None:
         with self._lock:
@@ -118,6 +120,6 @@ class SceneLocks:
     def _relock(self, model: SceneModel) -> None:
         try:
             if self._locked():
-                self._apply(model)
+                self._apply(model, forget=False)  # a camera added or loaded since the lock: the history stays
         except Exception:  # noqa: BLE001 - a scene the model refuses to lock now: the next change tries again
             pass
