@@ -3,7 +3,8 @@
 Nothing is computed here per follower: a :class:`RoomFrame` carries the instructor's scene, its derived
 geometry (computed once, when the instructor's model committed it) and the very SVG strings of the instructor's
 panels and read-out; every follower is given the same objects. A panel whose SVG is the object already shown is
-not sent again. The 3D view draws the same scene and derived arrays.
+not sent again. The 3D view draws the same scene and derived arrays, and its nodes are handed the arrays the
+instructor's tab prepared from them (``egtviz.viewer.workbench.models.shared``): a follower only assigns them.
 
 A follower cannot change the room's scene: there is no field to edit, and a gizmo moved in the browser is
 refused (the tab is told why) and put back.
