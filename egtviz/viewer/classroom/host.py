@@ -34,7 +34,7 @@ from .links import INSTRUCTOR_PREFIX, token_from_path
 from .room_html import step_caption
 from .room_sender import RoomSender, frame_from_scene, frame_of
 from .snapshot_pane import RoomSnapshots
-from .student_bar import JoinPage, StudentBar, stored_name
+from .student_bar import JoinPage, StudentBar, notify_refusal, stored_name
 from .instructor_panel import InstructorPanel
 
 __all__ = ["NAME_KEY", "ClassroomHost"]
@@ -126,7 +126,7 @@ class ClassroomHost:
                 return True
             except Exception:  # noqa: BLE001 - a name the class refuses now: ask again
                 pass
-        JoinPage(client, lambda typed: self.join(client, typed), lambda exc: notify_error(client, exc),
+        JoinPage(client, lambda typed: self.join(client, typed), lambda exc: notify_refusal(client, exc),
                  present=bool(getattr(self.app, "present", False)))
         return True
 
@@ -306,7 +306,7 @@ class ClassroomHost:
         cid = client.client_id
         name = self.room.name_of(cid) or ""
         bar = StudentBar(client, name, on_follow=lambda on: self.room.follow(cid, on),
-                         on_answer=lambda question, value: self.room.record_answer(cid, question, value), report=lambda exc: notify_error(client, exc))
+                         on_answer=lambda question, value: self.room.record_answer(cid, question, value), report=lambda exc: notify_refusal(client, exc))
         with self._lock:
             self.bars[cid] = bar
         self._sync_bar(cid)
@@ -320,7 +320,7 @@ class ClassroomHost:
     # -- the instructor ---------------------------------------------------------------------------------
 
     def _build_panel(self, client: Any) -> None:
-        panel = InstructorPanel(client, self, lambda exc: notify_error(client, exc))
+        panel = InstructorPanel(client, self, lambda exc: notify_refusal(client, exc))
         with self._lock:
             self.panels[client.client_id] = panel
 

@@ -14,10 +14,12 @@ from typing import Any
 import viser
 
 from ..render.palette import PRESENT_GUI_CSS
-from ..workbench.fields import FieldError, on_event
+from ...classroom import ClassroomError
+from ...lessons.progress import LearnerNameError
+from ..workbench.fields import FieldError, notify_error, on_event
 from .room_html import pause_html, student_status_html
 
-__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "stored_name", "typed_answer"]
+__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "notify_refusal", "stored_name", "typed_answer"]
 
 #: GUI order of the bar: above everything a workbench or a lesson adds.
 BAR_ORDER = -1000.0
@@ -77,6 +79,16 @@ class JoinPage:
             self.name = gui.add_text("your name", "")
             self.button = gui.add_button("Join", color="teal", icon=viser.Icon.ARROW_RIGHT)
         on_event(self.button.on_click, lambda _: on_join(self.name.value), report)
+
+
+def notify_refusal(client: Any, exc: BaseException) -> None:
+    """:func:`~egtviz.viewer.workbench.fields.notify_error`, with the class's refusals (a name the course does not
+    take, a question or an answer it cannot keep) shown as the refusal they are, in their own words."""
+    if isinstance(exc, LearnerNameError):
+        exc = FieldError(f"your {exc}")
+    elif isinstance(exc, ClassroomError):
+        exc = FieldError(str(exc))
+    notify_error(client, exc)
 
 
 class StudentBar:
