@@ -31,6 +31,7 @@ from ..workbench.fields import FieldError, notify_error, on_event
 from .camera_lock import CameraLock
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
+from .pacing_gate import PacingGate
 from .room_html import step_caption
 from .room_sender import RoomSender, frame_from_scene, frame_of
 from .snapshot_pane import RoomSnapshots
@@ -80,6 +81,7 @@ class ClassroomHost:
         self.cameras = CameraLock(self.room, lambda: self._copy(self.followers),
                                   released=lambda: (self._copy(self._roles), dict(self.app.views)))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
+        self.gate = PacingGate(self.room, app.course)  # the course's start page and lessons follow the pacing
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
         # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
         self._log_filter = self.room.log_filter()
@@ -439,6 +441,7 @@ class ClassroomHost:
     def close(self) -> None:
         """Stop the sender and the routing threads (the server is stopping)."""
         self._unsubscribe()
+        self.gate.close()
         for handler in self._log_handlers:
             handler.removeFilter(self._log_filter)
         self.sender.close()

@@ -193,18 +193,32 @@ class StartPage:
         self.client.send_file_download("egtviz-record.csv", text.encode("utf-8"), save_immediately=True)
 
     def _show_status(self) -> None:
-        """Each lesson's summary and how far this learner got in it; whether progress is kept."""
+        """Each lesson's summary and how far this learner got in it; whether progress is kept; in a class, the
+        lessons the pacing keeps closed (their buttons disabled) and how far the open ones go."""
         statuses = course_statuses(self.course.progress, self.learner, self.course.lessons)
         self.notice.content = progress_notice_html(self.course.progress.problem)
+        gate, tab = self.course.gate, self.client.client_id
         for name, lesson in self.course.lessons.items():
             status = statuses[name]
             colour = "#117733" if status == LessonStatus.DONE else "#555"
             mark = "\u2713 " if status == LessonStatus.DONE else ""
+            closed = gate.refusal(tab, name) if gate is not None else None
+            paced = gate.note(tab, name, len(lesson.steps)) if gate is not None and closed is None else ""
+            pacing = (f' · <b data-egtviz="not-open">not yet open</b>: {escape(closed)}' if closed is not None
+                      else f" · {escape(paced)}" if paced else "")
+            self.buttons[name].disabled = closed is not None
             self.status[name].content = (
                 f'<div style="font-size:0.85em;padding:0 0.6em 0.4em" data-lesson="{escape(name)}" '
-                f'data-status="{escape(status)}">{escape(lesson.summary)} '
-                f'<b style="color:{colour}">{mark}{escape(status)}</b></div>'
+                f'data-status="{escape(status)}" data-open="{str(closed is None).lower()}">{escape(lesson.summary)} '
+                f'<b style="color:{colour}">{mark}{escape(status)}</b>{pacing}</div>'
             )
+
+    def show_pacing(self) -> None:
+        """Show the lines again: the class's pacing changed."""
+        with self._lock:
+            if not self.closed:
+                with self.client.atomic():
+                    self._show_status()
 
     def close(self) -> None:
         self._typing.close()
@@ -233,6 +247,9 @@ class Course:
             load(lesson)  # raises the LessonError naming the lessons there are
         self.lesson = lesson
         self._lock = threading.Lock()
+        #: A class's pacing (:class:`egtviz.viewer.classroom.pacing_gate.PacingGate`): ``refusal(tab, lesson)`` says
+        #: why a tab may not open a lesson, ``opened(tab, panel)`` is told of each lesson opened; None: no pacing.
+        self.gate: Any = None
         #: What each tab shows: a :class:`StartPage`, a :class:`LessonPanel`, or a workbench view.
         self.tabs: dict[int, Any] = {}
         self._learners: dict[int, str] = {}
@@ -277,6 +294,9 @@ class Course:
         lesson = self.lessons.get(name)
         if lesson is None:
             raise FieldError(f"lesson: no lesson {str(name)[:40]!r}")
+        closed = self.gate.refusal(client.client_id, name) if self.gate is not None else None
+        if closed is not None:  # a disabled button clicked by a raw message, say
+            raise FieldError(f"{lesson.title}: {closed}")
         self._close_tab(client)
         run = LessonRun(lesson, learner, model=SceneModel(lesson.scene), progress=self.progress)
         view = self.app.show_workbench(client, run.model)
@@ -287,6 +307,8 @@ class Course:
                             field_delay=self.app.field_delay)
         self.remember(client.client_id, run.learner)
         self._set_tab(client, panel)
+        if self.gate is not None:
+            self.gate.opened(client.client_id, panel)
         return panel
 
     def open_workbench(self, client: Any) -> Any:
@@ -309,6 +331,8 @@ class Course:
                                 on_learner=lambda key: self.remember(client.client_id, key),
                                 field_delay=self.app.field_delay)
             self._set_tab(client, panel)
+            if self.gate is not None:
+                self.gate.opened(client.client_id, panel)
         else:
             self._add_back_button(client, view)
             self._set_tab(client, view)

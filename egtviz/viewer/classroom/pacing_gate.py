@@ -1,0 +1,88 @@
+"""The class's pacing on the course's own pages, for students' tabs: the start page shows the lessons the
+instructor has not opened as not yet open (their buttons disabled, and a click forged by a raw message refused),
+and a lesson opened from it starts at a step the pacing allows, its "next" held by the pacing too.
+
+The instructor's tabs, and a course served without a class, are not paced. The course asks the gate
+(:attr:`egtviz.viewer.course.start_page.Course.gate`); the gate asks the classroom.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from ...classroom import Classroom, PacingChanged
+from ..course.start_page import StartPage
+
+__all__ = ["NOT_OPEN", "PacingGate"]
+
+#: Why a student cannot open a lesson the pacing keeps closed.
+NOT_OPEN = "the instructor has not opened this lesson yet"
+
+
+class PacingGate:
+    """Which lessons, and which steps of them, a student's tab may open under the class's pacing.
+
+    Args:
+        room: the class.
+        course: the course that asks the gate (it becomes the course's ``gate``), and whose start pages are shown
+            again when the pacing changes; None: no course.
+    """
+
+    def __init__(self, room: Classroom, course: Any = None) -> None:
+        self.room = room
+        self.course = course
+        self._unsubscribe: Callable[[], None] = room.subscribe(self._on_event)
+        if course is not None:
+            course.gate = self
+
+    def _paced(self, tab: int) -> bool:
+        """Students' tabs are paced; the instructor's, and a tab that has not joined, are not."""
+        return self.room.name_of(tab) is not None and not self.room.is_instructor(tab)
+
+    def refusal(self, tab: int, lesson: str) -> str | None:
+        """Why the tab may not open ``lesson`` (None: it may)."""
+        if not self._paced(tab) or self.room.may_open(lesson, 0):
+            return None
+        return NOT_OPEN
+
+    def note(self, tab: int, lesson: str, steps: int) -> str:
+        """What the start page says of an open lesson's pacing: ``"open up to step k of n"``, or ``""``."""
+        if not self._paced(tab):
+            return ""
+        last = self.last_open(lesson, steps - 1)
+        return "" if last >= steps - 1 else f"open up to step {last + 1} of {steps}"
+
+    def last_open(self, lesson: str, step: int) -> int:
+        """The last step at or before ``step`` that the pacing lets students open (0 at the least)."""
+        while step > 0 and not self.room.may_open(lesson, step):
+            step -= 1
+        return step
+
+    def opened(self, tab: int, panel: Any) -> None:
+        """A lesson opened in the tab (a :class:`~egtviz.viewer.course.lesson_view.LessonPanel`): a student who
+        was further on resumes at the last step open, and "next" asks the pacing."""
+        if not self._paced(tab):
+            return
+        panel.may_enter = self.room.may_open
+        run = panel.run
+        last = self.last_open(run.lesson.name, run.step_index)
+        if last != run.step_index:
+            panel.go_to(last)
+
+    def _on_event(self, event: Any) -> None:
+        if not isinstance(event, PacingChanged) or self.course is None:
+            return
+        for tab, page in list(self.course.tabs.items()):
+            if isinstance(page, StartPage) and self._paced(tab):
+                try:
+                    page.show_pacing()
+                except Exception:  # noqa: BLE001 - a tab that left meanwhile; the other pages are still shown
+                    logging.getLogger(__name__).debug("start page %s not refreshed", tab, exc_info=True)
+
+    def close(self) -> None:
+        """Stop listening to the class; the course is no longer paced."""
+        self._unsubscribe()
+        if self.course is not None and self.course.gate is self:
+            self.course.gate = None
