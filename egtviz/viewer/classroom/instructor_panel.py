@@ -17,6 +17,7 @@ import viser
 from ...classroom import Mode
 from ..workbench.fields import FieldError, on_event
 from .links import qr_svg
+from .pacing_form import lesson_steps, pacing_html, paced_step
 from .room_html import histogram_html, roster_html, status_html
 
 if TYPE_CHECKING:
@@ -154,16 +155,7 @@ class InstructorPanel:
         lesson = self.lesson.value
         if lesson not in self.host.lesson_names():
             raise FieldError("pacing: no lesson to pace")
-        text = str(self.max_step.value).strip()
-        if text == ALL_STEPS:
-            last = None
-        else:
-            try:
-                last = int(text) - 1
-            except ValueError:
-                raise FieldError(f"up to step: expected a step number or blank, got {text[:20]!r}") from None
-            if last < 0:
-                raise FieldError("up to step: steps count from 1")
+        last = paced_step(self.max_step.value, lesson, lesson_steps(self.host.app.course).get(lesson, 0))
         self.room.pace(lesson, last)
         self.room.allow_lessons([lesson] if self.only.value else None)
 
@@ -196,10 +188,7 @@ class InstructorPanel:
                 self.student.options = options
             self.histogram.content = self._histogram_html()
             allowed, paced = self.room.pacing()
-            self.pacing.content = ('<div data-egtviz="pacing" style="padding:0 0.6em">'
-                                   + ("all lessons" if allowed is None else escape(", ".join(sorted(allowed))))
-                                   + "".join(f"<br>{escape(k)}: up to step {v + 1}" for k, v in sorted(paced.items()))
-                                   + "</div>")
+            self.pacing.content = pacing_html(allowed, paced, lesson_steps(self.host.app.course))
 
     def _histogram_html(self) -> str:
         question = self.room.asked()
