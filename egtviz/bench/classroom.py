@@ -16,7 +16,9 @@ Method (also in ``docs/benchmarks.md``):
   updates the server applied (renders; the guards merge a tab's waiting updates, latest wins, so a
   saturated server applies fewer than were sent). The parts come from per-thread CPU clocks
   (``time.thread_time``): ``compute_derived`` (geometry, a clock around the scene model's reference
-  to it) and the viewer's public timing hook (``ClientView.on_update_timed``, one
+  to it: one call per applied update, the call ``egtviz bench core`` times; each starts with cold CPU caches
+  after the tab's pause and the server's other work, as in that bench's paced row, not its back-to-back one)
+  and the viewer's public timing hook (``ClientView.on_update_timed``, one
   ``UpdateTiming`` per applied update): the panels (SVGs and their assignment), the read-out and
   GUI fields, the 3D nodes, ``client.flush``, the rest of the render, the rest of the user event
   (the model: checks, the new scene, undo), and what is outside the applied events (viser: receiving,
