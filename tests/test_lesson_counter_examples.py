@@ -159,6 +159,26 @@ def test_every_scene_and_lab_task_of_the_course_has_counter_examples():
     assert not missing
 
 
+def test_every_lens_diagnosis_of_the_course_is_proven_against_each_wrong_option():
+    """A diagnosis (a choice while the step's lens has a mistake on) is a lens task: its counter-examples type every
+    wrong option, so three or more (before, lesson 7's three diagnoses had one each)."""
+    diagnoses, short = 0, []
+    for info in list_lessons():
+        lesson = load(info.name)
+        run = LessonRun(lesson)
+        for i, step in enumerate(lesson.steps):
+            run.go_to(i)
+            for task in step.tasks:
+                if task.kind != "choice" or not run.lens.any:
+                    continue
+                diagnoses += 1
+                typed = {e.answer for e in step.counter_examples_of(task.id)}
+                wrong = set(task.options) - {task.answer}
+                if typed != wrong or len(typed) < 3:
+                    short.append((info.name, i + 1, task.id, sorted(wrong - typed)))
+    assert diagnoses >= 3 and short == []
+
+
 def test_egtviz_check_proves_every_shipped_lesson(capsys):
     paths = sorted(str(p) for p in lessons_folder().iterdir() if p.suffix == ".toml")
     assert len(paths) == 13
