@@ -7,7 +7,9 @@ need not import another module's private names.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from functools import lru_cache
+from typing import Any, Generic, TypeVar, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -17,6 +19,7 @@ from ._validate import DegenerateConfigurationError, as_calibration
 __all__ = [
     "AT_INFINITY_TOL",
     "COINCIDENT_CENTRES_TOL",
+    "cached_value",
     "centres_coincide",
     "epipolar_normals_columns",
     "inverse_calibration",
@@ -172,3 +175,36 @@ def epipolar_normals_columns(c1: np.ndarray, c2: np.ndarray, XT: np.ndarray) -> 
         # Every norm is positive (a zero one is on the baseline): no error context needed (every drag).
         n /= np.sqrt(norm2)
     return n
+
+
+_T = TypeVar("_T")
+
+
+class cached_value(Generic[_T]):  # noqa: N801 - used as a decorator, like functools.cached_property
+    """``functools.cached_property`` without its lock: the value, computed on first read, is stored in the
+    instance's ``__dict__`` (later reads never reach the descriptor).
+
+    Python 3.11's ``cached_property`` takes a lock shared by every instance on each first read; the values here
+    (matrices of an immutable camera or pose) are deterministic, so two threads that compute one at once store
+    equal values, and a new camera per drag step reads several of them.
+    """
+
+    def __init__(self, func: Callable[[Any], _T]) -> None:
+        self.func = func
+        self.name = func.__name__
+        self.__doc__ = func.__doc__
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    @overload
+    def __get__(self, instance: None, owner: type | None = None) -> cached_value[_T]: ...
+
+    @overload
+    def __get__(self, instance: object, owner: type | None = None) -> _T: ...
+
+    def __get__(self, instance: object, owner: type | None = None) -> _T | cached_value[_T]:
+        if instance is None:
+            return self
+        value = instance.__dict__[self.name] = self.func(instance)
+        return value

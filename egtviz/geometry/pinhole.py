@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import InitVar, dataclass
-from functools import cached_property, lru_cache
+from functools import lru_cache
 from typing import ClassVar, cast
 
 import numpy as np
@@ -41,7 +41,7 @@ from .camera_model import (
     parameters_from_specs,
     rectangle_rim,
 )
-from ._shared import inverse_calibration, normalize_homogeneous3
+from ._shared import cached_value, inverse_calibration, normalize_homogeneous3
 from .homogeneous import clip_lines_to_rect
 from .poses import Pose
 
@@ -139,7 +139,7 @@ class Intrinsics:
             raise GeometryError("K: expected positive focal lengths K[0,0], K[1,1]")
         return cls(f, (K[0, 0] / f, K[1, 1] / f), (K[0, 2], K[1, 2]), K[0, 1], width, height, check=check)
 
-    @cached_property
+    @cached_value
     def K(self) -> np.ndarray:
         """The 3x3 calibration matrix (read-only: built once, shared by the cameras with these intrinsics; copy it
         to change it)."""
@@ -148,7 +148,7 @@ class Intrinsics:
         f = self.focal_length
         return _read_only(np.array([[ku * f, self.skew, u0], [0.0, kv * f, v0], [0.0, 0.0, 1.0]]))
 
-    @cached_property
+    @cached_value
     def K_inv(self) -> np.ndarray:
         """:math:`K^{-1}` (read-only; the same array as ``inverse_calibration(K)``)."""
         return inverse_calibration(self.K, "K")
@@ -183,7 +183,7 @@ class PinholeProjection:
     image_size: tuple[int, int]
     """``(width, height)`` of the image, in pixels."""
 
-    @cached_property
+    @cached_value
     def in_image(self) -> np.ndarray:
         """(N,) bool, in front and inside ``[0, width] x [0, height]`` (computed when first read)."""
         # NaN compares False, without a warning (no error context needed): points behind are never in the image.
@@ -359,24 +359,24 @@ class PinholeCamera:
         intrinsics)."""
         return self.intrinsics.K_inv
 
-    @cached_property
+    @cached_value
     def K_Rt(self) -> np.ndarray:
         r""":math:`K R^T` (read-only): a world direction :math:`d` images to :math:`m \sim K R^T d`."""
         return _read_only(self.K @ self.pose.R.T)
 
-    @cached_property
+    @cached_value
     def plane_to_line(self) -> np.ndarray:
         r""":math:`K^{-T} R^T` (read-only): a plane through the centre with world normal :math:`n` images to the line
         :math:`l = K^{-T} R^T n`."""
         return _read_only(self.R_K_inv.T.copy())
 
-    @cached_property
+    @cached_value
     def R_K_inv(self) -> np.ndarray:
         r""":math:`R K^{-1}` (read-only): pixel :math:`m` at depth :math:`z_c` is the world point
         :math:`z_c R K^{-1} m + t`."""
         return _read_only(self.pose.R @ self.K_inv)
 
-    @cached_property
+    @cached_value
     def ray_frames(self) -> np.ndarray:
         r"""(2, 3, 3) read-only stack :math:`(R, R K^{-1})`: directions of the camera frame and of pixels in the world
         (both epipolar matrices of a pair are built from them in one product, ``epipolar.epipolar_pair``)."""

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import InitVar, dataclass, field
-from functools import cached_property
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from ._shared import cached_value
 from ._validate import GeometryError, as_matrix, as_points, as_rotation, as_scalar, as_vector
 
 __all__ = [
@@ -175,7 +175,7 @@ class Pose:
         """The same position with a new orientation."""
         return Pose(R, self.t)
 
-    @cached_property
+    @cached_value
     def quat_wxyz(self) -> np.ndarray:
         """Orientation as a unit quaternion ``(w, x, y, z)`` (viser's order)."""
         return _quat_wxyz(self.R)  # R is a rotation already

@@ -392,8 +392,10 @@ def _readout(names: tuple[str, str], c1: CameraModel, c2: CameraModel, first: Ep
         # The same formulas in plain floats (every drag): numpy's per-call cost dominates on 3x3 arrays.
         E, F = _essential_and_fundamental(c1.pose, c2.pose, K1, K2)
         if F is not None:
-            # The SVD's rank, decided from F's invariants when they are conclusive (every drag of a pin-hole pair).
-            rank = matrix_rank3(F, 1e-9 * float(np.linalg.norm(F)))
+            # The SVD's rank, decided from F's invariants when they are conclusive (every drag of a pin-hole pair);
+            # the tolerance from np.linalg.norm(F)'s own arithmetic, sqrt(x . x), without its wrapper.
+            x = F.ravel()
+            rank = matrix_rank3(F, 1e-9 * math.sqrt(x.dot(x)))
         return PairReadout(names, F, E, rank, first.epipoles[0], second.epipoles[0])
     E = essential_from_poses(c1.pose, c2.pose, check=check)
     if K1 is not None and K2 is not None:
