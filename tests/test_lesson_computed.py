@@ -5,6 +5,7 @@ differ, and every classic mistake recognised and named when its value is typed."
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -163,6 +164,20 @@ def test_at_least_ten_different_mistakes_are_diagnosed_in_the_course():
     documented = open("docs/lessons.md", encoding="utf-8").read()
     for mistake in {m for *_, m in MISTAKE_CASES}:
         assert f"| `{mistake}` |" in documented
+
+
+def test_the_misconception_list_names_every_lesson_that_diagnoses_each_mistake():
+    """docs/lessons.md's "taught in" column lists each lesson whose computed task names the mistake (before,
+    ``normalised_for_pixels`` said lesson 3 only, although lesson 7's epipole task diagnoses it too)."""
+    documented = open("docs/lessons.md", encoding="utf-8").read()
+    missing = []
+    for name, _, _, mistake in MISTAKE_CASES:
+        row = re.search(rf"^\| `{mistake}` \|.*\|([^|]*)\|$", documented, re.M)
+        assert row, mistake
+        taught = {int(n) for n in re.findall(r"\b(\d{1,2})\b(?=[.,]|\s*$)", row.group(1))}
+        if int(name[:2]) not in taught:
+            missing.append((mistake, name))
+    assert missing == []
 
 
 def test_a_wrong_answer_that_is_no_known_mistake_says_only_how_far():
