@@ -64,7 +64,9 @@ def test_names_are_text_in_the_roster_and_the_bar():
     html = roster_html(rows)
     root = ET.fromstring(html)
     assert root.get("data-rows") == "2"
-    assert [c.text for c in _cells(html)][:6] == ["<b>Bob</b>", "yes", "yes", "01-frames", "3", "1/4"]
+    assert [c.text for c in _cells(html)] == ["<b>Bob</b>", "1/4", "following · 01-frames · step 3",
+                                              'x" onmouseover="alert(1)', "0", "away"]
+    assert [c.text for c in _cells(roster_html(rows, {"01-frames": 1}))][2] == "following · lesson 1 · step 3"
     assert not list(root.iter("b")) and all(tr.get("onmouseover") is None for tr in root.iter("tr"))
     bar = ET.fromstring(student_status_html("<i>Eve</i>", True, "Is <F> rank 2?"))
     assert "".join(bar.itertext()).startswith("<i>Eve</i> ·") and "Is <F> rank 2?" in "".join(bar.itertext())

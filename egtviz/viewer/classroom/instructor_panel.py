@@ -181,7 +181,7 @@ class InstructorPanel:
                     self.show_names.value = self.room.names_shown()
             finally:
                 self._syncing.on = False
-            self.roster.content = roster_html(rows)
+            self.roster.content = roster_html(rows, {n: k for k, n in enumerate(self.host.lesson_names(), 1)})
             self._students = self.host.student_tabs()
             options = tuple(self._students) or (_NO_STUDENT,)
             if tuple(self.student.options) != options:

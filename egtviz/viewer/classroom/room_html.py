@@ -16,27 +16,46 @@ __all__ = ["histogram_html", "pause_html", "roster_html", "status_html", "step_c
 BAR_COLOUR = "#0072B2"
 
 
-def _cell(value: Any) -> str:
-    return f"<td>{escape(str(value))}</td>"
+#: The roster's cells: top-aligned, a little apart; no header is wider than its word.
+_TD = "vertical-align:top;padding:0.2em 0.5em 0 0"
+_TH = "text-align:left;white-space:nowrap;padding:0 0.5em 0.1em 0;font-weight:600"
 
 
-def roster_html(rows: Sequence[Any]) -> str:
-    """The roster as a table: name, connected, following, lesson, step (from 1), tasks passed of the lesson's.
+def _where(row: Any, numbers: Mapping[str, int]) -> tuple[str, str]:
+    """Where a roster row's student is: following, on their own scene, or away; and the lesson and step."""
+    state = "away" if not row.connected else "following" if row.following else "own scene"
+    if row.lesson is None:
+        return state, ""
+    lesson = f"lesson {numbers[row.lesson]}" if row.lesson in numbers else row.lesson
+    return state, lesson if row.step is None else f"{lesson} · step {row.step + 1}"
 
-    ``rows`` are :class:`egtviz.classroom.RosterRow`.
+
+def roster_html(rows: Sequence[Any], numbers: Mapping[str, int] | None = None) -> str:
+    """The roster as a table that fits the instructor's panel without scrolling sideways, two lines a student:
+    their name and the tasks passed of the lesson's ("3/12"); under it, where they are (following, own scene or
+    away, and the lesson and step, from 1).
+
+    ``rows`` are :class:`egtviz.classroom.RosterRow`; ``numbers`` gives each lesson's number in the course (the
+    lesson is said as "lesson 6"; a lesson not in it by its name).
     """
     if not rows:
         return '<div data-egtviz="roster" data-rows="0" style="padding:0.3em 0.6em">No student has joined yet.</div>'
-    head = "".join(f"<th style='text-align:left;padding-right:0.6em'>{h}</th>"
-                   for h in ("name", "here", "follows", "lesson", "step", "tasks"))
+    numbers = numbers or {}
+    head = f"<th style='{_TH}'>name</th><th style='{_TH};text-align:right;padding-right:0'>tasks</th>"
     body = []
     for r in rows:
-        step = "" if r.step is None else r.step + 1
+        state, lesson = _where(r, numbers)
         tasks = f"{r.tasks_passed}/{r.tasks_total}" if r.tasks_total else str(r.tasks_passed)
-        body.append(f'<tr data-name="{escape(r.name)}">' + _cell(r.name) + _cell("yes" if r.connected else "no")
-                    + _cell("yes" if r.following else "no") + _cell(r.lesson or "") + _cell(step) + _cell(tasks)
-                    + "</tr>")
-    return (f'<div data-egtviz="roster" data-rows="{len(rows)}" style="padding:0 0.6em;overflow-x:auto">'
+        where = f"{state} · {lesson}" if lesson else state
+        body.append(
+            f'<tr data-name="{escape(r.name)}" style="border-top:1px solid #ddd">'
+            f'<td data-col="name" style="{_TD};overflow-wrap:anywhere;font-weight:600">{escape(r.name)}</td>'
+            f'<td data-col="tasks" style="{_TD};text-align:right;white-space:nowrap;padding-right:0">'
+            f"{escape(tasks)}</td></tr>"
+            f'<tr data-where="{escape(r.name)}"><td colspan="2" data-col="where" data-state="{state}" '
+            f'style="padding:0 0 0.25em 0.8em;font-size:0.92em;color:{"#555" if r.connected else "#999"}">'
+            f"{escape(where)}</td></tr>")
+    return (f'<div data-egtviz="roster" data-rows="{len(rows)}" style="padding:0 0.6em">'
             f'<table style="border-collapse:collapse;width:100%;font-size:0.9em"><thead><tr>{head}</tr></thead>'
             f'<tbody>{"".join(body)}</tbody></table></div>')
 
