@@ -11,7 +11,7 @@ Fundamental Matrix F":
   correspondences").
 
 The kernels they share with the other estimators are public here: :func:`design_matrix`,
-:func:`normalized_design`, :func:`null_vector`, :func:`canonical_fundamental` and
+:func:`normalized_design`, :func:`float_pairs`, :func:`null_vector`, :func:`canonical_fundamental` and
 :func:`seven_point_candidates` (used by
 :mod:`egtviz.geometry.robust`, :mod:`egtviz.geometry.sampson_refinement`,
 :mod:`egtviz.geometry.essential`). They take arrays their callers have validated.
@@ -35,6 +35,7 @@ from .matrices import hartley_scales, nearest_rank2, point_pairs
 __all__ = [
     "canonical_fundamental",
     "design_matrix",
+    "float_pairs",
     "fundamental_7point",
     "fundamental_8point",
     "fundamental_normalized_8point",
@@ -76,9 +77,10 @@ def design_matrix(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
     return At
 
 
-def _float_pairs(U1: npt.ArrayLike, U2: npt.ArrayLike, min_count: int) -> tuple[np.ndarray, np.ndarray]:
+def float_pairs(U1: npt.ArrayLike, U2: npt.ArrayLike, min_count: int) -> tuple[np.ndarray, np.ndarray]:
     """:func:`~egtviz.geometry.matrices.point_pairs`, with the value checks left to Hartley's normalisation
-    when both are float64 ``(N, 2)`` arrays of one ``N >= min_count`` already.
+    when both are float64 ``(N, 2)`` arrays of one ``N >= min_count`` already: for callers that pass the pair
+    to :func:`normalized_design` (or its kernel) before any other use.
 
     The normalisation checks the values on its centroid and mean distance and raises the same errors
     (:func:`~egtviz.geometry.matrices.hartley_normalization`): the two reductions over each array that a
@@ -121,11 +123,14 @@ def _normalized_design_floats(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarra
     # Each row (x, y) read as one complex number x + iy, both images stacked: one call per pass.
     Z = np.empty((2, n), np.complex128)
     np.concatenate(images, out=Z.view(np.float64).reshape(2 * n, 2))
-    centres = [c / n for c in np.add.reduce(Z, axis=1).tolist()]
+    c = np.add.reduce(Z, axis=1)
+    parts = c.view(np.float64)
+    parts /= n  # each part divided by n (as Python divides a complex by an int), not multiplied by 1 / n
+    centres = c.tolist()
     c1, c2 = centres
     if not math.isfinite(abs(c1) + abs(c2)):
         hartley_scales(centres, None, n, images, names)  # names a NaN or inf
-    Z -= np.array(centres)[:, None]
+    Z -= c[:, None]
     means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
     s1, s2 = hartley_scales(centres, means, n, images, names)
     X = Z.view(np.float64).reshape(2, n, 2)
@@ -189,11 +194,16 @@ def _rank2_denormalize_canonical(f: np.ndarray, t: tuple[float, ...]) -> np.ndar
     s1, p1, q1, s2, p2, q2 = t
     a0, a1, a2 = u00 * d0, u10 * d0, u20 * d0
     b0, b1, b2 = u01 * d1, u11 * d1, u21 * d1
-    left = ((s2 * a0, s2 * b0), (s2 * a1, s2 * b1), (p2 * a0 + q2 * a1 + a2, p2 * b0 + q2 * b1 + b2))
-    w0 = (s1 * v00, s1 * v01, p1 * v00 + q1 * v01 + v02)
-    w1 = (s1 * v10, s1 * v11, p1 * v10 + q1 * v11 + v12)
-    f9 = [a * x + b * y for a, b in left for x, y in zip(w0, w1)]
-    top = max(f9, key=abs)
+    l0, m0, l1, m1 = s2 * a0, s2 * b0, s2 * a1, s2 * b1
+    l2, m2 = p2 * a0 + q2 * a1 + a2, p2 * b0 + q2 * b1 + b2
+    x0, x1, x2 = s1 * v00, s1 * v01, p1 * v00 + q1 * v01 + v02
+    y0, y1, y2 = s1 * v10, s1 * v11, p1 * v10 + q1 * v11 + v12
+    f9 = [l0 * x0 + m0 * y0, l0 * x1 + m0 * y1, l0 * x2 + m0 * y2,
+          l1 * x0 + m1 * y0, l1 * x1 + m1 * y1, l1 * x2 + m1 * y2,
+          l2 * x0 + m2 * y0, l2 * x1 + m2 * y1, l2 * x2 + m2 * y2]
+    # The largest-magnitude entry (the first of them, as max(f9, key=abs), on a tie of +v and -v).
+    hi, lo = max(f9), min(f9)
+    top = hi if hi > -lo else lo if -lo > hi else max(f9, key=abs)
     g = [v / top for v in f9]
     F = np.array(g)
     F /= math.hypot(*g)
@@ -207,6 +217,9 @@ def _det3(M: np.ndarray) -> np.ndarray:
         - M[..., 0, 1] * (M[..., 1, 0] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 0])
         + M[..., 0, 2] * (M[..., 1, 0] * M[..., 2, 1] - M[..., 1, 1] * M[..., 2, 0])
     )
+
+
+_THIRDS_OF_TURN = np.arange(3) * (2.0 * np.pi / 3.0)
 
 
 def _real_cubic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -224,18 +237,28 @@ def _real_cubic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.n
     y1 = np.cbrt(-q / 2.0 + sq) + np.cbrt(-q / 2.0 - sq)
     pn = np.where(one | (p >= 0.0), -1.0, p)  # p < 0 whenever there are three real roots
     m = 2.0 * np.sqrt(-pn / 3.0)
-    arg = np.clip(3.0 * q / (pn * m), -1.0, 1.0)
+    arg = np.minimum(np.maximum(3.0 * q / (pn * m), -1.0), 1.0)  # np.clip's own wrapper costs more
     phi = np.arccos(arg) / 3.0
-    k = np.arange(3) * (2.0 * np.pi / 3.0)
-    y3 = m[:, None] * np.cos(phi[:, None] - k)
+    y3 = m[:, None] * np.cos(phi[:, None] - _THIRDS_OF_TURN)
     y3 = np.where((p >= 0.0)[:, None], 0.0, y3)  # triple root
     y = np.where(one[:, None], y1[:, None], y3)
+    A, B, C = a[:, None], b[:, None], c[:, None]
     x = y - (a / 3.0)[:, None]
+    A2 = 2.0 * A
     for _ in range(2):
-        f = ((x + a[:, None]) * x + b[:, None]) * x + c[:, None]
-        df = (3.0 * x + 2.0 * a[:, None]) * x + b[:, None]
-        step = np.where(df != 0.0, f / np.where(df != 0.0, df, 1.0), 0.0)
-        x = np.where(np.isfinite(step), x - step, x)
+        # Horner's rule, each operation in place on one buffer (numpy's per-call cost dominates on K x 3).
+        f = x + A
+        f *= x
+        f += B
+        f *= x
+        f += C
+        df = 3.0 * x
+        df += A2
+        df *= x
+        df += B
+        nonzero = df != 0.0
+        step = np.divide(f, df, out=np.zeros_like(f), where=nonzero)
+        np.subtract(x, step, out=x, where=np.isfinite(step))
     valid = np.ones(x.shape, bool)
     valid[:, 1:] = ~one[:, None]
     return x, valid
@@ -361,7 +384,7 @@ def fundamental_normalized_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.nd
         GeometryError: bad shapes, NaN/inf, ``N < 8`` or mismatched ``N``.
         DegenerateConfigurationError: coincident points or rank-deficient data.
     """
-    u1, u2 = _float_pairs(U1, U2, 8)
+    u1, u2 = float_pairs(U1, U2, 8)
     At, t = _normalized_design_floats(u1, u2)
     return _rank2_denormalize_canonical(null_vector(At), t)
 

@@ -29,8 +29,15 @@ import numpy.typing as npt
 from ._validate import DegenerateConfigurationError, GeometryError, as_count, as_positive, as_scalar, short_repr
 from .error_metrics import sampson_distances_normalized
 from .essential import essential_linear, essential_projection, ray_pairs, ray_sampson
-from .fundamental import canonical_fundamental, design_matrix, normalized_design, null_vector, seven_point_candidates
-from .matrices import nearest_rank2, point_pairs
+from .fundamental import (
+    canonical_fundamental,
+    design_matrix,
+    float_pairs,
+    normalized_design,
+    null_vector,
+    seven_point_candidates,
+)
+from .matrices import nearest_rank2
 from .sampson_refinement import polish_sampson, refine_sampson
 
 __all__ = [
@@ -41,6 +48,8 @@ __all__ = [
     "fundamental_ransac",
 ]
 
+# Integers up to this are exact as floats: the checked route (through a float) returns them unchanged.
+_EXACT_INT = 2**53
 # Inliers needed before a robust estimate can be refitted with the 8-point algorithm.
 _MIN_REFIT = 8
 # Samples per batch of the robust estimators: the first batch, then what the
@@ -86,6 +95,14 @@ class RobustEstimate:
 
 def _check_robust_args(confidence: object, max_iterations: object, seed: object) -> tuple[float, int, int | None]:
     """The options shared by the sampling estimators, validated: ``(confidence, max_iterations, seed)``."""
+    if (
+        type(confidence) is float
+        and 0.0 < confidence < 1.0
+        and type(max_iterations) is int
+        and 1 <= max_iterations <= _EXACT_INT
+        and (seed is None or (type(seed) is int and seed >= 0))
+    ):
+        return confidence, max_iterations, seed  # what the checks below return for these plain values
     conf = as_scalar(confidence, "confidence")
     if not 0.0 < conf < 1.0:
         raise GeometryError(f"confidence: expected a number in (0, 1), got {short_repr(confidence)}")
@@ -151,9 +168,9 @@ class _Scorer:
 
 def _prepare(U1: npt.ArrayLike, U2: npt.ArrayLike, mode: str, threshold: float, options: tuple) -> tuple:
     """Validated data of a sampling estimator: ``(At, T1, T2, scorer, (confidence, max_iterations, seed))``."""
-    u1, u2 = point_pairs(U1, U2, _MIN_REFIT)
+    u1, u2 = float_pairs(U1, U2, _MIN_REFIT)
+    At, T1, T2 = normalized_design(u1, u2)  # checks the values, with point_pairs' errors, before the options
     options = _check_robust_args(*options)
-    At, T1, T2 = normalized_design(u1, u2)
     null_vector(At)  # all the data degenerate (e.g. a coplanar scene seen twice): no F to find
     # Scale floor of LMedS: 1e-9 of the larger point spread (mean distance to the centroid, 1 / s).
     floor2 = (_SIGMA_FLOOR / min(T1[0, 0], T2[0, 0])) ** 2

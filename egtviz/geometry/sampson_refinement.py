@@ -41,6 +41,10 @@ def _skew_stack(c: np.ndarray) -> np.ndarray:
     return (c @ _GENERATORS.reshape(3, 9)).reshape(-1, 3, 3)
 
 
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
+
+
 def _rodrigues_jr(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r"""Rotation :math:`R(\omega)` and right Jacobian :math:`J_r(\omega)`.
 
@@ -51,6 +55,8 @@ def _rodrigues_jr(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     cost would dominate on these 3x3 matrices, which the Levenberg-Marquardt loop builds at every step.
     """
     x, y, z = w.tolist()
+    if x == y == z == 0.0:
+        return _EYE3, _EYE3  # what the formulas give at 0, exactly (every start of an iteration is there)
     th = math.sqrt(x * x + y * y + z * z)
     if th < 1e-8:
         a, b, c = 1.0, 0.5, 1.0 / 6.0
@@ -122,20 +128,21 @@ class _SampsonProblem:
             return self._jac
         _, l1, l2, e, den, L, Rt, J1, J2 = self._eval(p)
         dF = np.empty((7, 3, 3))
-        D = np.diag([1.0, p[6], 0.0])
-        dF[0:3] = L @ _skew_stack(J1.T) @ (D @ Rt)
-        dF[3:6] = -((L @ D) @ _skew_stack(J2.T) @ Rt)
+        S = np.diag([1.0, p[6], 0.0])
+        dF[0:3] = L @ _skew_stack(J1.T) @ (S @ Rt)
+        dF[3:6] = -((L @ S) @ _skew_stack(J2.T) @ Rt)
         dF[6] = np.outer(L[:, 1], Rt[1])
-        # r = e / sqrt(den): dr = de / sqrt(den) - e / (2 den^1.5) d(den), with
-        # de = m2^T dF m1, d(den) = 2 q2 (F m1)_i (dF m1)_i + 2 q1 (F^T m2)_j (dF^T m2)_j (i, j < 2).
+        # r = e / sqrt(den) with e = m2^T F m1 and den = q2 |(F m1)_{1,2}|^2 + q1 |(F^T m2)_{1,2}|^2 is a function
+        # of F: dr/dF_ij = m2_i m1_j / sqrt(den) - e / den^1.5 (q2 (F m1)_i m1_j [i < 2] + q1 (F^T m2)_j m2_i [j < 2]),
+        # a (9, N) array D; the Jacobian is dF (7, 9) @ D, one product for the seven directions.
         N = e.shape[0]
-        de = dF.reshape(7, 9) @ self.At
-        P = (dF[:, :2, :].reshape(14, 3) @ self.h1).reshape(7, 2, N)
-        Q = (dF[:, :, :2].transpose(0, 2, 1).reshape(14, 3) @ self.h2).reshape(7, 2, N)
-        dden = self.q2 * (P[:, 0] * l2[0] + P[:, 1] * l2[1]) + self.q1 * (Q[:, 0] * l1[0] + Q[:, 1] * l1[1])
         rs = 1.0 / np.sqrt(den)
         g = e * rs / den
-        J = de * rs - dden * g
+        D = np.multiply(self.At, rs)
+        Dv = D.reshape(3, 3, N)
+        Dv[:2] -= (l2 * (self.q2 * g))[:, None, :] * self.h1[None]
+        Dv[:, :2] -= self.h2[:, None, :] * (l1 * (self.q1 * g))[None]
+        J = dF.reshape(7, 9) @ D
         if self.sw is not None:
             J *= self.sw
         self._jkey, self._jac = key, J.T
