@@ -125,6 +125,38 @@ def test_each_learner_gets_their_own_camera_the_same_every_time_within_the_range
     assert len(set(poses.values())) == len(LEARNERS)
 
 
+def test_randomise_point_is_read_strictly():
+    change = parse_change({"do": "randomise_point", "point": 1, "position": [[2, 4], 3, [-4, -2]]})
+    assert (change.do, change.point, change.position) == ("randomise_point", 1, ((2.0, 4.0), (3.0, 3.0), (-4.0, -2.0)))
+    for table, key in (({"point": 1, "position": [[4, 2], 0, 0]}, "position"), ({"point": 1, "position": [0, 0]},
+                       "position"), ({"point": 1}, "position"), ({"position": [0, 0, 0]}, "point"),
+                       ({"point": -1, "position": [0, 0, 0]}, "point"),
+                       ({"point": 1, "position": [0, 0, 0], "camera": "cam"}, "camera")):
+        with pytest.raises(EntryError) as err:
+            parse_change({"do": "randomise_point", **table})
+        assert err.value.key == key
+
+
+def test_each_learner_gets_their_own_points_the_same_every_time_within_the_ranges():
+    """Lesson 2's last step draws points 2 and 4 per learner too (before, only the camera was theirs: every
+    learner read the same points from the point list)."""
+    name = "02-pinhole-projection"
+    step = len(load(name).steps) - 1
+    drawn = {}
+    for learner in LEARNERS:
+        run = _run(name, step, learner)
+        points = run.model.scene.points
+        assert _run(name, step, learner).model.scene.points == points  # a reload: the same points
+        run.go_to(step)
+        assert run.model.scene.points == points  # "reset step" replays the same draw
+        (x1, y1, z1), (x3, y3, z3) = points[1], points[3]
+        assert 2 <= x1 <= 4 and 2 <= y1 <= 4 and -4 <= z1 <= -2 and -4 <= x3 <= -2 and 2 <= y3 <= 4 and 2 <= z3 <= 4
+        assert all(round(c, 2) == c for c in (*points[1], *points[3]))
+        assert points[0] == (-3.0, 3.0, -3.0) and points[2] == (3.0, 3.0, 3.0)  # the others stay the lesson's
+        drawn[learner] = (points[1], points[3])
+    assert len(set(drawn.values())) == len(LEARNERS)
+
+
 def test_the_course_has_at_least_15_computed_tasks_over_8_lessons_each_with_a_mistake_counter_example():
     assert len(COMPUTED) >= 15
     assert len({name for name, _, _ in COMPUTED}) >= 8

@@ -306,13 +306,51 @@ class RandomiseCamera:
                 out[key] = tuple(draw(low, high) for low, high in ranges)
         return out
 
+    @property
+    def seed_key(self) -> str:
+        """What the runner's per-learner seed is drawn for (with the learner, lesson and step)."""
+        return f"randomise:{self.camera}"
+
     def _apply(self, model: SceneModel) -> None:
         model.update_camera(self.camera, **self.values())
 
 
+@dataclass(frozen=True)
+class RandomisePoint:
+    """Move point ``point`` to a position drawn per learner: each coordinate a ``(low, high)`` range, drawn
+    uniformly and rounded to 0.01 (the point list shows what the core uses). ``seed`` is bound by the lesson runner
+    from (learner, lesson, step, point), as for :class:`RandomiseCamera`; unbound, the draw of seed 0."""
+
+    point: int
+    position: tuple[tuple[float, float], ...]
+    seed: int | None = None
+
+    do: ClassVar[str] = "randomise_point"
+
+    def seeded(self, seed: int) -> RandomisePoint:
+        """This change with its draw bound to ``seed``."""
+        return dataclasses.replace(self, seed=seed)
+
+    @property
+    def seed_key(self) -> str:
+        """What the runner's per-learner seed is drawn for (with the learner, lesson and step)."""
+        return f"randomise:point:{self.point}"
+
+    def value(self) -> tuple[float, float, float]:
+        """The drawn position, by this seed."""
+        import numpy as np
+
+        rng = np.random.default_rng(0 if self.seed is None else self.seed)
+        x, y, z = (round(float(rng.uniform(low, high)), 2) if low < high else low for low, high in self.position)
+        return x, y, z
+
+    def _apply(self, model: SceneModel) -> None:
+        model.set_point(self.point, self.value())
+
+
 Change = (
     Show | MoveCamera | MovePoint | Highlight | Lock | Select | SetPair | SetField | SetPoints | RandomPoints
-    | SetRange | SetLab | SetLens | OpenDemo | RandomiseCamera
+    | SetRange | SetLab | SetLens | OpenDemo | RandomiseCamera | RandomisePoint
 )
 Record = SetRange | SetLab | SetLens | OpenDemo
 
@@ -467,6 +505,13 @@ def _randomise_camera(table: dict, do: str) -> RandomiseCamera:
                            principal_point=ranges["principal_point"])
 
 
+def _randomise_point(table: dict, do: str) -> RandomisePoint:
+    position = _ranges(table, "position", 3, COORDINATE)
+    if position is None:
+        raise EntryError("position", "missing")
+    return RandomisePoint(fields.whole(table, "point", _POINT_INDEX), position)
+
+
 def _highlight(table: dict, do: str) -> Highlight:
     return Highlight(fields.name_list(table, "names"))
 
@@ -497,6 +542,7 @@ _KINDS: dict[str, tuple[tuple[str, ...], Callable[[dict, str], Change]]] = {
     "open_demo": (("do", "demo", *RUN_FIELDS["pinhole"]), _open_demo),
     "randomise_camera": (("do", "camera", "position", "ypr_deg", "focal_length", "principal_point"),
                          _randomise_camera),
+    "randomise_point": (("do", "point", "position"), _randomise_point),
 }
 """Every change kind (``do``): the keys its table may have and the function that reads it (given ``do``)."""
 CHANGE_KINDS = tuple(_KINDS)

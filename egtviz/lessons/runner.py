@@ -17,7 +17,7 @@ from ..scene.lens import LensToggles
 from ..files import FileSafetyError, read_limited
 from ..scene.limits import MAX_LESSON_FILE_BYTES
 from .catalog import lessons_folder
-from .changes import Change, OpenDemo, RandomiseCamera, SetLab, SetLens, SetRange
+from .changes import Change, OpenDemo, RandomiseCamera, RandomisePoint, SetLab, SetLens, SetRange
 from .changes import apply as apply_change
 from .format import Lesson, Step
 from .markup import render_markdown
@@ -113,10 +113,11 @@ class LessonRun:
 
     def apply(self, change: Change, step: int | None = None) -> None:
         """Apply one change (of step ``step``, default the current one): to the scene, or to the lab, lens and
-        ranges the runner holds. A ``randomise_camera`` draws for this learner, lesson and step."""
-        if isinstance(change, RandomiseCamera):
+        ranges the runner holds. A ``randomise_camera`` or ``randomise_point`` draws for this learner, lesson and
+        step."""
+        if isinstance(change, (RandomiseCamera, RandomisePoint)):
             at = self.step_index if step is None else step
-            change = change.seeded(task_seed(self.learner, self.lesson.name, at, f"randomise:{change.camera}"))
+            change = change.seeded(task_seed(self.learner, self.lesson.name, at, change.seed_key))
         record = apply_change(self.model, change)
         if isinstance(record, SetLab):
             self.lab = record.applied_to(self.lab)
