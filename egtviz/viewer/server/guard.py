@@ -33,6 +33,7 @@ import logging
 import math
 import socket
 import threading
+import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Callable, TypeGuard
 from urllib.parse import urlsplit
@@ -485,18 +486,64 @@ def _latest_wins_key(fn: Callable, args: tuple) -> tuple | None:
     return None
 
 
+#: Redraw jobs (latest-wins ones: a pose, a camera, a field's value) that run at once across all tabs. Under
+#: the GIL, thirty redraws run side by side each finish near the end of the round (and starve the event loop
+#: that receives and sends); run one after the other, each finishes in its own time.
+REDRAW_LANES = 1
+#: A redraw running longer than this (seconds) no longer holds its lane: one that waits must not stop the room.
+LANE_STALL_S = 0.25
+
+
 class FairExecutor:
     """Stands in for viser's thread pool: one job per tab at a time, tabs round-robin, latest wins.
 
-    Jobs that belong to no tab go straight to the pool.
+    Redraw jobs (those that latest-wins merges) of all tabs take turns in ``lanes`` lanes, tabs in the order
+    they became ready; other jobs of a tab (a button, a connection's set-up, which may wait) go to the pool at
+    once. Jobs that belong to no tab go straight to the pool.
     """
 
-    def __init__(self, pool: ThreadPoolExecutor, *, max_pending: int, stats: GuardStats) -> None:
+    def __init__(self, pool: ThreadPoolExecutor, *, max_pending: int, stats: GuardStats, lanes: int = REDRAW_LANES,
+                 stall_s: float = LANE_STALL_S) -> None:
         self._pool = pool
         self._max_pending = max_pending
         self._stats = stats
         self._lock = threading.Lock()
         self._tabs: dict[int, _TabQueue] = {}
+        self._lanes = lanes
+        self._stall_s = stall_s
+        self._line: collections.deque[int] = collections.deque()  # tabs whose next job is a redraw, in turn
+        self._started: dict[int, float] = {}  # tab -> when its redraw was handed to the pool
+        self._timer: threading.Timer | None = None
+
+    def _schedule(self, tab: int, queue: _TabQueue) -> None:
+        """Put the tab in line for its next job (the lock is held)."""
+        queue.scheduled = True
+        if self._lanes > 0 and queue.jobs[0].key is not None:
+            self._line.append(tab)
+            self._start_lanes()
+        else:
+            self._pool.submit(self._run_one, tab)
+
+    def _start_lanes(self) -> None:
+        """Hand the next redraws in line to the pool while a lane is free (the lock is held)."""
+        if not self._line:
+            return
+        now = time.monotonic()
+        running = [t0 for t0 in self._started.values() if now - t0 < self._stall_s]
+        while self._line and len(running) < self._lanes:
+            tab = self._line.popleft()
+            self._started[tab] = now
+            running.append(now)
+            self._pool.submit(self._run_one, tab)
+        if self._line and self._timer is None:  # look again when the oldest running redraw stalls
+            self._timer = threading.Timer(max(0.0, min(running) + self._stall_s - now), self._on_stall)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _on_stall(self) -> None:
+        with self._lock:
+            self._timer = None
+            self._start_lanes()
 
     def submit(self, fn: Callable, /, *args: Any, **kwargs: Any) -> Future:
         """Queue ``fn(*args, **kwargs)`` behind the other jobs of the tab ``args[0]`` belongs to.
@@ -527,8 +574,9 @@ class FairExecutor:
             if key is not None:
                 queue.waiting[key] = job
             if not queue.scheduled:
-                queue.scheduled = True
-                self._pool.submit(self._run_one, tab)
+                self._schedule(tab, queue)
+            else:
+                self._start_lanes()  # a redraw that stalls past its time frees its lane here
         return job.future
 
     def _run_one(self, tab: int) -> None:
@@ -548,15 +596,22 @@ class FairExecutor:
                     job.future.set_result(result)
         finally:
             with self._lock:
+                self._started.pop(tab, None)
                 if queue.jobs:
-                    # Back of the pool's line: the other tabs' jobs go first (round-robin).
-                    self._pool.submit(self._run_one, tab)
+                    # Back of the line: the other tabs' jobs go first (round-robin).
+                    self._schedule(tab, queue)
                 else:
                     queue.scheduled = False
                     del self._tabs[tab]
+                self._start_lanes()
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Shut the underlying pool down (viser does when the server stops)."""
+        with self._lock:
+            self._line.clear()
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
         self._pool.shutdown(wait=wait, cancel_futures=cancel_futures)
 
     def pending(self) -> int:

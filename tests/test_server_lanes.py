@@ -1,0 +1,83 @@
+"""The fair executor's redraw lanes: latest-wins jobs of all tabs run one at a time, tabs taking turns."""
+
+from __future__ import annotations
+
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import viser
+
+from egtviz.viewer.server import guard
+from egtviz.viewer.server.guard import FairExecutor
+
+
+class _Target:
+    """A field handle stand-in: an event on it is a value (latest wins), not a button press."""
+
+
+def _value_event(tab: int, target: _Target) -> viser.GuiEvent:
+    return viser.GuiEvent(client=None, client_id=tab, target=target)  # type: ignore[arg-type]
+
+
+class _Event:
+    def __init__(self, client_id: int) -> None:
+        self.client_id = client_id
+
+
+def _fair(**kwargs) -> tuple[FairExecutor, ThreadPoolExecutor]:
+    pool = ThreadPoolExecutor(max_workers=8)
+    return FairExecutor(pool, max_pending=100, stats=guard.GuardStats(), **kwargs), pool
+
+
+def test_redraws_of_different_tabs_run_one_at_a_time_in_turn():
+    fair, pool = _fair(stall_s=5.0)
+    lock = threading.Lock()
+    running, peak, order = [0], [0], []
+
+    def redraw(event: viser.GuiEvent, label: str) -> None:
+        with lock:
+            running[0] += 1
+            peak[0] = max(peak[0], running[0])
+        time.sleep(0.03)
+        with lock:
+            running[0] -= 1
+            order.append(label)
+
+    a, b, c = _Target(), _Target(), _Target()
+    futures = [fair.submit(redraw, _value_event(0, a), "tab0-a"), fair.submit(redraw, _value_event(0, b), "tab0-b"),
+               fair.submit(redraw, _value_event(1, c), "tab1"), fair.submit(redraw, _value_event(2, c), "tab2")]
+    for f in futures:
+        f.result(timeout=5)
+    pool.shutdown()
+    assert peak[0] == 1  # side by side they all finish late; one after the other each finishes in its time
+    assert order == ["tab0-a", "tab1", "tab2", "tab0-b"]  # tab 0's second redraw waits for the others' turn
+
+
+def test_other_jobs_are_not_held_by_a_running_redraw():
+    fair, pool = _fair(stall_s=5.0)
+    gate = threading.Event()
+    ran = threading.Event()
+    first = fair.submit(lambda event: gate.wait(5), _value_event(0, _Target()))
+    other = fair.submit(lambda event: ran.set(), _Event(1))  # a button, a connection's set-up: not a redraw
+    assert ran.wait(2)
+    gate.set()
+    first.result(timeout=5)
+    other.result(timeout=5)
+    pool.shutdown()
+
+
+def test_a_redraw_that_stalls_frees_its_lane():
+    fair, pool = _fair(stall_s=0.1)
+    gate = threading.Event()
+    ran = threading.Event()
+    stuck = fair.submit(lambda event: gate.wait(5), _value_event(0, _Target()))
+    t0 = time.monotonic()
+    nxt = fair.submit(lambda event: ran.set(), _value_event(1, _Target()))
+    assert ran.wait(2)  # started once the stuck redraw had held the lane for its time, not when it ended
+    assert time.monotonic() - t0 >= 0.09
+    gate.set()
+    stuck.result(timeout=5)
+    nxt.result(timeout=5)
+    fair.shutdown()
+    pool.shutdown()
