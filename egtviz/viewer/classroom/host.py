@@ -135,11 +135,9 @@ class ClassroomHost:
     def _open_instructor(self, client: Any) -> None:
         """The instructor's workbench (the course one click away), on the room's scene if the class has one: an
         instructor who reconnects carries on where the room is."""
-        view = self.app.course.open_workbench(client) if self.app.course is not None else \
-            self.app.show_workbench(client)
-        shared = self.room.shared().scene
-        if view is not None and shared is not None and view.model.scene is not shared:
-            view.model.load_scene(shared)
+        shared = self.room.shared().scene  # read first: the new workbench, drawn, would publish its own scene
+        opener = self.app.course.open_workbench if self.app.course is not None else self.app.show_workbench
+        opener(client, SceneModel(shared) if shared is not None else None)
 
     def cleared(self, client: Any) -> None:
         """The app emptied the tab: put the instructor's panel or the student's bar back on top."""

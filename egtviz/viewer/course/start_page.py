@@ -311,10 +311,10 @@ class Course:
             self.gate.opened(client.client_id, panel)
         return panel
 
-    def open_workbench(self, client: Any) -> Any:
-        """Open the workbench in this tab, with a button back to the course."""
+    def open_workbench(self, client: Any, model: SceneModel | None = None) -> Any:
+        """Open the workbench in this tab (on ``model``, default a new one), with a button back to the course."""
         self._close_tab(client)
-        view = self.app.show_workbench(client, None)
+        view = self.app.show_workbench(client, model)
         if view is None:
             return None
         self._add_back_button(client, view)
