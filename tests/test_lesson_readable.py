@@ -24,6 +24,7 @@ from egtviz.viewer.workbench.app import EgtvizApp
 from egtviz.scene.examples import SCENES
 from egtviz.viewer.server.headless import FakeTab, start_headless
 from egtviz.viewer.workbench.lesson_policy import LessonPolicy
+from egtviz.viewer.course.lab_view import MAX_RINGS
 from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.lessons.markup import PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, formula_width_px
@@ -122,6 +123,7 @@ def _view(svg: str) -> tuple[float, ...]:
 def test_lesson_10_keeps_cam2_on_the_image_and_numbers_only_the_selected_point(tmp_path, step):
     """Before, the ruined fit's epipole zoomed cam2 out to u from -2000 and the lab's rejected points were numbered
     (step 1, where least squares meets 30 % outliers, kept that view after steps 2 and 3 were fixed)."""
+    rung = []
     with lesson_at(tmp_path, "10-robust-estimation", step) as panel:
         for threshold in (None, 1.5):  # the step's start, then a threshold that passes step 2
             if threshold is not None:
@@ -132,6 +134,21 @@ def test_lesson_10_keeps_cam2_on_the_image_and_numbers_only_the_selected_point(t
                 numbers = NUMBER.findall(svg)
                 selected = panel.run.model.scene.selected_point
                 assert numbers in ([], [] if selected is None else [str(selected + 1)])
+            # RANSAC's rejects keep their rings, unnumbered (before, the step's labels dropped them all, while the
+            # lab's table said "ringed in the panels").
+            fit = panel.lab.result.fit("ransac")
+            data = panel.lab.result.data
+            u, v = data.measured1.T
+            inside = (u >= 0) & (u <= 640) & (v >= 0) & (v <= 480)
+            rejected = int((~fit.inliers & inside).sum())
+            rings = _svg(panel, "cam1").count('data-selected="false"')
+            if rejected <= MAX_RINGS:
+                assert rejected > 0 and "ringed in the panels" in panel.lab.table.content
+                assert rings == rejected
+            else:
+                assert "too many to ring" in panel.lab.table.content and rings == 0
+        rung.append(rings)
+    assert step == 3 or rung[-1] > 0  # steps 1 and 2 ring RANSAC's rejects at 1.5 px
 
 
 def test_lesson_9_draws_at_most_the_steps_lines_with_300_points(tmp_path):

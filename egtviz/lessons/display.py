@@ -6,7 +6,7 @@ A step may write, next to its ``text``:
   every redraw; the selected point's line is always among them);
 * ``labels = "none" | "selected" | "all"``: which point numbers the panels write (``selected``: the selected point's
   and the points the step highlights, however few points there are; the rings an instrument such as the
-  estimation lab adds are not drawn, each would be numbered);
+  estimation lab adds are drawn without numbers);
 * ``view = { cam2 = { u = [-100, 740], v = [-60, 540] }, pano = "fit" }``: per camera, the part of the image plane
   its panel shows when the step opens (a box in pixels, ``"fit"`` to follow the content at every update, or
   ``"image"``); the view buttons still move it afterwards.

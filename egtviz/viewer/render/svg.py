@@ -594,12 +594,15 @@ class _NumberPlan:
 
 @lru_cache(maxsize=16)
 def _number_plan(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
-                 highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float) -> _NumberPlan:
-    """What :func:`_place_numbers` places (cached: a panel whose points stay put keeps it while its epipoles move)."""
+                 highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float,
+                 ringed: frozenset = frozenset()) -> _NumberPlan:
+    """What :func:`_place_numbers` places (cached: a panel whose points stay put keeps it while its epipoles move).
+    ``ringed`` points get a ring but a number only when every point is numbered."""
     P = np.frombuffer(P_bytes).reshape(-1, 2)
     in_image = np.frombuffer(in_image_bytes, dtype=bool)
     in_view = np.frombuffer(in_view_bytes, dtype=bool)
-    marked = _marked_points(P, in_image | in_view, selected_point, highlighted)
+    marked = _marked_points(P, in_image | in_view, selected_point, highlighted | ringed)
+    ring_only = marked - _marked_points(P, in_image | in_view, selected_point, highlighted) if ringed else set()
     r_pt = style.mark_px * k
     ring_r = r_pt * 2.0
     lw = style.line_px * k
@@ -608,7 +611,7 @@ def _number_plan(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, se
     # Points outside the view (zoomed in) keep their disc for the contract, clipped, but get no number. Only the
     # marked ones are numbered above MAX_NUMBERED_POINTS (the sort below fixes the order).
     numbered = [i for i in (idx + outside if number_all else marked) if show_labels and in_view[i]
-                and (number_all or i in marked)]
+                and (number_all or (i in marked and i not in ring_only))]
     # Placement order: epipole labels, then the selected, the highlighted, the others by index.
     numbered.sort(key=lambda i: (i != selected_point, i not in marked, i))
     size = style.label_px * k
@@ -738,21 +741,23 @@ def _point_group(i: int, kind: str, xy: tuple[float, float], *, ring: bool, sele
 
 def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
            highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float, dp: int,
-           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...]) -> tuple[str, tuple, int]:
+           bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...],
+           ringed: frozenset = frozenset()) -> tuple[str, tuple, int]:
     """The points (``point`` and ``point-outside``) with their numbers, and the epipole label boxes.
 
     During a drag the panel of the camera that does not move keeps its pixels while its epipoles move: when the
     epipoles' marks and labels stay out of every number's reach (:func:`_clear_of_numbers`), the numbers are where
     they would be without them, and the points' text drawn for that case is reused.
     """
-    plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k)
+    plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k,
+                        ringed)
     ep_boxes = _epipole_boxes(plan, epipoles, style, k, bounds)
     boxes = tuple(tuple(b) for b in ep_boxes.tolist())
     near = epipoles if plan.numbered else ()
     if near and _clear_of_numbers(plan, np.concatenate([ep_boxes, [e.obstacle for e in epipoles]])):
         near = ()
     body, n_unnumbered = _point_marks(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels,
-                                      style, k, dp, bounds, near, boxes if near else ())
+                                      style, k, dp, bounds, near, boxes if near else (), ringed)
     return body, boxes, n_unnumbered
 
 
@@ -760,14 +765,15 @@ def _marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected
 def _point_marks(P_bytes: bytes, in_image_bytes: bytes, in_view_bytes: bytes, selected_point: int | None,
                  highlighted: frozenset, show_labels: bool | str, style: PanelStyle, k: float, dp: int,
                  bounds: tuple[float, float, float, float], epipoles: tuple[_EpipoleLabel, ...],
-                 ep_boxes: tuple) -> tuple[str, int]:
+                 ep_boxes: tuple, ringed: frozenset = frozenset()) -> tuple[str, int]:
     """The points' text with their numbers placed clear of ``epipoles`` and their labels (``ep_boxes``) too, and how
     many numbers found no room."""
     P = np.frombuffer(P_bytes).reshape(-1, 2)
     in_image = np.frombuffer(in_image_bytes, dtype=bool)
     in_view = np.frombuffer(in_view_bytes, dtype=bool)
     idx, outside = np.flatnonzero(in_image).tolist(), np.flatnonzero(in_view & ~in_image).tolist()
-    plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k)
+    plan = _number_plan(P_bytes, in_image_bytes, in_view_bytes, selected_point, highlighted, show_labels, style, k,
+                        ringed)
     marked = plan.marked
     label_of, leader_of, n_unnumbered = _place_numbers(plan, style, k, bounds, epipoles, ep_boxes)
     special = sorted(set(label_of) | marked)
@@ -917,6 +923,7 @@ def image_plane_svg(
     style: PanelStyle = NORMAL,
     panel_px: float | None = None,
     fixed_size: bool = False,
+    ringed: frozenset[int] = frozenset(),
 ) -> str:
     """Inline SVG of one camera's image plane, in pixel units.
 
@@ -939,6 +946,8 @@ def image_plane_svg(
             style's sizes are met at that width (default ``style.panel_px``).
         fixed_size: write ``width``/``height`` in pixels (a figure file)
             instead of ``width="100%"`` (a panel that follows its column).
+        ringed: 0-based indices of points an instrument rings (e.g. the estimation lab's rejects): a ring, and a
+            number only when every point is numbered (a step that numbers the selected point only keeps it so).
 
     Returns:
         The ``<svg>`` element as a string (see the module docstring for the
@@ -974,7 +983,8 @@ def image_plane_svg(
     in_view = np.ascontiguousarray(view.contains(P))
     points_svg, ep_boxes, n_unnumbered = _marks(P.tobytes(), in_image.tobytes(), in_view.tobytes(), selected_point,
                                                 frozenset(highlighted), show_labels, style, k, dp,
-                                                (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels))
+                                                (view.u0, view.v0, view.u1, view.v1), tuple(ep_labels),
+                                                frozenset(ringed))
     if n_unnumbered:  # one more status row (the scale, and so every size drawn so far, does not depend on the rows)
         lay = panel_layout(view, style, panel_px, len(lay.rows_y) + 1)
         out[0] = svg_open("image-plane", attrs, lay, style, fixed_size=fixed_size, max_height=max_height)

@@ -379,12 +379,12 @@ class ClientView:
         self._sync_panels(scene)
         highlighted = {int(h.split(":")[1]) for h in scene.highlighted if h.startswith("point:")}
         panel_derived, ringed = self._filtered(scene, derived)
-        highlighted |= ringed
         for spec in scene.cameras:
             plane = panel_derived.image_planes.get(spec.name)
             if plane is not None:
                 self._show_panel(spec.name, self.dock.panel_svg(spec.name, plane, scene, highlighted,
-                                                                revision=self.revision, drag_step=self.drag.step))
+                                                                revision=self.revision, drag_step=self.drag.step,
+                                                                ringed=ringed))
         for plot in scene.annotations.plots:  # a figure's 2D plots
             key = plot_key(plot.number)
             self._show_panel(key, self.dock.plot_panel_svg(key, plot, revision=self.revision))

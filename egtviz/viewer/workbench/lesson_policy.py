@@ -55,12 +55,10 @@ class LessonPolicy:
 
     def panels(self, scene: Scene, derived: Derived) -> tuple[Any, frozenset[int]]:
         """What the panels draw, and the points they ring (the model's geometry and none without a filter); the
-        step's ``max_lines`` thins each panel's epipolar lines, and its ``labels`` other than ``all`` drop the
-        filter's rings (each would be numbered)."""
+        step's ``max_lines`` thins each panel's epipolar lines. The filter's rings are drawn without numbers unless
+        the panel numbers every point."""
         drawn, ringed = (derived, frozenset()) if self.panel_filter is None else self.panel_filter(scene, derived)
         shown = self.shown()
-        if shown.labels != "all":
-            ringed = frozenset()
         if shown.max_lines is not None:
             planes = {name: thin_lines(plane, shown.max_lines, scene.selected_point)
                       for name, plane in drawn.image_planes.items()}

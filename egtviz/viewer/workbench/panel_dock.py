@@ -320,7 +320,7 @@ class PanelDock:
         return panel_px, max_height
 
     def panel_svg(self, name: str, plane: ImagePlane, scene: Scene, highlighted: set[int], *, revision: int,
-                  drag_step: bool) -> str:
+                  drag_step: bool, ringed: frozenset[int] = frozenset()) -> str:
         """Panel ``name``'s SVG: its view, the tab's style, drawn for the width its column has on screen.
 
         A panel whose image plane is the very object drawn last time (a camera that neither moved nor is in the
@@ -333,7 +333,7 @@ class PanelDock:
         view = self.panel_view(name, plane).resolve(plane, kept=kept)
         self._shown_views[name] = view
         inputs = (scene.selected_point, frozenset(highlighted), scene.options.show_labels,
-                  self.view.policy.shown().labels, view, self.style, panel_px, max_height)
+                  self.view.policy.shown().labels, view, self.style, panel_px, max_height, ringed)
         drawn = self._drawn.get(name)
         if drawn is not None and drawn[0] is plane and drawn[1] == inputs:
             return drawn[2]
@@ -348,6 +348,7 @@ class PanelDock:
             panel_px=panel_px,
             # The grid leaves room for the SVG in its cell; the cap only keeps a longer status text from scrolling.
             max_height=max_height,
+            ringed=ringed,
         )
         self._drawn[name] = (plane, inputs, svg)
         return svg
