@@ -15,16 +15,52 @@ from egtviz.scene import derived
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
 
 
+def reference_det3(M):
+    """Determinants of a stack of 3x3 matrices (..., 3, 3), written out on strided views (the former kernel)."""
+    return (
+        M[..., 0, 0] * (M[..., 1, 1] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 1])
+        - M[..., 0, 1] * (M[..., 1, 0] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 0])
+        + M[..., 0, 2] * (M[..., 1, 0] * M[..., 2, 1] - M[..., 1, 1] * M[..., 2, 0])
+    )
+
+
+def reference_cubic_roots(a, b, c):
+    """The real roots of x^3 + a x^2 + b x + c as the solver computed them before (one array per operation)."""
+    p = b - a * a / 3.0
+    q = 2.0 * a**3 / 27.0 - a * b / 3.0 + c
+    disc = (q / 2.0) ** 2 + (p / 3.0) ** 3
+    one = disc > 0.0
+    sq = np.sqrt(np.where(one, disc, 0.0))
+    y1 = np.cbrt(-q / 2.0 + sq) + np.cbrt(-q / 2.0 - sq)
+    pn = np.where(one | (p >= 0.0), -1.0, p)
+    m = 2.0 * np.sqrt(-pn / 3.0)
+    arg = np.clip(3.0 * q / (pn * m), -1.0, 1.0)
+    phi = np.arccos(arg) / 3.0
+    k = np.arange(3) * (2.0 * np.pi / 3.0)
+    y3 = m[:, None] * np.cos(phi[:, None] - k)
+    y3 = np.where((p >= 0.0)[:, None], 0.0, y3)
+    y = np.where(one[:, None], y1[:, None], y3)
+    x = y - (a / 3.0)[:, None]
+    for _ in range(2):
+        f = ((x + a[:, None]) * x + b[:, None]) * x + c[:, None]
+        df = (3.0 * x + 2.0 * a[:, None]) * x + b[:, None]
+        step = np.where(df != 0.0, f / np.where(df != 0.0, df, 1.0), 0.0)
+        x = np.where(np.isfinite(step), x - step, x)
+    valid = np.ones(x.shape, bool)
+    valid[:, 1:] = ~one[:, None]
+    return x, valid
+
+
 def reference_pencil_members(F1, F2):
     """The members as the solver built them before: both branches on (K, 3, 3, 3) blocks, then the real ones."""
-    k3, k0, pp, pm = fundamental._det3(np.stack((F1, F2, F1 + F2, F1 - F2)))
+    k3, k0, pp, pm = reference_det3(np.stack((F1, F2, F1 + F2, F1 - F2)))
     k2 = 0.5 * (pp - pm) - k0
     k1 = 0.5 * (pp + pm) - k3
     first = np.abs(k3) >= np.abs(k0)
     lead = np.where(first, k3, k0)
     lead = np.where(lead == 0.0, 1e-300, lead)
     with np.errstate(over="ignore", invalid="ignore"):
-        roots, real = fundamental._real_cubic_roots(
+        roots, real = reference_cubic_roots(
             np.where(first, k2, k1) / lead, np.where(first, k1, k2) / lead, np.where(first, k0, k3) / lead
         )
     r = roots[:, :, None, None]
@@ -39,6 +75,20 @@ def test_pencil_members_are_the_reference_bit_for_bit(seed, k, scale):
     F1, F2 = rng.normal(size=(2, k, 3, 3)) * scale
     F2[: k // 3] = F1[: k // 3] * 0.5  # degenerate pencils: a constant determinant ratio
     np.testing.assert_array_equal(fundamental._cubic_solutions(F1, F2), reference_pencil_members(F1, F2))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds, k=st.sampled_from([1, 7, 128]), scale=st.sampled_from([1e-6, 1.0, 1e6]))
+def test_cubic_roots_are_the_reference_bit_for_bit(seed, k, scale):
+    rng = np.random.default_rng(seed)
+    a, b, c = rng.normal(size=(3, k)) * scale
+    b[: k // 3] = a[: k // 3] ** 2 / 3.0  # p = 0: the triple-root branch
+    c[k // 2 :: 4] = 0.0  # a root at 0
+    with np.errstate(all="ignore"):
+        x, valid = fundamental._real_cubic_roots(a, b, c)
+        x_ref, valid_ref = reference_cubic_roots(a, b, c)
+    np.testing.assert_array_equal(valid, valid_ref)
+    np.testing.assert_array_equal(x, x_ref)
 
 
 @settings(max_examples=60, deadline=None)

@@ -53,6 +53,11 @@ _RANK_TOL_SV = 1e-10
 # its inverse the smallest largest one): its design matrix mixes u^2, u and 1, and beyond these
 # the rounding of one kind of term swamps the others.
 _MAX_RAW_PIXEL = 1e6
+# Spreads and magnitudes that hartley_scales accepts by far (its own bounds are 1e-100 and 1e100), so that the
+# normalised 8-point algorithm decides them without calling it.
+_SURE_SPREAD = 1e-50
+_SURE_MAGNITUDE = 1e90
+_SQRT2 = math.sqrt(2.0)
 # numpy's float64 dtype is a singleton: an identity test is the cheapest dtype check.
 _F64 = np.dtype(np.float64)
 
@@ -131,8 +136,18 @@ def _normalized_design_floats(u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarra
     if not math.isfinite(abs(c1) + abs(c2)):
         hartley_scales(centres, None, n, images, names)  # names a NaN or inf
     Z -= c[:, None]
-    means = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
-    s1, s2 = hartley_scales(centres, means, n, images, names)
+    m1, m2 = [d / n for d in np.add.reduce(np.abs(Z), axis=1).tolist()]
+    r1, r2 = abs(c1), abs(c2)  # each at least the larger of its parts
+    if (
+        _SURE_SPREAD < m1 > 1e-9 * r1
+        and _SURE_SPREAD < m2 > 1e-9 * r2
+        and r1 + n * m1 <= _SURE_MAGNITUDE
+        and r2 + n * m2 <= _SURE_MAGNITUDE
+    ):
+        # Every check of hartley_scales passes by a wide margin (the usual case): its scales, without its loops.
+        s1, s2 = _SQRT2 / m1, _SQRT2 / m2
+    else:
+        s1, s2 = hartley_scales(centres, [m1, m2], n, images, names)
     X = Z.view(np.float64).reshape(2, n, 2)
     At = np.empty((9, n))
     h1 = At[6:9]
@@ -210,13 +225,11 @@ def _rank2_denormalize_canonical(f: np.ndarray, t: tuple[float, ...]) -> np.ndar
     return F.reshape(3, 3)
 
 
-def _det3(M: np.ndarray) -> np.ndarray:
-    """Determinants of a stack of 3x3 matrices ``(..., 3, 3)``, written out."""
-    return (
-        M[..., 0, 0] * (M[..., 1, 1] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 1])
-        - M[..., 0, 1] * (M[..., 1, 0] * M[..., 2, 2] - M[..., 1, 2] * M[..., 2, 0])
-        + M[..., 0, 2] * (M[..., 1, 0] * M[..., 2, 1] - M[..., 1, 1] * M[..., 2, 0])
-    )
+def _det3_rows(M: np.ndarray) -> np.ndarray:
+    """Determinants of 3x3 matrices given as the rows of ``M`` ``(9, K)`` (entry ``3 i + j`` in row ``3 i + j``),
+    written out on contiguous rows."""
+    a, b, c, d, e, f, g, h, i = M
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
 _THIRDS_OF_TURN = np.arange(3) * (2.0 * np.pi / 3.0)
@@ -276,7 +289,10 @@ def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> np.ndarray:
     and in the order of the roots: :math:`r F_1 + F_2` or :math:`F_1 + r F_2`, written as
     :math:`\alpha F_1 + \beta F_2` with the other coefficient 1 (the same numbers), only for those roots.
     """
-    k3, k0, pp, pm = _det3(np.stack((F1, F2, F1 + F2, F1 - F2)))  # one pass over the four stacks
+    K = F1.shape[0]
+    # The four stacks' entries as contiguous rows: one pass over all of them per product.
+    entries = np.ascontiguousarray(np.stack((F1, F2, F1 + F2, F1 - F2)).reshape(4 * K, 9).T)
+    k3, k0, pp, pm = _det3_rows(entries).reshape(4, K)
     k2 = 0.5 * (pp - pm) - k0
     k1 = 0.5 * (pp + pm) - k3
     first = np.abs(k3) >= np.abs(k0)  # solve for r = a / b
@@ -289,7 +305,6 @@ def _cubic_solutions(F1: np.ndarray, F2: np.ndarray) -> np.ndarray:
     k, j = np.nonzero(real & np.isfinite(roots))
     r = roots[k, j][:, None]
     on_first = first[k][:, None]
-    K = F1.shape[0]
     # Rows of 9 (not (3, 3) blocks): numpy's loops are far slower over small inner dimensions.
     members = np.where(on_first, r, 1.0) * F1.reshape(K, 9)[k] + np.where(on_first, 1.0, r) * F2.reshape(K, 9)[k]
     return members.reshape(-1, 3, 3)
@@ -312,9 +327,11 @@ def seven_point_candidates(A7: np.ndarray) -> np.ndarray:
         vt = np.linalg.svd(A7)[2]
         N1, N2 = vt[:, 7], vt[:, 8]
     cand = _cubic_solutions(N1.reshape(K, 3, 3), N2.reshape(K, 3, 3)).reshape(-1, 9)
-    cand = cand[np.all(np.isfinite(cand), axis=1)]
-    norms = np.linalg.norm(cand, axis=1)
-    return (cand / np.where(norms > 0, norms, 1.0)[:, None]).reshape(-1, 3, 3)
+    cand = cand[np.logical_and.reduce(np.isfinite(cand), axis=1)]
+    norms = np.sqrt(np.add.reduce(cand * cand, axis=1))  # np.linalg.norm(cand, axis=1), without its wrapper
+    norms[norms == 0.0] = 1.0
+    cand /= norms[:, None]
+    return cand.reshape(-1, 3, 3)
 
 
 def fundamental_8point(U1: npt.ArrayLike, U2: npt.ArrayLike) -> np.ndarray:

@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import numpy.typing as npt
+from scipy.linalg import lapack as _lapack
 from scipy.optimize import leastsq
 
 from ._validate import GeometryError, as_up_to_scale
@@ -64,11 +65,20 @@ def _rodrigues_jr(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         a = math.sin(th) / th
         b = (1.0 - math.cos(th)) / th**2
         c = (th - math.sin(th)) / th**3
-    W = ((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0))
-    # W @ W, entry by entry as the product computes it.
-    W2 = ((-z * z - y * y, y * x, z * x), (x * y, -z * z - x * x, z * y), (x * z, y * z, -y * y - x * x))
-    R = [[(i == j) + a * W[i][j] + b * W2[i][j] for j in range(3)] for i in range(3)]
-    J = [[(i == j) - b * W[i][j] + c * W2[i][j] for j in range(3)] for i in range(3)]
+    # W @ W, entry by entry as the product computes it; then R and J entry by entry (W's diagonal is zero).
+    q00, q01, q02 = -z * z - y * y, y * x, z * x
+    q10, q11, q12 = x * y, -z * z - x * x, z * y
+    q20, q21, q22 = x * z, y * z, -y * y - x * x
+    R = (
+        (1.0 + b * q00, a * -z + b * q01, a * y + b * q02),
+        (a * z + b * q10, 1.0 + b * q11, a * -x + b * q12),
+        (a * -y + b * q20, a * x + b * q21, 1.0 + b * q22),
+    )
+    J = (
+        (1.0 + c * q00, -b * -z + c * q01, -b * y + c * q02),
+        (-b * z + c * q10, 1.0 + c * q11, -b * -x + c * q12),
+        (-b * -y + c * q20, -b * x + c * q21, 1.0 + c * q22),
+    )
     return np.array(R), np.array(J)
 
 
@@ -126,6 +136,17 @@ class _SampsonProblem:
         key = p.tobytes()
         if key == self._jkey:
             return self._jac
+        dF, D = self._jacobian_factors(p)
+        self._jkey, self._jac = key, (dF @ D).T
+        return self._jac
+
+    def normal_equations(self, p: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(J^T J, J^T r)`` at ``p`` from the factors ``J = (dF D)^T``, without the ``(N, 7)`` Jacobian itself."""
+        dF, D = self._jacobian_factors(p)
+        return dF @ (D @ D.T) @ dF.T, dF @ (D @ r)
+
+    def _jacobian_factors(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(dF, D)``, ``(7, 9)`` and ``(9, N)``: the Jacobian of the residuals is ``(dF @ D).T``."""
         _, l1, l2, e, den, L, Rt, J1, J2 = self._eval(p)
         dF = np.empty((7, 3, 3))
         S = np.diag([1.0, p[6], 0.0])
@@ -134,7 +155,7 @@ class _SampsonProblem:
         dF[6] = np.outer(L[:, 1], Rt[1])
         # r = e / sqrt(den) with e = m2^T F m1 and den = q2 |(F m1)_{1,2}|^2 + q1 |(F^T m2)_{1,2}|^2 is a function
         # of F: dr/dF_ij = m2_i m1_j / sqrt(den) - e / den^1.5 (q2 (F m1)_i m1_j [i < 2] + q1 (F^T m2)_j m2_i [j < 2]),
-        # a (9, N) array D; the Jacobian is dF (7, 9) @ D, one product for the seven directions.
+        # the (9, N) array D; each of the seven directions dF_k gives the row dF_k . D of the Jacobian.
         N = e.shape[0]
         rs = 1.0 / np.sqrt(den)
         g = e * rs / den
@@ -142,11 +163,9 @@ class _SampsonProblem:
         Dv = D.reshape(3, 3, N)
         Dv[:2] -= (l2 * (self.q2 * g))[:, None, :] * self.h1[None]
         Dv[:, :2] -= self.h2[:, None, :] * (l1 * (self.q1 * g))[None]
-        J = dF.reshape(7, 9) @ D
         if self.sw is not None:
-            J *= self.sw
-        self._jkey, self._jac = key, J.T
-        return self._jac
+            D *= self.sw
+        return dF.reshape(7, 9), D
 
 
 def refine_sampson(
@@ -214,12 +233,11 @@ def polish_sampson(Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, *, max
     cost = float(r @ r)
     moved = False
     for _ in range(max_steps):
-        J = prob.jacobian(p)
-        H = J.T @ J
+        H, g = prob.normal_equations(p, r)
         H[_DIAGONAL_7] *= 1.0 + 1e-9
-        try:
-            delta = np.linalg.solve(H, -(J.T @ r))
-        except np.linalg.LinAlgError:
+        # LAPACK's LU solve directly (numpy.linalg.solve's routine): its wrapper costs more than the 7x7 system.
+        delta, info = _lapack.dgesv(H, -g)[2:]
+        if info != 0:  # singular
             break
         for _halving in range(4):
             p_new = p + delta
@@ -235,7 +253,10 @@ def polish_sampson(Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, *, max
         if small:
             break
     F = prob.F(p)
-    return F / np.linalg.norm(F) if moved and np.all(np.isfinite(F)) else Fn0
+    if not (moved and np.all(np.isfinite(F))):
+        return Fn0
+    f = F.ravel()
+    return F / math.sqrt(f.dot(f))  # np.linalg.norm's arithmetic without its wrapper
 
 
 _DIAGONAL_7 = np.diag_indices(7)
