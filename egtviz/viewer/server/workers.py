@@ -1,10 +1,11 @@
 """``egtviz serve --workers N``: N worker processes behind the one URL, restarted when one dies.
 
-How connections reach the workers: each worker runs the ordinary server (viser, the guards, the app) and binds
-the same port with ``SO_REUSEPORT``; the kernel hands each new connection to one of them (a tab's websocket then
-lives on that worker; the page's static files are the same in every worker). The supervising process first
-reserves the port (a bound socket that never listens, so no connection goes to it) after checking that nobody
-holds it, so that the workers never join a port another program listens on.
+How connections reach the workers: each worker runs the ordinary server (viser, the guards, the app). The
+supervising process reserves the port after checking that nobody holds it, listens on it, and hands each new
+connection to the worker that holds the fewest (:mod:`.balance`; a tab's websocket then lives on that worker, the
+page's static files are the same in every worker). With ``balance=False`` the workers instead bind the port with
+``SO_REUSEPORT`` and the kernel picks a worker by a hash of each connection's addresses (the supervising process's
+socket then never listens, so no connection goes to it), which split rooms unevenly (9 / 21 tabs in one run).
 
 The supervising process starts the workers, restarts one that ends (a tab of it reconnects by itself, to a live
 worker; its progress is in the SQLite database, its class in the hub), and with ``--classroom`` runs the
@@ -184,13 +185,29 @@ def start_worker(config: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
     """Start the server in this process as ``config`` says; returns ``(server, app, host, bus)``."""
     from .cli import start, student_url
 
-    enable_reuse_port()
     o = config["options"]
-    server, app = start(o["host"], config["port"], o["scene"], demo=o["demo"], present=o["present"],
-                        lesson=o["lesson"], course=o["course"], allow_hosts=tuple(o["allow_hosts"]))
-    if server.get_port() != config["port"]:
+    channel = config.get("channel")
+    if channel is None:  # the kernel balances: bind the shared port beside the other workers
+        enable_reuse_port()
+    else:  # handed connections by the supervising process: this worker's own socket stays on loopback, unused
+        from .balance import capture_serve
+
+        capture_serve(reuse_port=False)
+    server, app = start(o["host"] if channel is None else "127.0.0.1", config["port"] if channel is None else 0,
+                        o["scene"], demo=o["demo"], present=o["present"], lesson=o["lesson"], course=o["course"],
+                        allow_hosts=tuple(o["allow_hosts"]))
+    if channel is None and server.get_port() != config["port"]:
         server.stop()
         raise OSError(f"worker {config['index']}: bound port {server.get_port()}, not the shared {config['port']}")
+    if channel is not None:
+        from .balance import adopt_connections, served
+        from .viser_adapter import event_loop
+
+        try:
+            adopt_connections(socket.socket(fileno=int(channel)), served()[-1], event_loop(server))
+        except (RuntimeError, IndexError):
+            server.stop()
+            raise
     host = bus = None
     if o["classroom"]:
         from ...classroom import Classroom
@@ -210,8 +227,7 @@ def worker_main() -> int:
     (the supervising process closed it, or ended)."""
     config = json.loads(sys.stdin.readline())
     server, _app, host, bus = start_worker(config)
-    print(_READY + json.dumps({"index": config["index"], "pid": os.getpid(), "port": server.get_port()}),
-          flush=True)
+    print(_READY + json.dumps({"index": config["index"], "pid": os.getpid(), "port": config["port"]}), flush=True)
     try:
         sys.stdin.read()
     except KeyboardInterrupt:  # the terminal's Ctrl-C reaches every process of the group: the supervisor stops us
@@ -252,14 +268,20 @@ class Supervisor:
         options: what each worker serves.
         token: the instructor's token (default: a random one; :attr:`token`).
         worker_module: the module each worker runs (``python -m``; a benchmark's instrumented worker).
+        balance: hand each connection to the worker with the fewest (:mod:`.balance`); False: the kernel's hash.
     """
 
     def __init__(self, workers: int, port: int, options: WorkerOptions, *, token: str | None = None,
-                 worker_module: str = "egtviz.viewer.server.workers") -> None:
+                 worker_module: str = "egtviz.viewer.server.workers", balance: bool = True) -> None:
         if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
             raise ValueError(f"workers: expected a whole number 1 to {MAX_WORKERS}, got {workers!r}")
         self.options = options
         self.port, self._reserved = reserve_port(options.host, port)
+        self.dispatcher = None
+        if balance:
+            from .balance import Dispatcher
+
+            self.dispatcher = Dispatcher(self._reserved)
         self.hub = None
         self.token = None
         if options.classroom:
@@ -274,20 +296,26 @@ class Supervisor:
         self._stopping = False
         self.log = lambda text: print(f"egtviz: {text}", file=sys.stderr, flush=True)
 
-    def _config(self, index: int) -> str:
+    def _config(self, index: int, channel: int | None = None) -> str:
         config = {"index": index, "port": self.port, "options": dataclasses.asdict(self.options),
                   "token": self.token, "hub": self.hub.address if self.hub else None,
-                  "authkey": self.hub.authkey.hex() if self.hub else None}
+                  "authkey": self.hub.authkey.hex() if self.hub else None, "channel": channel}
         return json.dumps(config) + "\n"
 
     def _spawn(self, slot: _Slot) -> None:
         slot.ready.clear()
         slot.started = time.monotonic()
-        proc = subprocess.Popen([sys.executable, "-m", self.worker_module], stdin=subprocess.PIPE,
-                                stdout=subprocess.PIPE, text=True)
+        theirs = self.dispatcher.channel_for(slot.index) if self.dispatcher is not None else None
+        fd = None if theirs is None else theirs.fileno()  # the same number in the worker (pass_fds)
+        try:
+            proc = subprocess.Popen([sys.executable, "-m", self.worker_module], stdin=subprocess.PIPE,
+                                    stdout=subprocess.PIPE, text=True, pass_fds=() if fd is None else (fd,))
+        finally:
+            if theirs is not None:
+                theirs.close()  # the worker has its copy
         slot.proc = proc
         assert proc.stdin is not None
-        proc.stdin.write(self._config(slot.index))
+        proc.stdin.write(self._config(slot.index, fd))
         proc.stdin.flush()
         threading.Thread(target=self._read_output, args=(slot, proc), daemon=True,
                          name=f"egtviz-worker-{slot.index}-out").start()
@@ -298,6 +326,8 @@ class Supervisor:
             if line.startswith(_READY):
                 slot.pid = int(json.loads(line[len(_READY):])["pid"])
                 slot.ready.set()
+                if self.dispatcher is not None:
+                    self.dispatcher.mark_ready(slot.index)
             elif line.startswith(REPLY):
                 slot.replies.put(json.loads(line[len(REPLY):]))
             elif "(viser)" not in line and not line.startswith(("\u256d", "\u2502", "\u2570")):
@@ -385,6 +415,8 @@ class Supervisor:
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait(5)
+        if self.dispatcher is not None:
+            self.dispatcher.close()
         for sock in self._reserved:
             sock.close()
         if self.hub is not None:
