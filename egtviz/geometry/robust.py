@@ -131,10 +131,10 @@ def _sample(rng: np.random.Generator, n: int, k: int, size: int = 7) -> np.ndarr
     while got < k:
         draw = rng.integers(0, n, size=(k + 8, size))
         srt = np.sort(draw, axis=1)
-        ok = np.all(srt[:, 1:] != srt[:, :-1], axis=1)
+        ok = np.logical_and.reduce(srt[:, 1:] != srt[:, :-1], axis=1)  # np.all without its wrapper
         out.append(draw[ok])
-        got += int(ok.sum())
-    return np.concatenate(out)[:k]
+        got += int(np.count_nonzero(ok))
+    return (out[0] if len(out) == 1 else np.concatenate(out))[:k]
 
 
 class _Scorer:

@@ -100,7 +100,7 @@ class _SampsonProblem:
         self.p0[6] = S[1] / S[0]
         self.At = At
         self.h1 = At[6:9]  # m1 as rows (3, N)
-        self.h2 = np.ascontiguousarray(At[2::3])  # m2 as rows (3, N)
+        self.h2 = At[2::3]  # m2 as rows (3, N); each row contiguous, as BLAS needs
         self.q1, self.q2 = s1 * s1, s2 * s2
         self._key: bytes | None = None
         self._jkey: bytes | None = None
