@@ -54,6 +54,19 @@ def _port(text: str) -> int:
     return value
 
 
+def _host(text: str) -> str:
+    """argparse type of ``--host``: text a host name or an address could be (the resolver judges the rest)."""
+    if not _could_be_host(text):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a host name or an IP address")
+    return text
+
+
+def _could_be_host(host: object) -> bool:
+    # No name or address holds a control character; refused here, one shown on a terminal could move its
+    # cursor or change its colours (repr writes it out).
+    return isinstance(host, str) and bool(host.strip()) and host.isprintable()
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register the ``serve`` sub-command on an ``argparse`` sub-parser set."""
     p = subparsers.add_parser("serve", help="start the interactive viewer in the browser",
@@ -79,7 +92,7 @@ def _one_line_address_errors(parser: argparse.ArgumentParser) -> None:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--host", default="127.0.0.1",
+    p.add_argument("--host", default="127.0.0.1", type=_host,
                    help="address to listen on (default 127.0.0.1: this computer only; 0.0.0.0: every network "
                    "interface, so that other computers can connect)")
     p.add_argument("--port", type=_port, default=8080,
@@ -164,7 +177,7 @@ def check_bind(host: str, port: int, *, timeout: float = RESOLVE_TIMEOUT) -> Bin
     """
     if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
         raise ServeAddressError(f"cannot use --port {port!r}: expected an integer 0..65535")
-    if not isinstance(host, str) or not host.strip():
+    if not _could_be_host(host):
         raise ServeAddressError(f"cannot use --host {host!r}: expected a host name or an IP address")
     busy = False
     addresses = []
