@@ -244,16 +244,18 @@ def _real_cubic_roots(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.n
     """
     p = b - a * a / 3.0
     q = 2.0 * a**3 / 27.0 - a * b / 3.0 + c
-    disc = (q / 2.0) ** 2 + (p / 3.0) ** 3
+    h = -q / 2.0
+    disc = h * h + (p / 3.0) ** 3  # h * h is (q / 2)^2, bit for bit
     one = disc > 0.0
     sq = np.sqrt(np.where(one, disc, 0.0))
-    y1 = np.cbrt(-q / 2.0 + sq) + np.cbrt(-q / 2.0 - sq)
-    pn = np.where(one | (p >= 0.0), -1.0, p)  # p < 0 whenever there are three real roots
+    y1 = np.cbrt(h + sq) + np.cbrt(h - sq)
+    flat = p >= 0.0
+    pn = np.where(one | flat, -1.0, p)  # p < 0 whenever there are three real roots
     m = 2.0 * np.sqrt(-pn / 3.0)
     arg = np.minimum(np.maximum(3.0 * q / (pn * m), -1.0), 1.0)  # np.clip's own wrapper costs more
     phi = np.arccos(arg) / 3.0
     y3 = m[:, None] * np.cos(phi[:, None] - _THIRDS_OF_TURN)
-    y3 = np.where((p >= 0.0)[:, None], 0.0, y3)  # triple root
+    y3 = np.where(flat[:, None], 0.0, y3)  # triple root
     y = np.where(one[:, None], y1[:, None], y3)
     A, B, C = a[:, None], b[:, None], c[:, None]
     x = y - (a / 3.0)[:, None]

@@ -93,7 +93,11 @@ class _SampsonProblem:
     def __init__(
         self, Fn0: np.ndarray, At: np.ndarray, s1: float, s2: float, weights: np.ndarray | None = None
     ) -> None:
-        U0, S, V0t = np.linalg.svd(Fn0)
+        # LAPACK's divide-and-conquer SVD directly (numpy.linalg.svd's routine, the same numbers): its wrapper
+        # costs more than the 3x3 decomposition.
+        U0, S, V0t, info = _lapack.dgesdd(Fn0)
+        if info != 0:  # pragma: no cover - LAPACK failure
+            U0, S, V0t = np.linalg.svd(Fn0)
         self.sw = None if weights is None else np.sqrt(weights)
         self.U0, self.V0t = U0, V0t
         self.p0 = np.zeros(7)
