@@ -29,14 +29,8 @@ import numpy.typing as npt
 from ._validate import DegenerateConfigurationError, GeometryError, as_count, as_positive, as_scalar, short_repr
 from .error_metrics import sampson_distances_normalized
 from .essential import essential_linear, essential_projection, ray_pairs, ray_sampson
-from .fundamental import (
-    canonical_fundamental,
-    design_matrix,
-    float_pairs,
-    normalized_design,
-    null_vector,
-    seven_point_candidates,
-)
+from .fundamental import canonical_fundamental, design_matrix, float_pairs, normalized_design, null_vector
+from .fundamental import seven_point_candidates
 from .matrices import nearest_rank2
 from .sampson_refinement import polish_sampson, refine_sampson
 
