@@ -35,6 +35,7 @@ def test_the_gate_paces_students_only():
     assert gate.refusal(1, CLOSED) is None and gate.refusal(3, CLOSED) is None  # the instructor; no student
     assert gate.note(2, OPEN, 6) == "open up to step 2 of 6" and gate.note(1, OPEN, 6) == ""
     assert gate.last_open(OPEN, 4) == 1 and gate.last_open(OPEN, 0) == 0
+    assert gate.paced_run(1, None) is None  # the instructor's lessons are not paced
     room.pace(OPEN, 5)
     assert gate.note(2, OPEN, 6) == ""  # every step of a six-step lesson
     gate.close()

@@ -60,16 +60,16 @@ class PacingGate:
             step -= 1
         return step
 
-    def opened(self, tab: int, panel: Any) -> None:
-        """A lesson opened in the tab (a :class:`~egtviz.viewer.course.lesson_view.LessonPanel`): a student who
-        was further on resumes at the last step open, and "next" asks the pacing."""
+    def paced_run(self, tab: int, run: Any) -> Callable[[str, int], bool] | None:
+        """A lesson run (:class:`~egtviz.lessons.LessonRun`) opened in the tab, before it is drawn: a student who
+        was further on resumes at the last step open. Returns what the lesson panel's "next" asks (None: the tab is
+        not paced)."""
         if not self._paced(tab):
-            return
-        panel.may_enter = self.room.may_open
-        run = panel.run
+            return None
         last = self.last_open(run.lesson.name, run.step_index)
         if last != run.step_index:
-            panel.go_to(last)
+            run.go_to(last)
+        return self.room.may_open
 
     def _on_event(self, event: Any) -> None:
         if not isinstance(event, PacingChanged) or self.course is None:

@@ -248,7 +248,8 @@ class Course:
         self.lesson = lesson
         self._lock = threading.Lock()
         #: A class's pacing (:class:`egtviz.viewer.classroom.pacing_gate.PacingGate`): ``refusal(tab, lesson)`` says
-        #: why a tab may not open a lesson, ``opened(tab, panel)`` is told of each lesson opened; None: no pacing.
+        #: why a tab may not open a lesson, ``paced_run(tab, run)`` puts a run opened there at a step the pacing
+        #: allows and gives what "next" asks (None: anything); None: no pacing.
         self.gate: Any = None
         #: What each tab shows: a :class:`StartPage`, a :class:`LessonPanel`, or a workbench view.
         self.tabs: dict[int, Any] = {}
@@ -299,16 +300,17 @@ class Course:
             raise FieldError(f"{lesson.title}: {closed}")
         self._close_tab(client)
         run = LessonRun(lesson, learner, model=SceneModel(lesson.scene), progress=self.progress)
+        # Paced: at a step the class allows, before anything is drawn; "next" asks the pacing.
+        may_enter = self.gate.paced_run(client.client_id, run) if self.gate is not None else None
         view = self.app.show_workbench(client, run.model)
         if view is None:
             return None
         panel = LessonPanel(view, run, progress=self.progress, on_back=lambda: self.show_start(client),
                             on_learner=lambda key: self.remember(client.client_id, key),
                             field_delay=self.app.field_delay)
+        panel.may_enter = may_enter
         self.remember(client.client_id, run.learner)
         self._set_tab(client, panel)
-        if self.gate is not None:
-            self.gate.opened(client.client_id, panel)
         return panel
 
     def open_workbench(self, client: Any, model: SceneModel | None = None) -> Any:
@@ -330,9 +332,8 @@ class Course:
             panel = LessonPanel(view, was.run, progress=self.progress, on_back=lambda: self.show_start(client),
                                 on_learner=lambda key: self.remember(client.client_id, key),
                                 field_delay=self.app.field_delay)
+            panel.may_enter = was.may_enter
             self._set_tab(client, panel)
-            if self.gate is not None:
-                self.gate.opened(client.client_id, panel)
         else:
             self._add_back_button(client, view)
             self._set_tab(client, view)
