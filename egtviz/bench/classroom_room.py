@@ -206,14 +206,23 @@ def _quiet_after(done: asyncio.Event) -> Any:
 async def _tabs_main(config: dict[str, Any]) -> None:
     port, mode, seconds, rate = config["port"], config["mode"], config["seconds"], config["rate"]
     async with contextlib.AsyncExitStack() as stack:
+        # Each tab listens from the moment it is open: a student's tab is asked its name at once, and the class
+        # gives up waiting for the answer after a few seconds (the tab would then never join).
+        waits = []
         if mode == "drag":
-            draggers = [await _open(stack, port, "", None) for _ in range(config["tabs"])]
+            draggers = []
+            for _ in range(config["tabs"]):
+                draggers.append(await _open(stack, port, "", None))
+                waits.append(asyncio.create_task(_until_ready(draggers[-1], True)))
             followers: list[_Tab] = []
         else:
             draggers = [await _open(stack, port, f"/egtviz-instructor/{config['token']}", None)]
             await _until_ready(draggers[0], True)
-            followers = [await _open(stack, port, "", f"student {i}") for i in range(config["followers"])]
-        await asyncio.gather(*(_until_ready(t, True) for t in draggers), *(_until_ready(t, False) for t in followers))
+            followers = []
+            for i in range(config["followers"]):
+                followers.append(await _open(stack, port, "", f"student {i}"))
+                waits.append(asyncio.create_task(_until_ready(followers[-1], False)))
+        await asyncio.gather(*waits)
         everyone = draggers + followers
         print(json.dumps({"ports": [t.ws.local_address[1] for t in everyone],
                           "owners": [t.pose.get("owner") for t in draggers],
