@@ -187,7 +187,8 @@ class LessonRun:
         return tuple(out)
 
     def check(self, task_id: str, answer: str | None = None) -> Attempt:
-        """Check one task of the current step (``answer``: the typed answer of a question); the attempt is recorded."""
+        """Check one task of the current step (``answer``: the typed answer of a question); the attempt is recorded
+        (an answer that could not be read, :attr:`TaskResult.unread`, is not)."""
         for resolved in self.tasks():
             if resolved.task.id == task_id:
                 break
@@ -198,7 +199,10 @@ class LessonRun:
         result = (TaskResult(False, f"{breach}: {RESET_ADVICE}") if breach is not None
                   else resolved.task.check(ctx, resolved.params))
         tiers = resolved.task.hint
-        if self.progress is not None:
+        if result.unread:  # not an answer: the hints shown so far stay, nothing is counted
+            shown = (self.progress.hints_shown(self.learner, self.lesson.name, self.step_index, task_id)
+                     if self.progress is not None else self._own.get((self.step_index, task_id), (0, False, 0))[2])
+        elif self.progress is not None:
             shown = self.progress.record_attempt(self.learner, self.lesson.name, self.step_index, task_id,
                                                  result.passed, hint_tiers=len(tiers))
         else:

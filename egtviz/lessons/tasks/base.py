@@ -37,6 +37,9 @@ class TaskResult:
 
     passed: bool
     feedback: str
+    unread: bool = False
+    """The typed answer could not be read (not one number, no brackets...): a refusal saying what was expected,
+    not a wrong answer, so it is neither counted as an attempt nor a reason to show the next hint."""
 
 
 @dataclass(frozen=True)

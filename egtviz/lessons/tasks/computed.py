@@ -190,7 +190,7 @@ class ComputedTask(Task):
         try:
             x = self.read(ctx.answer)
         except AnswerError as exc:
-            return TaskResult(False, str(exc))
+            return TaskResult(False, str(exc), unread=True)
         right = self.value(ctx.scene)
         scale = self.spec.up_to_scale
         shown = typed_text(x, self.unit)

@@ -28,7 +28,7 @@ def compare_number(typed: str | None, answer: float, tolerance: float, unit: str
     try:
         x = read_number(typed, unit)
     except AnswerError as exc:
-        return TaskResult(False, str(exc))
+        return TaskResult(False, str(exc), unread=True)
     shown = f" {unit}" if unit else ""
     if abs(x - answer) <= tolerance:
         return TaskResult(True, f"Right: {fmt(x)}{shown}.")

@@ -222,13 +222,14 @@ def typed_learner_key(name: Any) -> str:
         raise FieldError(str(exc)) from exc
 
 
-def _feedback_markdown(passed: bool, feedback: str, hint: str | None) -> str:
+def _feedback_markdown(passed: bool, feedback: str, hint: str | None, *, unread: bool = False) -> str:
     """One attempt as shown: the verdict, the check's feedback (plain text), the hints shown so far (Markdown, each
-    labelled by the runner) after a failure."""
+    labelled by the runner) after a failure. An answer that could not be read (``unread``) gets no verdict: it was
+    not judged."""
     text = escape(feedback, quote=False).replace("*", "\\*").replace("_", "\\_")
     if passed:
         return f"**\u2713 Passed.** {text}"
-    out = f"**\u2717 Not yet.** {text}"
+    out = f"**Answer not read.** {text}" if unread else f"**\u2717 Not yet.** {text}"
     if hint:
         out += f"\n\n{hint}"
     return out
@@ -507,7 +508,8 @@ class LessonPanel:
             return
         attempt = self.run.check(row.task_id, answer)
         self.attempts[row.task_id] = attempt
-        row.feedback.content = _feedback_markdown(attempt.result.passed, attempt.result.feedback, attempt.hint)
+        row.feedback.content = _feedback_markdown(attempt.result.passed, attempt.result.feedback, attempt.hint,
+                                                  unread=attempt.result.unread)
         if self.summary is not None:
             self.summary.content = self.run.summary().markdown()
 

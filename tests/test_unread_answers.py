@@ -1,0 +1,85 @@
+"""An answer that cannot be read (``1,5``, ``0x0E``, ``14_85``, a vector without its brackets) is refused with a
+message: it is not a wrong answer, so it is not counted as an attempt and does not open the next hint."""
+
+from __future__ import annotations
+
+import pytest
+
+from egtviz.lessons import LessonRun, ProgressStore, load
+from egtviz.lessons.tasks import TaskContext, parse_task
+from egtviz.scene import SCENES
+
+INTRINSICS = "03-intrinsics"  # step 1: "focal-pixels", a number in px (800)
+FRAMES = "01-frames-and-poses"
+
+
+@pytest.mark.parametrize("learner", ["Ada", ""], ids=["named", "anonymous"])
+def test_an_unread_number_is_refused_without_counting_an_attempt_or_opening_a_hint(tmp_path, learner):
+    store = ProgressStore(tmp_path / "p.sqlite3")
+    run = LessonRun(load(INTRINSICS), learner, progress=store)
+    for typed, words in (("1,5", "Write the decimals after a point: 1.5, not 1,5."),
+                         ("0x0E", "Type one number"), ("14_85", "Type one number")):
+        attempt = run.check("focal-pixels", typed)
+        assert not attempt.result.passed and attempt.result.unread and words in attempt.result.feedback
+        assert attempt.hint is None and attempt.hints_shown == 0
+    wrong = run.check("focal-pixels", "900")  # a number, wrong: the first attempt, the first hint
+    assert not wrong.result.unread and wrong.hints_shown == 1 and "(1 of 3)" in wrong.hint
+    again = run.check("focal-pixels", "800 mm")  # refused: the hint shown so far stays, no next one
+    assert again.result.unread and again.hints_shown == 1 and again.hint == wrong.hint
+    assert run.check("focal-pixels", "800 px").result.passed
+    summary = run.summary()
+    assert summary.attempts == 2 and summary.hints == 1
+    if learner:
+        assert store.attempts(learner, INTRINSICS, 0, "focal-pixels") == 2
+        assert store.hints_shown(learner, INTRINSICS, 0, "focal-pixels") == 1
+    else:
+        assert store.task_records() == []
+
+
+def test_an_unread_vector_is_refused_and_a_read_one_is_judged():
+    run = LessonRun(load(FRAMES), "")
+    step = next(i for i, s in enumerate(run.lesson.steps) if any(t.id == "xc" for t in s.tasks))
+    run.go_to(step)
+    refused = run.check("xc", "1, 2, 3")  # no brackets
+    assert refused.result.unread and "Type 3 numbers in brackets" in refused.result.feedback
+    assert refused.hints_shown == 0
+    judged = run.check("xc", "[1, 2, 3]")
+    assert not judged.result.unread and not judged.result.passed and judged.hints_shown == 1
+
+
+def test_a_wrong_number_or_option_is_read_and_counted():
+    number = parse_task({"kind": "number", "prompt": "x", "answer": 1.5, "tolerance": 0.01}, "t1")
+    assert not number.check(TaskContext(SCENES["default"](), answer="2"), number.resolve(0)).unread
+    assert number.check(TaskContext(SCENES["default"](), answer="1,5"), number.resolve(0)).unread
+
+
+def test_the_panel_says_an_answer_was_not_read_with_no_verdict_and_keeps_the_hints_shown(tmp_path):
+    import viser
+
+    from egtviz.viewer.course.lesson_view import LessonPanel
+    from egtviz.viewer.server.headless import FakeTab
+    from egtviz.viewer.workbench.app import EgtvizApp
+
+    store = ProgressStore(tmp_path / "p.sqlite3")
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    tab = None
+    try:
+        app = EgtvizApp(server, field_delay=0.0, course=True, progress=store, lesson=INTRINSICS)
+        tab = FakeTab(server.get_port())
+        (panel,) = app.course.wait_for_tab(LessonPanel)
+        panel.learner.value = "Ada"
+        row = panel.row("focal-pixels")
+        row.answer.value = "900"
+        row.button.value = True
+        assert row.feedback.content.startswith("**\u2717 Not yet.** 900 px is too high.") and "(1 of 3)" in \
+            row.feedback.content
+        row.answer.value = "1,5"
+        row.button.value = True
+        content = row.feedback.content
+        assert content.startswith("**Answer not read.** Write the decimals after a point: 1.5, not 1,5.")
+        assert "\u2717" not in content and "(1 of 3)" in content and "(2 of 3)" not in content
+        assert store.attempts("Ada", INTRINSICS, 0, "focal-pixels") == 1
+    finally:
+        if tab is not None:
+            tab.close()
+        server.stop()
