@@ -13,7 +13,7 @@ from egtviz.classroom import Classroom, Mode
 from egtviz.lessons import ProgressStore
 from egtviz.viewer.classroom import host as host_module
 from egtviz.viewer.classroom.host import ClassroomHost
-from egtviz.viewer.classroom.pacing_gate import NOT_OPEN, PacingGate
+from egtviz.viewer.classroom.course_gate import NOT_OPEN, CourseGate
 from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.viewer.server.headless import FakeTab
@@ -26,7 +26,7 @@ OPEN, CLOSED = "02-pinhole-projection", "03-intrinsics"
 
 def test_the_gate_paces_students_only():
     room = Classroom(None, token="t" * 20)
-    gate = PacingGate(room)
+    gate = CourseGate(room)
     room.instructor_join(1)
     room.join(2, "Ada")
     room.allow_lessons([OPEN])
@@ -129,3 +129,17 @@ def test_the_pacing_leaves_a_course_without_a_class_alone(tmp_path):
         fake.close()
     finally:
         server.stop()
+
+
+def test_the_workbench_opened_from_a_students_start_page_is_their_own_scene(classroom):
+    app, host, _, join = classroom
+    cid, fake = join("Cy")  # released to explore: their own scene
+    own = app.views[cid].model
+    cam = own.scene.camera("cam2")
+    own.set_camera_pose("cam2", (cam.position[0] + 0.4, *cam.position[1:]), cam.pose.R)  # their work
+    assert wait_until(lambda: host.room.own_scene("Cy") is own.scene, 10)
+    page = _start_page(app, cid, "Cy")
+    fake.send("GuiUpdateMessage", uuid=page.btn_workbench._impl.uuid, updates={"value": True})
+    assert wait_until(lambda: app.course.tabs.get(cid) is not page and cid in app.views, 30)
+    assert app.views[cid].model is own
+    assert wait_until(lambda: host.room.own_scene("Cy") is own.scene, 10)

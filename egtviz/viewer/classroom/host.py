@@ -31,7 +31,7 @@ from ..workbench.fields import FieldError, notify_error, on_event
 from .camera_lock import CameraLock
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
-from .pacing_gate import PacingGate
+from .course_gate import CourseGate
 from .room_html import step_caption
 from .room_sender import RoomSender, frame_from_scene, frame_of
 from .snapshot_pane import RoomSnapshots
@@ -81,7 +81,7 @@ class ClassroomHost:
         self.cameras = CameraLock(self.room, lambda: self._copy(self.followers),
                                   released=lambda: (self._copy(self._roles), dict(self.app.views)))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
-        self.gate = PacingGate(self.room, app.course)  # the course's start page and lessons follow the pacing
+        self.gate = CourseGate(self.room, app.course, own_model=self._own_model)  # paced pages, own workbench
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
         # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
         self._log_filter = self.room.log_filter()

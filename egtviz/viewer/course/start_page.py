@@ -247,9 +247,10 @@ class Course:
             load(lesson)  # raises the LessonError naming the lessons there are
         self.lesson = lesson
         self._lock = threading.Lock()
-        #: A class's pacing (:class:`egtviz.viewer.classroom.pacing_gate.PacingGate`): ``refusal(tab, lesson)`` says
-        #: why a tab may not open a lesson, ``paced_run(tab, run)`` puts a run opened there at a step the pacing
-        #: allows and gives what "next" asks (None: anything); None: no pacing.
+        #: A class on the course's pages (:class:`egtviz.viewer.classroom.course_gate.CourseGate`):
+        #: ``refusal(tab, lesson)`` says why a tab may not open a lesson, ``paced_run(tab, run)`` puts a run opened
+        #: there at a step the pacing allows and gives what "next" asks (None: anything), ``workbench_model(tab)``
+        #: the scene a tab's workbench shows (None: a new one); None: no class.
         self.gate: Any = None
         #: What each tab shows: a :class:`StartPage`, a :class:`LessonPanel`, or a workbench view.
         self.tabs: dict[int, Any] = {}
@@ -314,7 +315,10 @@ class Course:
         return panel
 
     def open_workbench(self, client: Any, model: SceneModel | None = None) -> Any:
-        """Open the workbench in this tab (on ``model``, default a new one), with a button back to the course."""
+        """Open the workbench in this tab (on ``model``, default a new one or, in a class, the student's own), with a
+        button back to the course."""
+        if model is None and self.gate is not None:
+            model = self.gate.workbench_model(client.client_id)
         self._close_tab(client)
         view = self.app.show_workbench(client, model)
         if view is None:

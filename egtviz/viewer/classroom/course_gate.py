@@ -1,8 +1,12 @@
-"""The class's pacing on the course's own pages, for students' tabs: the start page shows the lessons the
-instructor has not opened as not yet open (their buttons disabled, and a click forged by a raw message refused),
-and a lesson opened from it starts at a step the pacing allows, its "next" held by the pacing too.
+"""The class on the course's own pages, for students' tabs:
 
-The instructor's tabs, and a course served without a class, are not paced. The course asks the gate
+* **Pacing.** The start page shows the lessons the instructor has not opened as not yet open (their buttons
+  disabled, and a click forged by a raw message refused), and a lesson opened from it starts at a step the pacing
+  allows, its "next" held by the pacing too.
+* **Their own scene.** The workbench the start page opens is the student's own scene, the one the class keeps for
+  them, not a new one.
+
+The instructor's tabs, and a course served without a class, are left alone. The course asks the gate
 (:attr:`egtviz.viewer.course.start_page.Course.gate`); the gate asks the classroom.
 """
 
@@ -15,24 +19,28 @@ from typing import Any
 from ...classroom import Classroom, PacingChanged
 from ..course.start_page import StartPage
 
-__all__ = ["NOT_OPEN", "PacingGate"]
+__all__ = ["NOT_OPEN", "CourseGate"]
 
 #: Why a student cannot open a lesson the pacing keeps closed.
 NOT_OPEN = "the instructor has not opened this lesson yet"
 
 
-class PacingGate:
-    """Which lessons, and which steps of them, a student's tab may open under the class's pacing.
+class CourseGate:
+    """Which lessons, and which steps of them, a student's tab may open under the class's pacing, and which scene
+    their workbench shows.
 
     Args:
         room: the class.
         course: the course that asks the gate (it becomes the course's ``gate``), and whose start pages are shown
             again when the pacing changes; None: no course.
+        own_model: the scene model of a student's own scene, by name (None: a new workbench for everyone).
     """
 
-    def __init__(self, room: Classroom, course: Any = None) -> None:
+    def __init__(self, room: Classroom, course: Any = None, *,
+                 own_model: Callable[[str], Any] | None = None) -> None:
         self.room = room
         self.course = course
+        self._own_model = own_model
         self._unsubscribe: Callable[[], None] = room.subscribe(self._on_event)
         if course is not None:
             course.gate = self
@@ -70,6 +78,11 @@ class PacingGate:
         if last != run.step_index:
             run.go_to(last)
         return self.room.may_open
+
+    def workbench_model(self, tab: int) -> Any:
+        """The scene model the workbench opened in the tab shows: a student's own; None: a new one."""
+        name = self.room.name_of(tab) if self._paced(tab) else None
+        return self._own_model(name) if name is not None and self._own_model is not None else None
 
     def _on_event(self, event: Any) -> None:
         if not isinstance(event, PacingChanged) or self.course is None:
