@@ -83,3 +83,16 @@ def test_the_panel_says_an_answer_was_not_read_with_no_verdict_and_keeps_the_hin
         if tab is not None:
             tab.close()
         server.stop()
+
+
+def test_checking_a_choice_with_no_option_picked_is_not_an_attempt():
+    run = LessonRun(load(FRAMES), "")
+    run.go_to(next(i for i, s in enumerate(run.lesson.steps) if any(t.kind == "choice" for t in s.tasks)))
+    task = next(t.task for t in run.tasks() if t.task.kind == "choice")
+    for typed in (None, "", "(choose an answer)", str(len(task.options) + 1)):
+        refused = run.check(task.id, typed)
+        assert refused.result.unread and refused.result.feedback == "Pick one of the options."
+        assert refused.hints_shown == 0 and refused.hint is None
+    wrong = next(o for o in task.options if o != task.answer)
+    judged = run.check(task.id, wrong)
+    assert not judged.result.unread and not judged.result.passed and judged.hints_shown == 1

@@ -92,7 +92,7 @@ class ChoiceTask(Task):
         if given.isdigit() and 1 <= int(given) <= len(self.options):
             given = self.options[int(given) - 1]
         if given not in self.options:
-            return TaskResult(False, "Pick one of the options.")
+            return TaskResult(False, "Pick one of the options.", unread=True)
         said = dict(self.feedback).get(given)
         if given == self.answer:
             return TaskResult(True, f"Right: {given}." + (f" {said}" if said else ""))
