@@ -153,9 +153,9 @@ def test_a_wrong_answer_is_refused_with_its_hint_and_counted(store):
         assert not attempt.result.passed
         shown = panel.row("meet").feedback.content
         assert "Not yet" in shown and "Hint:" in shown and "Every epipolar plane contains the baseline" in shown
-        # No choice made: refused too, and not passed.
+        # No choice made: refused, not passed, and not counted (it is no answer).
         assert not answer(panel, "meet", CHOOSE).result.passed
-        assert store.attempts("Grace", LESSON6, 0, "meet") == 2
+        assert store.attempts("Grace", LESSON6, 0, "meet") == 1
         assert (0, "meet") not in store.passed_tasks("Grace", LESSON6)
         # A number task: a wrong number says which way it is off, and the hint follows.
         panel.btn_back.value = True
