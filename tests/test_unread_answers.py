@@ -96,3 +96,33 @@ def test_checking_a_choice_with_no_option_picked_is_not_an_attempt():
     wrong = next(o for o in task.options if o != task.answer)
     judged = run.check(task.id, wrong)
     assert not judged.result.unread and not judged.result.passed and judged.hints_shown == 1
+
+
+def test_egtviz_check_refuses_a_counter_example_the_check_cannot_read():
+    from egtviz.lessons import LessonError
+    from egtviz.lessons.format import parse_lesson
+    from egtviz.lessons.proof import prove_counter_examples
+
+    text = '''title = "T"
+summary = "S"
+scene = "default"
+
+[[steps]]
+title = "Step"
+text = "Text."
+
+[[steps.tasks]]
+id = "rank"
+kind = "number"
+prompt = "Rank?"
+answer = 2
+
+[[steps.tasks.counter_examples]]
+why = "a typo that proves nothing about the check"
+answer = "2,0"
+'''
+    lesson = parse_lesson(text, source="q.toml", name="q")
+    with pytest.raises(LessonError, match=r"^q.toml:15: task rank: counter-example 1 is not read as an answer: "
+                                          r"Write the decimals after a point: 2.0, not 2,0. \["):
+        prove_counter_examples(lesson, learners=("",))
+    prove_counter_examples(parse_lesson(text.replace('"2,0"', '"3"'), source="q.toml", name="q"), learners=("",))

@@ -76,6 +76,9 @@ def _prove_one(lesson: Lesson, run: LessonRun, index: int, task_id: str, number:
         except SceneError as exc:
             raise LessonError(lesson.source, example.line, f"{where} cannot be applied: {exc}") from None
     attempt = run.check(task_id, answer)
+    if attempt.result.unread:  # refused before it was judged: it shows nothing about the check
+        raise LessonError(lesson.source, example.line,
+                          f"{where} is not read as an answer: {attempt.result.feedback} [{example.why}]")
     if attempt.result.passed:
         learner = f" (learner {run.learner!r})" if run.learner else ""
         raise LessonError(lesson.source, example.line,
