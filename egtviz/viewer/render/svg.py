@@ -928,24 +928,21 @@ def image_plane_svg(
     """Inline SVG of one camera's image plane, in pixel units.
 
     Args:
-        plane: an :class:`egtviz.scene.ImagePlane` (read: ``camera``,
-            ``width``, ``height``, ``points``, ``visible``, ``in_image``,
-            ``n_hidden``, ``no_image``, ``epipoles``, ``lines``, ``conics``, ``rim``,
+        plane: an :class:`egtviz.scene.ImagePlane` (read: ``camera``, ``width``, ``height``, ``points``,
+            ``visible``, ``in_image``, ``n_hidden``, ``no_image``, ``epipoles``, ``lines``, ``conics``, ``rim``,
             ``horizon``, ``message``).
-        selected_point: 0-based index of the selected scene point: drawn with a
-            ring, its epipolar line/conic thicker.
+        selected_point: 0-based index of the selected scene point: drawn with a ring, its epipolar line/conic thicker.
         highlighted: 0-based indices of highlighted points (a ring too).
         show_labels: write the point numbers (1-based) next to the points (``"marked"``: the marked ones).
-        revision: written as ``data-rev`` on the root (lets a browser test or
-            the benchmark recognise a given update).
+        revision: written as ``data-rev`` on the root (a browser test or the benchmark recognises an update by it).
         max_height: a CSS ``max-height`` for the SVG (it keeps its aspect ratio).
         view: the part of the image plane shown (:mod:`egtviz.viewer.render.panel_view`);
             ``None``: the image rectangle.
         style: ``NORMAL`` or ``PRESENT``.
-        panel_px: the panel's width on screen in CSS pixels, if known: the
-            style's sizes are met at that width (default ``style.panel_px``).
-        fixed_size: write ``width``/``height`` in pixels (a figure file)
-            instead of ``width="100%"`` (a panel that follows its column).
+        panel_px: the panel's width on screen in CSS pixels, if known: the style's sizes are met at that width
+            (default ``style.panel_px``).
+        fixed_size: write ``width``/``height`` in pixels (a figure file) instead of ``width="100%"`` (a panel that
+            follows its column).
         ringed: 0-based indices of points an instrument rings (e.g. the estimation lab's rejects): a ring, and a
             number only when every point is numbered (a step that numbers the selected point only keeps it so).
 
