@@ -142,7 +142,9 @@ def test_serve_classroom_prints_the_student_url_its_qr_code_and_the_instructor_u
 
 
 @pytest.mark.parametrize(("typed", "value"), [("12", 12.0), (" 1,5 ", 1.5), ("-3e2", -300.0),
-                                              ("parallel", "parallel"), (" e1 is left ", "e1 is left")])
+                                              ("parallel", "parallel"), (" e1 is left ", "e1 is left"),
+                                              ("14_85", "14_85"), ("nan", "nan"), ("1e400", "1e400"),
+                                              ("0x0E", "0x0E"), ("14.85.3", "14.85.3"), (".5", 0.5)])
 def test_an_answer_is_a_number_when_it_reads_as_one(typed, value):
     from egtviz.viewer.classroom.student_bar import typed_answer
 

@@ -8,6 +8,8 @@ built again whenever the tab is cleared. Every callback's failure is shown in th
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -18,6 +20,8 @@ from ...classroom import ClassroomError
 from ...lessons.progress import LearnerNameError
 from ..workbench.fields import FieldError, notify_error, on_event
 from .room_html import pause_html, student_status_html
+
+_PLAIN_NUMBER = re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?")
 
 __all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "notify_refusal", "stored_name", "typed_answer"]
 
@@ -39,17 +43,20 @@ def stored_name(client: Any, key: str, timeout: float) -> str | None:
 
 
 def typed_answer(text: Any) -> float | str:
-    """An answer as typed: a number (``1,5`` reads as 1.5) or, failing that, the text.
+    """An answer as typed: a plain finite decimal (``1,5`` reads as 1.5) is a number, anything else its text.
 
     Raises:
         FieldError: nothing typed.
     """
     if not isinstance(text, str) or not text.strip():
         raise FieldError("your answer: type it first")
-    try:
-        return float(text.strip().replace(",", "."))
-    except ValueError:
-        return text.strip()
+    typed = text.strip()
+    # Only a plain decimal reads as a number: float() alone would read "14_85" as 1485 and "nan" as a number.
+    if _PLAIN_NUMBER.fullmatch(typed):
+        value = float(typed.replace(",", "."))
+        if math.isfinite(value):
+            return value
+    return typed
 
 
 class JoinPage:
