@@ -3,9 +3,7 @@
 :func:`frame_of` takes what the instructor's tab has just sent to its own browser (its panels' SVG strings, its
 read-out, its scene and derived geometry): nothing is computed again. :class:`RoomSender` gives the newest
 frame to each follower in turn; a frame that arrives while it is sending replaces the one waiting (latest
-wins), so a room of followers costs the instructor nothing but handing over a reference. A follower whose tab
-has not yet been sent its last frame (the event loop is behind) is passed over and come back to once it has:
-drawing it again now would only replace what waits, and take the time from the loop that sends it.
+wins), so a room of followers costs the instructor nothing but handing over a reference.
 """
 
 from __future__ import annotations
@@ -13,7 +11,6 @@ from __future__ import annotations
 import itertools
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -70,30 +67,15 @@ def frame_from_scene(scene: Any, version: int, number: int, *, present: bool = F
     return RoomFrame(number, version, scene, derived, tuple(panels), pair_html(derived), present)
 
 
-#: Seconds between two looks at followers whose tabs were still being sent their last frame.
-RETRY_S = 0.002
-#: A follower passed over this long (seconds) is shown the newest frame anyway (a tab that never drains).
-MAX_PASS_OVER_S = 0.5
-
-
-def _tab_waiting(view: FollowView) -> bool:
-    from ..server.client_backlog import waiting
-
-    return waiting(view.client)
-
-
 class RoomSender:
     """One thread that shows the newest :class:`RoomFrame` in every follower.
 
     Args:
         followers: returns the followers' views now (called once per frame sent).
-        busy: whether a follower's tab still waits for messages already queued for it (default: asks viser).
     """
 
-    def __init__(self, followers: Callable[[], list[FollowView]],
-                 busy: Callable[[FollowView], bool] = _tab_waiting) -> None:
+    def __init__(self, followers: Callable[[], list[FollowView]]) -> None:
         self._followers = followers
-        self._busy = busy
         self._cond = threading.Condition()
         self._numbers = itertools.count(1)
         #: The newest frame posted (a new follower starts from it); None before the first.
@@ -133,30 +115,14 @@ class RoomSender:
                 frame = self.latest
             if frame is None:
                 continue
-            todo = self._followers()
-            since = time.monotonic()
-            while todo:
-                overdue = time.monotonic() - since > MAX_PASS_OVER_S
-                todo = [view for view in todo if not self._show(view, overdue)]
-                if todo:
-                    with self._cond:  # a newer frame starts a new pass over every follower
-                        if self._closed or self._pending or self._cond.wait(RETRY_S) and self._pending:
-                            break
+            for view in self._followers():
+                with self._cond:
+                    newer = self.latest
+                try:
+                    view.show(newer if newer is not None else frame)
+                except Exception:  # noqa: BLE001 - one follower's broken tab must not stop the room
+                    _log.exception("egtviz classroom: a follower could not be shown the room's scene")
             self.sent += 1
-
-    def _show(self, view: FollowView, overdue: bool) -> bool:
-        """Show the newest frame in ``view``; False: passed over, its tab still waits for what it was sent."""
-        with self._cond:
-            frame = self.latest
-        if frame is None or (view.frame is not None and view.frame.number >= frame.number):
-            return True
-        if not overdue and self._busy(view):
-            return False
-        try:
-            view.show(frame)
-        except Exception:  # noqa: BLE001 - one follower's broken tab must not stop the room
-            _log.exception("egtviz classroom: a follower could not be shown the room's scene")
-        return True
 
     def close(self) -> None:
         with self._cond:
