@@ -90,7 +90,7 @@ def _run_scene(args) -> int:
         return 0
     if args.scene_command == "save":
         if args.name not in SCENES:
-            return _error(f"no built-in scene {printable(args.name)!r} (built-in: {', '.join(SCENES)})")
+            return _error(f"no built-in scene '{printable(args.name)}' (built-in: {', '.join(SCENES)})")
         try:
             check_write_target(args.file)
             save_scene_file(SCENES[args.name](), args.file)

@@ -42,7 +42,7 @@ def allowed_host(text: str, *, what: str = "host") -> str:
     except ValueError:
         pass
     if not name or len(name) > 253 or not all(_DNS_LABEL.match(label) for label in name.split(".")):
-        raise ValueError(f"{what}: {printable(text)!r} is not a host name (expected a name such as hub.example.edu, "
+        raise ValueError(f"{what}: '{printable(text)}' is not a host name (expected a name such as hub.example.edu, "
                          "without scheme, port, path or wildcard)")
     return name
 

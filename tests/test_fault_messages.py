@@ -30,6 +30,16 @@ def test_check_bind_refuses_a_host_with_control_characters_before_resolving_it()
     assert str(info.value) == f"cannot use --host {SHOWN}"
 
 
+@pytest.mark.parametrize(("argv", "shown"), [
+    (["serve", "--port", "0", "--allow-host", ESCAPES], "'\\x1b[31mX\\x07' is not a host name"),
+    (["scene", "save", ESCAPES, "/nonexistent-egtviz/o.json"], "no built-in scene '\\x1b[31mX\\x07'"),
+], ids=["allow-host", "scene-save"])
+def test_a_name_is_written_out_once_not_escaped_twice(capsys, argv, shown):
+    assert main(argv) in (1, 2)
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and shown in err and "\\\\x1b" not in err
+
+
 # -- a set_range refusal in the unit of the field the learner types in ------------------------------------------
 
 

@@ -182,7 +182,7 @@ def parse_lesson(data: bytes | str, *, source: str, name: str, known_lessons: fr
             raise LessonError(source, 1, too_large(size, MAX_LESSON_FILE_BYTES))
     text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     if not _LESSON_NAME.fullmatch(name):
-        raise LessonError(source, 1, f"lesson name {printable(name)!r}: expected lower-case letters, digits and '-'")
+        raise LessonError(source, 1, f"lesson name '{printable(name)}': expected lower-case letters, digits and '-'")
     check_toml_text(text, source)
     try:
         doc = tomllib.loads(text)
@@ -234,7 +234,7 @@ class _Reader:
             raise self.entry((), exc, "lesson") from None
         for p in prerequisites:
             if self.known is not None and p not in self.known:
-                raise self.error(("prerequisites",), f"prerequisites: no lesson named {printable(p)!r}")
+                raise self.error(("prerequisites",), f"prerequisites: no lesson named '{printable(p)}'")
             if p == self.name:
                 raise self.error(("prerequisites",), "prerequisites: a lesson cannot require itself")
         scene = self.scene(doc.get("scene"))

@@ -101,7 +101,7 @@ def _refusal(args: argparse.Namespace) -> str | None:
         if value is not None and not (math.isfinite(value) and 0.0 <= value <= high):
             return f"--{name}: expected a number in 0..{high:g}{unit}, got {value:g}"
     if args.plot is not None and not str(args.plot).lower().endswith(".png"):
-        return f"--plot writes a PNG: expected a file name ending in .png, got {printable(args.plot)!r}"
+        return f"--plot writes a PNG: expected a file name ending in .png, got '{printable(args.plot)}'"
     outputs = [o for o in (args.json, args.plot) if o is not None]
     if len(outputs) == 2 and os.path.abspath(outputs[0]) == os.path.abspath(outputs[1]):
         return "--json and --plot name the same file"

@@ -202,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.name in SCENES:
         scene = SCENES[args.name]()
     else:
-        return _fail(f"no built-in scene {printable(args.name)!r} (have {', '.join(SCENES)}; a file needs --scene)")
+        return _fail(f"no built-in scene '{printable(args.name)}' (have {', '.join(SCENES)}; a file needs --scene)")
     try:
         svg = panel_svg(scene, args.camera, present=args.present, fit=args.fit)
     except KeyError as exc:
