@@ -102,6 +102,9 @@ class LessonRun:
         self._own: dict[tuple[int, str], tuple[int, bool, int]] = {}
         """``(step, task)``: attempts, passed, hints shown, of an anonymous learner (nothing goes to the store)."""
         self._next_title: tuple[str | None] | None = None
+        self.keep_furthest = False
+        """Record a step only when it is further than the one remembered (a class's pacing decides where the tab
+        shows, not how far the learner got)."""
         self.step_index = 0
         start = self.progress.current_step(self.learner, lesson.name) if self.progress else 0
         self.go_to(min(max(start, 0), len(lesson.steps) - 1))
@@ -135,7 +138,8 @@ class LessonRun:
         self.step_index = index
         self.step_start = self.model.scene
         """The scene as the step started (its locks are verified by every scene task's check)."""
-        if self.progress is not None:
+        if self.progress is not None and (not self.keep_furthest
+                                          or index > self.progress.current_step(self.learner, self.lesson.name)):
             self.progress.set_step(self.learner, self.lesson.name, index)
 
     def go_to(self, index: int) -> None:

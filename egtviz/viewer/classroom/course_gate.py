@@ -2,7 +2,11 @@
 
 * **Pacing.** The start page shows the lessons the instructor has not opened as not yet open (their buttons
   disabled, and a click forged by a raw message refused), and a lesson opened from it starts at a step the pacing
-  allows, its "next" held by the pacing too.
+  allows, its "next" held by the pacing too. When the instructor tightens the pacing, a student already past it goes
+  back to the last open step (to the start page if their lesson closed), with a note saying so; the progress
+  database keeps the furthest step they reached.
+* **Their name.** A student's name is the one they joined with: the name fields of the start page and of the lesson
+  panel show it read-only, and a name sent to them anyway is refused.
 * **Their own scene.** The workbench the start page opens is the student's own scene, the one the class keeps for
   them, not a new one.
 
@@ -14,15 +18,18 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from ...classroom import Classroom, PacingChanged
 from ..course.start_page import StartPage
 
-__all__ = ["NOT_OPEN", "CourseGate"]
+__all__ = ["NOT_OPEN", "PACED_TITLE", "CourseGate"]
 
 #: Why a student cannot open a lesson the pacing keeps closed.
 NOT_OPEN = "the instructor has not opened this lesson yet"
+#: The title of the note a student's tab shows when the pacing moved it back.
+PACED_TITLE = "Paced by the instructor"
 
 
 class CourseGate:
@@ -41,6 +48,8 @@ class CourseGate:
         self.room = room
         self.course = course
         self._own_model = own_model
+        # Tabs are moved off the instructor's thread (a class of redraws must not hold up the pacing form), in order.
+        self._mover = ThreadPoolExecutor(max_workers=1, thread_name_prefix="egtviz-class-pacing")
         self._unsubscribe: Callable[[], None] = room.subscribe(self._on_event)
         if course is not None:
             course.gate = self
@@ -48,6 +57,11 @@ class CourseGate:
     def _paced(self, tab: int) -> bool:
         """Students' tabs are paced; the instructor's, and a tab that has not joined, are not."""
         return self.room.name_of(tab) is not None and not self.room.is_instructor(tab)
+
+    def student_name(self, tab: int) -> str | None:
+        """The name the student on ``tab`` joined with, which their tab cannot change; None: the instructor's tab
+        or a tab that has not joined (it names its own learner)."""
+        return self.room.name_of(tab) if self._paced(tab) else None
 
     def refusal(self, tab: int, lesson: str) -> str | None:
         """Why the tab may not open ``lesson`` (None: it may)."""
@@ -74,6 +88,7 @@ class CourseGate:
         not paced)."""
         if not self._paced(tab):
             return None
+        run.keep_furthest = True  # the pacing moves the tab, not how far the learner got
         last = self.last_open(run.lesson.name, run.step_index)
         if last != run.step_index:
             run.go_to(last)
@@ -87,15 +102,45 @@ class CourseGate:
     def _on_event(self, event: Any) -> None:
         if not isinstance(event, PacingChanged) or self.course is None:
             return
+        try:
+            self._mover.submit(self._follow_pacing)
+        except RuntimeError:  # closed: the server is stopping
+            pass
+
+    def _follow_pacing(self) -> None:
+        """Each student's tab as the new pacing says: start pages shown again, a lesson past it moved back."""
         for tab, page in list(self.course.tabs.items()):
-            if isinstance(page, StartPage) and self._paced(tab):
-                try:
+            if not self._paced(tab):
+                continue
+            try:
+                if isinstance(page, StartPage):
                     page.show_pacing()
-                except Exception:  # noqa: BLE001 - a tab that left meanwhile; the other pages are still shown
-                    logging.getLogger(__name__).debug("start page %s not refreshed", tab, exc_info=True)
+                elif getattr(page, "run", None) is not None:
+                    self._hold_back(page)
+            except Exception:  # noqa: BLE001 - a tab that left meanwhile; the other tabs still follow
+                logging.getLogger(__name__).debug("tab %s not paced", tab, exc_info=True)
+
+    def _hold_back(self, panel: Any) -> None:
+        """A student's lesson panel past the pacing goes back to the last open step, or to the start page if their
+        lesson is closed, with a note in the tab."""
+        lesson = panel.run.lesson
+        client = panel.view.client
+        if not self.room.may_open(lesson.name, 0):
+            with panel.view.lock:
+                if panel.view.closed or self.course.tabs.get(client.client_id) is not panel:
+                    return
+            self.course.show_start(client)
+            said = f"{lesson.title} is closed for now: you are back on the course's page."
+        else:
+            last = self.last_open(lesson.name, panel.run.step_index)
+            if not panel.hold_back(last):
+                return
+            said = f"{lesson.title} is open up to step {last + 1} for now: you are back on that step."
+        client.add_notification(PACED_TITLE, said, color="blue", auto_close_seconds=8.0)
 
     def close(self) -> None:
         """Stop listening to the class; the course is no longer paced."""
         self._unsubscribe()
+        self._mover.shutdown(wait=False, cancel_futures=True)
         if self.course is not None and self.course.gate is self:
             self.course.gate = None

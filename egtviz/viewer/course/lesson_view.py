@@ -58,7 +58,7 @@ from ..workbench.lesson_policy import LessonPolicy
 
 __all__ = [
     "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "lock_refusal",
-    "pose_within_ranges", "range_refusal", "typed_learner_key",
+    "pose_within_ranges", "range_refusal", "refuse_held_name", "typed_learner_key",
 ]
 
 #: The choice field's value before the learner picks an option.
@@ -222,6 +222,20 @@ def typed_learner_key(name: Any) -> str:
         raise FieldError(str(exc)) from exc
 
 
+def refuse_held_name(field: Any, held: str, text: Any) -> None:
+    """A class student's *your name* ``field`` was sent ``text``: nothing if it is ``held``, the name they joined
+    with (the field showing it again); else the field shows ``held`` again and the change is refused (their progress
+    never goes under another name, perhaps another student's).
+
+    Raises:
+        FieldError: ``text`` is not ``held``.
+    """
+    if text == held:
+        return
+    show_name_in_use(field, held)
+    raise FieldError(f"your name: in the class your progress is kept under the name you joined with, {held}")
+
+
 def _feedback_markdown(passed: bool, feedback: str, hint: str | None, *, unread: bool = False) -> str:
     """One attempt as shown: the verdict, the check's feedback (plain text), the hints shown so far (Markdown, each
     labelled by the runner) after a failure. An answer that could not be read (``unread``) gets no verdict: it was
@@ -307,6 +321,8 @@ class LessonPanel:
         self._on_learner = on_learner
         #: ``may_enter(lesson, step)``: whether "next" may open that step (a class's pacing); None: always.
         self.may_enter: Callable[[str, int], bool] | None = None
+        #: In a class, the name the student joined with: the name field shows it read-only (None: free).
+        self.held_name: str | None = None
         self._typing = Debouncer(field_delay)
         self.rows: list[TaskRow] = []
         #: The lesson's summary under the last step's tasks (None on the other steps).
@@ -396,7 +412,11 @@ class LessonPanel:
                 pass
 
     def _name_typed(self, text: Any) -> None:
-        """The name field changed: take the name once the typing stops (latest text wins)."""
+        """The name field changed: take the name once the typing stops (latest text wins); a class student's
+        name is refused at once."""
+        if self.held_name is not None:
+            refuse_held_name(self.learner, self.held_name, text)
+            return
         self._typing.submit("learner", lambda: self._later(lambda: self._set_learner(text)))
 
     def _later(self, action: Callable[[], None]) -> None:
@@ -486,6 +506,24 @@ class LessonPanel:
                 self.run.reset_step()
             self._show_step()
             self.view.redraw()
+
+    def hold_learner(self, name: str) -> None:
+        """A class student's lesson: the learner is ``name``, the one they joined with, shown read-only."""
+        with self.view.lock:
+            self.held_name = name
+            self.learner.disabled = True
+
+    def hold_back(self, step: int) -> bool:
+        """Go back to ``step`` if the run is past it (a class's pacing tightened). False: it is not, or the tab
+        closed."""
+        with self.view.lock:
+            if self.view.closed or self.run.step_index <= step:
+                return False
+            with self.view.client.atomic():
+                self.run.go_to(step)
+                self._show_step()
+                self.view.redraw()
+        return True
 
     def go_to(self, index: int) -> None:
         """Start step ``index`` (tests; the page uses the step buttons)."""

@@ -25,7 +25,7 @@ from ...lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
 from ...lessons.progress import LessonProgress
 from ...scene import SceneModel
 from ..workbench.fields import Debouncer, FieldError, on_event
-from .lesson_view import LESSON_ORDER, LessonPanel, typed_learner_key
+from .lesson_view import LESSON_ORDER, LessonPanel, refuse_held_name, typed_learner_key
 from ..render.palette import PRESENT_GUI_CSS
 from .start_preview import start_preview_html
 from .progress_notice import progress_notice_html, show_name_in_use
@@ -69,13 +69,15 @@ class StartPage:
     Args:
         client: the tab's viser client.
         course: the course (its lessons, progress, and what the buttons open).
-        learner: the name to show (the tab's last one).
+        learner: the name to show (the tab's last one; a class student's is the name they joined with).
     """
 
     def __init__(self, client: Any, course: Course, learner: str = "") -> None:
         self.client = client
         self.course = course
-        self.learner = learner
+        #: In a class, the name the student joined with: the name field shows it read-only (None: free).
+        self.held_name: str | None = course.held_name(client.client_id)
+        self.learner = learner if self.held_name is None else self.held_name
         self.closed = False
         self._lock = threading.RLock()
         self._typing = Debouncer(course.app.field_delay)
@@ -100,7 +102,7 @@ class StartPage:
                 "servoing. Each lesson is a workbench with a panel of steps; its tasks are checked as you go. "
                 "Type your name to keep your progress.</div>")
             self.notice = gui.add_html("")
-            self.name = gui.add_text("your name", learner,
+            self.name = gui.add_text("your name", self.learner, disabled=self.held_name is not None,
                                      hint="Your progress is kept under this name: type it again in any tab, or "
                                           "after a restart, to resume where you were.")
             self.btn_workbench = gui.add_button(
@@ -160,7 +162,11 @@ class StartPage:
         on_event(register, guarded, self.report)
 
     def _name_typed(self, text: Any) -> None:
-        """The name field changed: take the name once the typing stops (each keystroke is not a learner)."""
+        """The name field changed: take the name once the typing stops (each keystroke is not a learner); a class
+        student's name is refused at once."""
+        if self.held_name is not None:
+            refuse_held_name(self.name, self.held_name, text)
+            return
         self._typing.submit("learner", lambda: self._later(lambda: self._set_name(text)))
 
     def _later(self, action: Any) -> None:
@@ -250,7 +256,8 @@ class Course:
         #: A class on the course's pages (:class:`egtviz.viewer.classroom.course_gate.CourseGate`):
         #: ``refusal(tab, lesson)`` says why a tab may not open a lesson, ``paced_run(tab, run)`` puts a run opened
         #: there at a step the pacing allows and gives what "next" asks (None: anything), ``workbench_model(tab)``
-        #: the scene a tab's workbench shows (None: a new one); None: no class.
+        #: the scene a tab's workbench shows (None: a new one), ``student_name(tab)`` the name a class student joined
+        #: with (None: the tab names its learner); None: no class.
         self.gate: Any = None
         #: What each tab shows: a :class:`StartPage`, a :class:`LessonPanel`, or a workbench view.
         self.tabs: dict[int, Any] = {}
@@ -262,6 +269,10 @@ class Course:
             self.open_lesson(client, self.lesson, "")
         else:
             self.show_start(client)
+
+    def held_name(self, client_id: int) -> str | None:
+        """The name a class student joined with, which their tab cannot change (None: the tab types its own)."""
+        return self.gate.student_name(client_id) if self.gate is not None else None
 
     def remember(self, client_id: int, learner: str) -> None:
         """The tab's learner, kept while the tab lives (the start page and the lessons it opens show it)."""
@@ -299,19 +310,29 @@ class Course:
         closed = self.gate.refusal(client.client_id, name) if self.gate is not None else None
         if closed is not None:  # a disabled button clicked by a raw message, say
             raise FieldError(f"{lesson.title}: {closed}")
+        held = self.held_name(client.client_id)
         self._close_tab(client)
-        run = LessonRun(lesson, learner, model=SceneModel(lesson.scene), progress=self.progress)
+        run = LessonRun(lesson, learner if held is None else held, model=SceneModel(lesson.scene),
+                        progress=self.progress)
         # Paced: at a step the class allows, before anything is drawn; "next" asks the pacing.
         may_enter = self.gate.paced_run(client.client_id, run) if self.gate is not None else None
         view = self.app.show_workbench(client, run.model)
         if view is None:
             return None
+        panel = self._lesson_panel(client, view, run, may_enter)
+        self.remember(client.client_id, run.learner)
+        self._set_tab(client, panel)
+        return panel
+
+    def _lesson_panel(self, client: Any, view: Any, run: LessonRun, may_enter: Any) -> LessonPanel:
+        """The lesson's panel on ``view``; a class student's name in it is the one they joined with."""
         panel = LessonPanel(view, run, progress=self.progress, on_back=lambda: self.show_start(client),
                             on_learner=lambda key: self.remember(client.client_id, key),
                             field_delay=self.app.field_delay)
         panel.may_enter = may_enter
-        self.remember(client.client_id, run.learner)
-        self._set_tab(client, panel)
+        held = self.held_name(client.client_id)
+        if held is not None:
+            panel.hold_learner(held)
         return panel
 
     def open_workbench(self, client: Any, model: SceneModel | None = None) -> Any:
@@ -333,11 +354,9 @@ class Course:
         with self._lock:
             was = self.tabs.get(client.client_id)
         if isinstance(was, LessonPanel) and was.run.model is view.model:
-            panel = LessonPanel(view, was.run, progress=self.progress, on_back=lambda: self.show_start(client),
-                                on_learner=lambda key: self.remember(client.client_id, key),
-                                field_delay=self.app.field_delay)
-            panel.may_enter = was.may_enter
-            self._set_tab(client, panel)
+            if self.gate is not None:  # the pacing may have tightened while the demo was open
+                self.gate.paced_run(client.client_id, was.run)
+            self._set_tab(client, self._lesson_panel(client, view, was.run, was.may_enter))
         else:
             self._add_back_button(client, view)
             self._set_tab(client, view)

@@ -1,0 +1,184 @@
+"""A classroom student is the name they joined with, and the pacing holds them where it says:
+
+* the name fields of the course's start page and of the lesson panel show the joined name read-only for a student,
+  and a raw message setting them is refused in that tab (an instructor's tab, and a course without a class, keep
+  the field);
+* an instructor tightening the pacing moves a student already past it back to the last open step (or to the start
+  page when their lesson closes), with a note in their tab;
+* the progress database keeps the furthest step the student reached, not the step the pacing showed.
+"""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+import viser
+
+from egtviz.classroom import Classroom, Mode
+from egtviz.lessons import ProgressStore
+from egtviz.viewer.classroom import host as host_module
+from egtviz.viewer.classroom.course_gate import CourseGate
+from egtviz.viewer.classroom.host import ClassroomHost
+from egtviz.viewer.course.lesson_view import LessonPanel
+from egtviz.viewer.course.start_page import StartPage
+from egtviz.viewer.server.headless import FakeTab
+from egtviz.viewer.workbench.app import EgtvizApp
+
+from _waiting import wait_until
+
+LESSON = "07-fundamental-and-essential"  # seven steps
+
+
+@pytest.fixture
+def classroom(tmp_path, monkeypatch):
+    """A course served to a class; ``join(name)`` connects one more tab, joins it, returns its id and fake tab."""
+    monkeypatch.setattr(host_module, "NAME_TIMEOUT", 0.05)  # a fake tab keeps no name: ask it at once
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    progress = ProgressStore(tmp_path / "progress.db")
+    app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=progress)
+    host = ClassroomHost(app)
+    host.room.set_mode(Mode.EXPLORE)
+    tabs: list[FakeTab] = []
+
+    def join(name: str) -> tuple[int, FakeTab]:
+        before = set(server.get_clients())
+        tabs.append(FakeTab(server.get_port()))
+        assert wait_until(lambda: set(server.get_clients()) - before, 30)
+        (cid,) = set(server.get_clients()) - before
+        time.sleep(0.3)  # the tab is asked for a name it does not keep, then shown the join page
+        host.join(server.get_clients()[cid], name)
+        assert wait_until(lambda: host.room.name_of(cid) == name and cid in app.views, 30)
+        return cid, tabs[-1]
+
+    yield app, host, progress, join
+    for t in tabs:
+        t.close()
+    host.close()
+    server.stop()
+
+
+def _notes(client) -> list[tuple[str, str]]:
+    notes: list[tuple[str, str]] = []
+    client.add_notification = lambda title, body, **kw: notes.append((title, body))
+    return notes
+
+
+def _open_lesson(app, cid, fake) -> LessonPanel:
+    """The student opens LESSON from their start page (a click sent by their tab)."""
+    app.course.remember(cid, app.course.gate.room.name_of(cid))  # as a lesson the class opened for them did
+    page = app.course.show_start(app.views[cid].client)
+    fake.send("GuiUpdateMessage", uuid=page.buttons[LESSON]._impl.uuid, updates={"value": True})
+    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), 30)
+    return app.course.tabs[cid]
+
+
+def test_a_students_name_on_the_start_page_is_the_joined_one_and_cannot_be_changed(classroom):
+    app, host, progress, join = classroom
+    cid, fake = join("Ada")
+    page = app.course.show_start(app.views[cid].client)
+    notes = _notes(page.client)
+    assert page.name.value == "Ada" and page.name.disabled and page.learner == "Ada"
+    fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Bea"})
+    assert wait_until(lambda: notes, 10)
+    assert notes[-1][0] == "Value refused" and "Ada" in notes[-1][1]
+    assert page.learner == "Ada" and page.name.value == "Ada"
+    assert app.course.tabs[cid] is page and app.course.show_start(page.client).learner == "Ada"
+
+
+def test_a_students_name_in_the_lesson_panel_cannot_be_changed(classroom):
+    app, host, progress, join = classroom
+    progress.set_step("Bea", LESSON, 2)  # another student's progress, which Ada must not take over
+    cid, fake = join("Ada")
+    panel = _open_lesson(app, cid, fake)
+    notes = _notes(panel.view.client)
+    assert panel.learner.value == "Ada" and panel.learner.disabled and panel.run.learner == "Ada"
+    fake.send("GuiUpdateMessage", uuid=panel.learner._impl.uuid, updates={"value": "Bea"})
+    assert wait_until(lambda: notes, 10)
+    assert notes[-1][0] == "Value refused" and "Ada" in notes[-1][1]
+    assert app.course.tabs[cid] is panel and panel.run.learner == "Ada" and panel.learner.value == "Ada"
+    assert progress.current_step("Bea", LESSON) == 2
+
+
+def test_the_instructors_name_fields_stay_free(classroom):
+    app, host, progress, join = classroom
+    cid, _ = join("Ada")
+    gate = host.gate
+    assert gate.student_name(cid) == "Ada"
+    host.room.instructor_join(cid + 1000)
+    assert gate.student_name(cid + 1000) is None and gate.student_name(cid + 2000) is None
+
+
+def test_a_course_without_a_class_keeps_its_name_field(tmp_path):
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        progress = ProgressStore(tmp_path / "p.db")
+        app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=progress)
+        fake = FakeTab(server.get_port())
+        (page,) = app.course.wait_for_tab(StartPage)
+        assert not page.name.disabled
+        fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Cy"})
+        assert wait_until(lambda: page.learner == "Cy", 10)
+        fake.close()
+    finally:
+        server.stop()
+
+
+def test_tightening_the_pacing_moves_a_student_past_it_back_with_a_note(classroom):
+    app, host, progress, join = classroom
+    progress.set_step("Ada", LESSON, 3)
+    cid, fake = join("Ada")
+    panel = _open_lesson(app, cid, fake)
+    assert panel.run.step_index == 3
+    notes = _notes(panel.view.client)
+    host.room.pace(LESSON, 1)
+    assert wait_until(lambda: panel.run.step_index == 1, 10)
+    assert wait_until(lambda: notes, 10)
+    assert notes[-1][0] == "Paced by the instructor" and "step 2" in notes[-1][1]
+    assert 'data-step="1"' in panel.nav.head.content
+    # The furthest step reached stays in the progress database: the pacing moved the tab, not the learner.
+    assert progress.current_step("Ada", LESSON) == 3
+    # Closing the lesson sends the student to the start page, with a note.
+    client = panel.view.client
+    notes2 = _notes(client)
+    host.room.allow_lessons([])
+    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), StartPage), 10)
+    assert wait_until(lambda: notes2, 10)
+    assert notes2[-1][0] == "Paced by the instructor"
+    assert app.course.tabs[cid].buttons[LESSON].disabled
+    assert progress.current_step("Ada", LESSON) == 3
+
+
+def test_a_student_within_the_pacing_and_the_instructor_stay_where_they_are(classroom):
+    app, host, progress, join = classroom
+    progress.set_step("Ada", LESSON, 1)
+    cid, fake = join("Ada")
+    panel = _open_lesson(app, cid, fake)
+    notes = _notes(panel.view.client)
+    host.room.pace(LESSON, 2)
+    time.sleep(0.5)
+    assert panel.run.step_index == 1 and not notes and app.course.tabs[cid] is panel
+
+
+def test_a_lesson_reopened_at_an_earlier_step_keeps_the_furthest_step_in_the_database(classroom):
+    app, host, progress, join = classroom
+    progress.set_step("Bea", LESSON, 3)
+    host.room.pace(LESSON, 1)
+    cid, fake = join("Bea")
+    panel = _open_lesson(app, cid, fake)
+    assert panel.run.step_index == 1
+    assert progress.current_step("Bea", LESSON) == 3
+    panel.go_to(0)  # "previous" in a paced lesson does not forget how far the student got either
+    assert progress.current_step("Bea", LESSON) == 3
+    host.room.pace(LESSON, None)
+    panel.go_to(4)  # further than before: recorded
+    assert progress.current_step("Bea", LESSON) == 4
+
+
+def test_the_gate_moves_no_tab_of_a_course_it_does_not_pace():
+    room = Classroom(None, token="t" * 20)
+    gate = CourseGate(room)
+    room.join(2, "Ada")
+    room.pace(LESSON, 0)  # no course: nothing to move, nothing raised
+    assert gate.student_name(2) == "Ada"
+    gate.close()
