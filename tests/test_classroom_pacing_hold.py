@@ -102,11 +102,20 @@ def test_a_students_name_in_the_lesson_panel_cannot_be_changed(classroom):
 
 def test_the_instructors_name_fields_stay_free(classroom):
     app, host, progress, join = classroom
-    cid, _ = join("Ada")
-    gate = host.gate
-    assert gate.student_name(cid) == "Ada"
-    host.room.instructor_join(cid + 1000)
-    assert gate.student_name(cid + 1000) is None and gate.student_name(cid + 2000) is None
+    cid, fake = join("Ada")
+    assert host.gate.student_name(cid) == "Ada"
+    host.room.instructor_join(cid)  # the tab is the instructor's now (as a checked token makes it)
+    assert host.gate.student_name(cid) is None and host.gate.student_name(cid + 1000) is None
+    page = app.course.show_start(app.views[cid].client)
+    assert not page.name.disabled
+    fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Zed"})
+    assert wait_until(lambda: page.learner == "Zed", 10)
+    fake.send("GuiUpdateMessage", uuid=page.buttons[LESSON]._impl.uuid, updates={"value": True})
+    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), 30)
+    panel = app.course.tabs[cid]
+    assert not panel.learner.disabled and panel.run.learner == "Zed"
+    fake.send("GuiUpdateMessage", uuid=panel.learner._impl.uuid, updates={"value": "Ann"})
+    assert wait_until(lambda: panel.run.learner == "Ann", 10)
 
 
 def test_a_course_without_a_class_keeps_its_name_field(tmp_path):
@@ -182,3 +191,38 @@ def test_the_gate_moves_no_tab_of_a_course_it_does_not_pace():
     room.pace(LESSON, 0)  # no course: nothing to move, nothing raised
     assert gate.student_name(2) == "Ada"
     gate.close()
+
+
+def test_a_run_that_keeps_the_furthest_step_records_no_step_back(tmp_path):
+    from egtviz.lessons import LessonRun, load
+
+    progress = ProgressStore(tmp_path / "p.db")
+    lesson = load(LESSON)
+    run = LessonRun(lesson, "Ada", progress=progress)
+    run.go_to(4)
+    run.go_to(2)  # a run of the course alone remembers where the learner is
+    assert progress.current_step("Ada", LESSON) == 2
+    run.keep_furthest = True
+    run.go_to(4)
+    run.previous()
+    run.go_to(0)
+    assert progress.current_step("Ada", LESSON) == 4 and run.step_index == 0
+    run.go_to(5)
+    run.next()
+    assert progress.current_step("Ada", LESSON) == 6
+
+
+def test_a_lesson_back_from_a_servo_demo_follows_a_pacing_tightened_meanwhile(classroom):
+    app, host, progress, join = classroom
+    progress.set_step("Ada", LESSON, 3)
+    cid, fake = join("Ada")
+    panel = _open_lesson(app, cid, fake)
+    client = panel.view.client
+    assert app.open_demo(client, "pinhole") is not None  # the step's "Open the demo" button
+    host.room.pace(LESSON, 1)
+    time.sleep(0.3)  # the gate moves no tab showing a demo: its lesson view is closed
+    app.close_demo(client)  # the demo's Back button
+    back = app.course.tabs[cid]
+    assert isinstance(back, LessonPanel) and back.run is panel.run
+    assert back.run.step_index == 1 and back.held_name == "Ada" and back.learner.disabled
+    assert progress.current_step("Ada", LESSON) == 3
