@@ -20,7 +20,7 @@ from egtviz.lessons import ProgressStore
 from egtviz.viewer.classroom import host as host_module
 from egtviz.viewer.classroom.course_gate import CourseGate
 from egtviz.viewer.classroom.host import ClassroomHost
-from egtviz.viewer.course.lesson_view import LessonPanel
+from egtviz.viewer.course.lesson_view import HELD_NAME_HINT, LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.workbench.app import EgtvizApp
@@ -79,6 +79,7 @@ def test_a_students_name_on_the_start_page_is_the_joined_one_and_cannot_be_chang
     page = app.course.show_start(app.views[cid].client)
     notes = _notes(page.client)
     assert page.name.value == "Ada" and page.name.disabled and page.learner == "Ada"
+    assert page.name.hint == HELD_NAME_HINT
     fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Bea"})
     assert wait_until(lambda: notes, 10)
     assert notes[-1][0] == "Value refused" and "Ada" in notes[-1][1]
@@ -93,6 +94,7 @@ def test_a_students_name_in_the_lesson_panel_cannot_be_changed(classroom):
     panel = _open_lesson(app, cid, fake)
     notes = _notes(panel.view.client)
     assert panel.learner.value == "Ada" and panel.learner.disabled and panel.run.learner == "Ada"
+    assert panel.learner.hint == HELD_NAME_HINT
     fake.send("GuiUpdateMessage", uuid=panel.learner._impl.uuid, updates={"value": "Bea"})
     assert wait_until(lambda: notes, 10)
     assert notes[-1][0] == "Value refused" and "Ada" in notes[-1][1]

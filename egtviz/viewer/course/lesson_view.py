@@ -57,8 +57,8 @@ from .progress_notice import progress_notice_html, show_name_in_use
 from ..workbench.lesson_policy import LessonPolicy
 
 __all__ = [
-    "CHOOSE", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments", "lock_refusal",
-    "pose_within_ranges", "range_refusal", "refuse_held_name", "typed_learner_key",
+    "CHOOSE", "HELD_NAME_HINT", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments",
+    "lock_refusal", "pose_within_ranges", "range_refusal", "refuse_held_name", "typed_learner_key",
 ]
 
 #: The choice field's value before the learner picks an option.
@@ -220,6 +220,10 @@ def typed_learner_key(name: Any) -> str:
         return learner_key(name)
     except LearnerNameError as exc:
         raise FieldError(str(exc)) from exc
+
+
+#: The *your name* field's hint for a class student (the field is read-only).
+HELD_NAME_HINT = "In the class your progress is kept under the name you joined with."
 
 
 def refuse_held_name(field: Any, held: str, text: Any) -> None:
@@ -512,6 +516,7 @@ class LessonPanel:
         with self.view.lock:
             self.held_name = name
             self.learner.disabled = True
+            self.learner.hint = HELD_NAME_HINT
 
     def hold_back(self, step: int) -> bool:
         """Go back to ``step`` if the run is past it (a class's pacing tightened). False: it is not, or the tab

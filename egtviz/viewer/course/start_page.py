@@ -25,7 +25,7 @@ from ...lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
 from ...lessons.progress import LessonProgress
 from ...scene import SceneModel
 from ..workbench.fields import Debouncer, FieldError, on_event
-from .lesson_view import LESSON_ORDER, LessonPanel, refuse_held_name, typed_learner_key
+from .lesson_view import HELD_NAME_HINT, LESSON_ORDER, LessonPanel, refuse_held_name, typed_learner_key
 from ..render.palette import PRESENT_GUI_CSS
 from .start_preview import start_preview_html
 from .progress_notice import progress_notice_html, show_name_in_use
@@ -103,8 +103,9 @@ class StartPage:
                 "Type your name to keep your progress.</div>")
             self.notice = gui.add_html("")
             self.name = gui.add_text("your name", self.learner, disabled=self.held_name is not None,
-                                     hint="Your progress is kept under this name: type it again in any tab, or "
-                                          "after a restart, to resume where you were.")
+                                     hint=HELD_NAME_HINT if self.held_name is not None else
+                                     "Your progress is kept under this name: type it again in any tab, or after a "
+                                     "restart, to resume where you were.")
             self.btn_workbench = gui.add_button(
                 "Open the workbench", color="teal", icon=viser.Icon.ARROW_RIGHT,
                 hint="Cameras, points and image planes without a lesson; this page is one click away from it.")
