@@ -515,12 +515,13 @@ class FairExecutor:
         self._started: dict[int, float] = {}  # tab -> when its redraw was handed to the pool
         self._timer: threading.Timer | None = None
 
-    def _schedule(self, tab: int, queue: _TabQueue) -> None:
-        """Put the tab in line for its next job (the lock is held)."""
+    def _schedule(self, tab: int, queue: _TabQueue, *, start: bool = True) -> None:
+        """Put the tab in line for its next job (the lock is held; ``start``: start the line's next redraws)."""
         queue.scheduled = True
         if self._lanes > 0 and queue.jobs[0].key is not None:
             self._line.append(tab)
-            self._start_lanes()
+            if start:
+                self._start_lanes()
         else:
             self._pool.submit(self._run_one, tab)
 
@@ -579,13 +580,20 @@ class FairExecutor:
                 self._start_lanes()  # a redraw that stalls past its time frees its lane here
         return job.future
 
-    def _run_one(self, tab: int) -> None:
-        """On a pool thread: run the tab's oldest job, then put the tab back in the pool's line."""
+    def _run_one(self, tab: int | None) -> None:
+        """On a pool thread: run the tab's oldest job, then put the tab back in line. A thread that ran a redraw
+        goes on with the next redraw in line itself (no hand-over to another pool thread between two)."""
+        while tab is not None:
+            tab = self._run_job(tab)
+
+    def _run_job(self, tab: int) -> int | None:
+        """Run ``tab``'s oldest job; returns the tab whose redraw this thread runs next (None: none)."""
         with self._lock:
             queue = self._tabs[tab]
             job = queue.jobs.popleft()
             if job.key is not None and queue.waiting.get(job.key) is job:
                 del queue.waiting[job.key]
+        nxt = None
         try:
             if job.future.set_running_or_notify_cancel():
                 try:
@@ -596,14 +604,18 @@ class FairExecutor:
                     job.future.set_result(result)
         finally:
             with self._lock:
-                self._started.pop(tab, None)
+                lane = self._started.pop(tab, None) is not None
                 if queue.jobs:
                     # Back of the line: the other tabs' jobs go first (round-robin).
-                    self._schedule(tab, queue)
+                    self._schedule(tab, queue, start=False)
                 else:
                     queue.scheduled = False
                     del self._tabs[tab]
+                if lane and self._line:
+                    nxt = self._line.popleft()
+                    self._started[nxt] = time.monotonic()
                 self._start_lanes()
+        return nxt
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         """Shut the underlying pool down (viser does when the server stops)."""
