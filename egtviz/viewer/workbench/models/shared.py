@@ -10,6 +10,7 @@ hashable key (the drawn rows). The arrays handed out are read-only: no tab can c
 
 from __future__ import annotations
 
+import operator
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
@@ -52,10 +53,10 @@ class SharedArrays:
 
         ``kind`` names what is made (two drawings may prepare different things from the same sources).
         """
-        ident = (kind, tuple(id(s) for s in sources), key)
+        ident = (kind, tuple(map(id, sources)), key)
         with self._lock:
             entry = self._entries.get(ident)
-            if entry is not None and all(a is b for a, b in zip(entry[0], sources)):
+            if entry is not None and all(map(operator.is_, entry[0], sources)):
                 self._entries.move_to_end(ident)
                 self.hits += 1
                 return entry[1]
