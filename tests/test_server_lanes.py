@@ -1,4 +1,4 @@
-"""The fair executor's redraw lanes: latest-wins jobs of all tabs run one at a time, tabs taking turns."""
+"""The fair executor's redraw lane: gizmo drags' pose updates of all tabs run one at a time, tabs taking turns."""
 
 from __future__ import annotations
 
@@ -13,11 +13,27 @@ from egtviz.viewer.server.guard import FairExecutor
 
 
 class _Target:
-    """A field handle stand-in: an event on it is a value (latest wins), not a button press."""
+    """A gizmo handle stand-in."""
 
 
-def _value_event(tab: int, target: _Target) -> viser.GuiEvent:
-    return viser.GuiEvent(client=None, client_id=tab, target=target)  # type: ignore[arg-type]
+def _value_event(tab: int, target: _Target) -> viser.TransformControlsEvent:
+    """A gizmo drag's pose update (latest wins; a redraw)."""
+    return viser.TransformControlsEvent(client=None, client_id=tab, target=target,  # type: ignore[arg-type]
+                                        phase="update")
+
+
+def test_only_a_drags_pose_takes_a_lane():
+    fair, pool = _fair(stall_s=5.0)
+    gate = threading.Event()
+    ran = threading.Event()
+    first = fair.submit(lambda event: gate.wait(5), _value_event(0, _Target()))
+    value = viser.GuiEvent(client=None, client_id=1, target=_Target())  # type: ignore[arg-type]
+    field = fair.submit(lambda event: ran.set(), value)
+    assert ran.wait(2)  # a field's value (the follow-me checkbox, say) is not held behind a drag
+    gate.set()
+    first.result(timeout=5)
+    field.result(timeout=5)
+    pool.shutdown()
 
 
 class _Event:

@@ -486,20 +486,26 @@ def _latest_wins_key(fn: Callable, args: tuple) -> tuple | None:
     return None
 
 
-#: Redraw jobs (latest-wins ones: a pose, a camera, a field's value) that run at once across all tabs. Under
-#: the GIL, thirty redraws run side by side each finish near the end of the round (and starve the event loop
-#: that receives and sends); run one after the other, each finishes in its own time.
+#: Drag redraws (a gizmo drag's pose updates) that run at once across all tabs. Under the GIL, thirty redraws
+#: run side by side each finish near the end of the round (and starve the event loop that receives and sends);
+#: run one after the other, each finishes in its own time. Other events (a field's value, a view camera) keep
+#: the pool: with them in the lane too, a classroom browser test's follow-me came back too late to its tabs.
 REDRAW_LANES = 1
 #: A redraw running longer than this (seconds) no longer holds its lane: one that waits must not stop the room.
 LANE_STALL_S = 0.25
 
 
+def _is_redraw(key: tuple | None) -> bool:
+    """A job that takes a lane: a gizmo drag's pose (what a dragging room sends twenty times a second)."""
+    return key is not None and key[1] in ("TransformControlsEvent", "SceneNodeDragEvent")
+
+
 class FairExecutor:
     """Stands in for viser's thread pool: one job per tab at a time, tabs round-robin, latest wins.
 
-    Redraw jobs (those that latest-wins merges) of all tabs take turns in ``lanes`` lanes, tabs in the order
-    they became ready; other jobs of a tab (a button, a connection's set-up, which may wait) go to the pool at
-    once. Jobs that belong to no tab go straight to the pool.
+    Drag redraws (a gizmo's pose updates) of all tabs take turns in ``lanes`` lanes, tabs in the order they
+    became ready; other jobs of a tab (a field, a button, a connection's set-up, which may wait) go to the pool
+    at once. Jobs that belong to no tab go straight to the pool.
     """
 
     def __init__(self, pool: ThreadPoolExecutor, *, max_pending: int, stats: GuardStats, lanes: int = REDRAW_LANES,
@@ -518,7 +524,7 @@ class FairExecutor:
     def _schedule(self, tab: int, queue: _TabQueue, *, start: bool = True) -> None:
         """Put the tab in line for its next job (the lock is held; ``start``: start the line's next redraws)."""
         queue.scheduled = True
-        if self._lanes > 0 and queue.jobs[0].key is not None:
+        if self._lanes > 0 and _is_redraw(queue.jobs[0].key):
             self._line.append(tab)
             if start:
                 self._start_lanes()
