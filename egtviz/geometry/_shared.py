@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from functools import lru_cache
-from typing import Any, Generic, TypeVar, overload
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -180,7 +180,7 @@ def epipolar_normals_columns(c1: np.ndarray, c2: np.ndarray, XT: np.ndarray) -> 
 _T = TypeVar("_T")
 
 
-class cached_value(Generic[_T]):  # noqa: N801 - used as a decorator, like functools.cached_property
+class _CachedValue(Generic[_T]):
     """``functools.cached_property`` without its lock: the value, computed on first read, is stored in the
     instance's ``__dict__`` (later reads never reach the descriptor).
 
@@ -198,13 +198,22 @@ class cached_value(Generic[_T]):  # noqa: N801 - used as a decorator, like funct
         self.name = name
 
     @overload
-    def __get__(self, instance: None, owner: type | None = None) -> cached_value[_T]: ...
+    def __get__(self, instance: None, owner: type | None = None) -> _CachedValue[_T]: ...
 
     @overload
     def __get__(self, instance: object, owner: type | None = None) -> _T: ...
 
-    def __get__(self, instance: object, owner: type | None = None) -> _T | cached_value[_T]:
+    def __get__(self, instance: object, owner: type | None = None) -> _T | _CachedValue[_T]:
         if instance is None:
             return self
         value = instance.__dict__[self.name] = self.func(instance)
         return value
+
+
+
+if TYPE_CHECKING:
+    # A type checker knows cached_property as a read-only member (it matches a Protocol's property); at run time
+    # the lock-free class above stands in for it with the same reads.
+    from functools import cached_property as cached_value
+else:
+    cached_value = _CachedValue

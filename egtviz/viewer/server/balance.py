@@ -44,8 +44,8 @@ def capture_serve(*, reuse_port: bool) -> None:
     import websockets.asyncio.server as ws_server
 
     base = ws_server.serve
-    while getattr(base, "egtviz_base", None) is not None:
-        base = base.egtviz_base
+    while (replaced := getattr(base, "egtviz_base", None)) is not None:
+        base = replaced
 
     class serve(base):  # type: ignore[valid-type,misc]  # noqa: N801 - it replaces websockets' ``serve``
         egtviz_base = base
