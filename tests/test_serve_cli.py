@@ -46,8 +46,8 @@ def test_top_level_options_are_checked_the_same_way():
                                    "(expected an integer 0..65535)")
 
 
-def _serve_until_running(args: list[str]) -> tuple[str, str]:
-    """Start ``egtviz serve``, wait for its "running at" line, stop it with Ctrl-C; (stdout, stderr)."""
+def _serve_until_running(args: list[str], stop: signal.Signals = signal.SIGINT) -> tuple[str, str]:
+    """Start ``egtviz serve``, wait for its "running at" line, stop it with ``stop`` (Ctrl-C); (stdout, stderr)."""
     proc = subprocess.Popen([*EGTVIZ, "serve", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=_env())
     try:
@@ -60,8 +60,9 @@ def _serve_until_running(args: list[str]) -> tuple[str, str]:
             out.append(line)
             if line.startswith("egtviz running at"):
                 break
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(stop)
         rest, err = proc.communicate(timeout=20)
+        assert proc.returncode == 0, (out, rest, err)
         return "".join(out) + rest, err
     finally:
         if proc.poll() is None:
@@ -135,3 +136,11 @@ def test_reachable_urls():
     assert all("0.0.0.0" not in u and u.endswith(":8080") and "[" not in u for u in urls)
     v6 = reachable_urls("::", 8080)
     assert v6[0] == "http://[::1]:8080" and all(u.startswith("http://[") for u in v6)
+
+
+@pytest.mark.parametrize("args", [["--port", "0"], ["--port", "0", "--workers", "2"]], ids=["one", "workers"])
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "terminate"])
+def test_ctrl_c_and_a_service_managers_terminate_both_stop_the_server_and_say_so(args, stop):
+    out, err = _serve_until_running(args, stop)
+    assert "egtviz: stopped" in out.splitlines(), (out, err)
+    assert "Traceback" not in err

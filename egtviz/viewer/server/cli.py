@@ -11,6 +11,7 @@ import argparse
 import dataclasses
 import errno
 import ipaddress
+import signal
 import socket
 import sys
 import threading
@@ -18,7 +19,8 @@ from pathlib import Path
 
 from ...scene import scene_from_argument
 
-__all__ = ["BindCheck", "ServeAddressError", "add_parser", "check_bind", "reachable_urls", "run", "serve", "start"]
+__all__ = ["BindCheck", "ServeAddressError", "add_parser", "check_bind", "reachable_urls", "run", "serve", "start",
+           "terminate_as_interrupt"]
 
 #: Seconds allowed for resolving ``--host`` (a name server that never answers must not hang the command).
 RESOLVE_TIMEOUT = 3.0
@@ -247,6 +249,17 @@ def reachable_urls(host: str, port: int) -> list[str]:
     return [_url(a, port) for a in out]
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def terminate_as_interrupt() -> None:
+    """Make SIGTERM (a service manager's stop, ``kill``) end the server as Ctrl-C does: tabs closed, the class
+    closed, ``egtviz: stopped`` printed. Only the main thread can install a handler; elsewhere this does nothing."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _interrupt)
+
+
 def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | None = None, *, verbose: bool = False,
           demo: str | None = None, present: bool = False, lesson: str | None = None, course: bool = False,
           allow_hosts: tuple[str, ...] = (), classroom: bool = False):
@@ -327,6 +340,7 @@ def serve(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
         return 1
     stop = stop_event or threading.Event()
     try:
+        terminate_as_interrupt()
         if _is_wildcard(host):
             print(f"egtviz: warning: --host {host} opens the app to the network: anyone who can reach this "
                   "machine can use it (each tab has its own scene; see docs/server.md)", file=sys.stderr, flush=True)

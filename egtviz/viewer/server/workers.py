@@ -458,7 +458,7 @@ def serve_workers(workers: int, port: int, options: WorkerOptions, *,
                   stop_event: threading.Event | None = None) -> int:
     """``egtviz serve --workers N``: start the workers, print the URLs, supervise until Ctrl-C (or
     ``stop_event``); returns the exit status (1: the port or a worker could not be started)."""
-    from .cli import reachable_urls, student_url
+    from .cli import reachable_urls, student_url, terminate_as_interrupt
 
     problem = _options_problem(options)
     if problem is not None:
@@ -474,6 +474,7 @@ def serve_workers(workers: int, port: int, options: WorkerOptions, *,
         print(f"egtviz: port {port} is busy on {options.host}; using {sup.port}", file=sys.stderr, flush=True)
     stop = stop_event or threading.Event()
     try:
+        terminate_as_interrupt()
         if _is_wildcard(options.host):
             print(f"egtviz: warning: --host {options.host} opens the app to the network: anyone who can reach this "
                   "machine can use it (each tab has its own scene; see docs/server.md)", file=sys.stderr, flush=True)
