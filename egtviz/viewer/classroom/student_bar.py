@@ -8,8 +8,6 @@ built again whenever the tab is cleared. Every callback's failure is shown in th
 
 from __future__ import annotations
 
-import math
-import re
 from collections.abc import Callable
 from typing import Any
 
@@ -17,11 +15,10 @@ import viser
 
 from ..render.palette import PRESENT_GUI_CSS
 from ...classroom import ClassroomError
+from ...lessons.answers import AnswerError, read_number
 from ...lessons.progress import LearnerNameError
 from ..workbench.fields import FieldError, notify_error, on_event
 from .room_html import pause_html, student_status_html
-
-_PLAIN_NUMBER = re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?")
 
 __all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "notify_refusal", "stored_name", "typed_answer"]
 
@@ -51,12 +48,10 @@ def typed_answer(text: Any) -> float | str:
     if not isinstance(text, str) or not text.strip():
         raise FieldError("your answer: type it first")
     typed = text.strip()
-    # Only a plain decimal reads as a number: float() alone would read "14_85" as 1485 and "nan" as a number.
-    if _PLAIN_NUMBER.fullmatch(typed):
-        value = float(typed.replace(",", "."))
-        if math.isfinite(value):
-            return value
-    return typed
+    try:  # the course's strict reader, with a poll's decimal comma taken as a point
+        return read_number(typed.replace(",", ".") if typed.count(",") == 1 else typed)
+    except AnswerError:
+        return typed
 
 
 class JoinPage:
