@@ -262,6 +262,12 @@ class OpenDemo(DemoRun):
         return self
 
 
+def _drawn(rng: Any, low: float, high: float, digits: int = 2) -> float:
+    """One value drawn uniformly in ``[low, high]`` and rounded to ``digits`` decimals (the fields show what the
+    core uses); ``low`` itself for an empty range."""
+    return round(float(rng.uniform(low, high)), digits) if low < high else low
+
+
 @dataclass(frozen=True)
 class RandomiseCamera:
     """Place camera ``camera`` (and set its focal length and principal point) at values drawn per learner.
@@ -290,20 +296,15 @@ class RandomiseCamera:
         import numpy as np
 
         rng = np.random.default_rng(0 if self.seed is None else self.seed)
-
-        def draw(low: float, high: float) -> float:
-            return round(float(rng.uniform(low, high)), 2) if low < high else low
-
         out: dict[str, Any] = {}
         for key in ("position", "ypr_deg", "focal_length", "principal_point"):
             ranges = getattr(self, key)
             if ranges is None:
                 continue
             if key == "focal_length":
-                low, high = ranges
-                out[key] = round(float(rng.uniform(low, high)), 5) if low < high else low
+                out[key] = _drawn(rng, *ranges, digits=5)
             else:
-                out[key] = tuple(draw(low, high) for low, high in ranges)
+                out[key] = tuple(_drawn(rng, low, high) for low, high in ranges)
         return out
 
     @property
@@ -341,7 +342,7 @@ class RandomisePoint:
         import numpy as np
 
         rng = np.random.default_rng(0 if self.seed is None else self.seed)
-        x, y, z = (round(float(rng.uniform(low, high)), 2) if low < high else low for low, high in self.position)
+        x, y, z = (_drawn(rng, low, high) for low, high in self.position)
         return x, y, z
 
     def _apply(self, model: SceneModel) -> None:
