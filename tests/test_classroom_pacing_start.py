@@ -4,21 +4,18 @@ and a lesson opened from the page starts at a step the pacing allows, its "next"
 
 from __future__ import annotations
 
-import time
 
-import pytest
 import viser
 
-from egtviz.classroom import Classroom, Mode
+from egtviz.classroom import Classroom
 from egtviz.lessons import ProgressStore
-from egtviz.viewer.classroom import host as host_module
-from egtviz.viewer.classroom.host import ClassroomHost
 from egtviz.viewer.classroom.course_gate import NOT_OPEN, CourseGate
 from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.workbench.app import EgtvizApp
 
+from _class_course import classroom  # noqa: F401 - the fixture
 from _waiting import wait_until
 
 OPEN, CLOSED = "02-pinhole-projection", "03-intrinsics"
@@ -39,34 +36,6 @@ def test_the_gate_paces_students_only():
     room.pace(OPEN, 5)
     assert gate.note(2, OPEN, 6) == ""  # every step of a six-step lesson
     gate.close()
-
-
-@pytest.fixture
-def classroom(tmp_path, monkeypatch):
-    """A course served to a class; ``join(name)`` connects one more tab, joins it and returns its client id."""
-    monkeypatch.setattr(host_module, "NAME_TIMEOUT", 0.05)  # a fake tab keeps no name: ask it at once
-    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    progress = ProgressStore(tmp_path / "progress.db")
-    app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=progress)
-    host = ClassroomHost(app)
-    host.room.set_mode(Mode.EXPLORE)
-    tabs: list[FakeTab] = []
-
-    def join(name: str) -> tuple[int, FakeTab]:
-        before = set(server.get_clients())
-        tabs.append(FakeTab(server.get_port()))
-        assert wait_until(lambda: set(server.get_clients()) - before, 30)
-        (cid,) = set(server.get_clients()) - before
-        time.sleep(0.3)  # the tab is asked for a name it does not keep, then shown the join page
-        host.join(server.get_clients()[cid], name)
-        assert wait_until(lambda: host.room.name_of(cid) == name and cid in app.views, 30)
-        return cid, tabs[-1]
-
-    yield app, host, progress, join
-    for t in tabs:
-        t.close()
-    host.close()
-    server.stop()
 
 
 def _start_page(app, cid, name) -> StartPage:
