@@ -302,7 +302,8 @@ class RandomiseCamera:
             if ranges is None:
                 continue
             if key == "focal_length":
-                out[key] = _drawn(rng, *ranges, digits=5)
+                low, high = ranges
+                out[key] = _drawn(rng, low, high, digits=5)
             else:
                 out[key] = tuple(_drawn(rng, low, high) for low, high in ranges)
         return out
