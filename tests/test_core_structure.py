@@ -6,7 +6,7 @@
   module (public names of a private module, such as ``._validate``, are fine);
 - no file of ``egtviz/geometry`` over ``MAX_LINES`` lines;
 - every module of ``egtviz.geometry`` declares ``__all__``, and every name in it exists;
-- ``egtviz/geometry/py.typed`` exists and the wheel ships it.
+- ``egtviz/py.typed`` (PEP 561: the package's root marks every subpackage typed) exists and the wheel ships it.
 """
 
 from __future__ import annotations
@@ -149,8 +149,8 @@ def test_every_geometry_module_declares_all_and_every_name_exists(name):
     assert len(set(names)) == len(names), f"{name}.__all__ lists a name twice"
 
 
-def test_geometry_ships_py_typed():
-    marker = PACKAGE / "geometry" / "py.typed"
+def test_the_package_root_ships_py_typed():
+    marker = PACKAGE / "py.typed"
     assert marker.is_file()
     wheel = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["hatch"]["build"]["targets"]["wheel"]
     # Hatch puts every file of a listed package in the wheel unless an exclude (or an only-include) leaves it out.

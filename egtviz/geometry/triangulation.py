@@ -56,6 +56,13 @@ def _cameras(P1: npt.ArrayLike, P2: npt.ArrayLike) -> tuple[np.ndarray, np.ndarr
     return P1, P2, C1, C2
 
 
+#: The largest ratio of the two camera matrices' scales (largest absolute entries) the linear method takes:
+#: the smaller camera's equations then still carry about ``1e-16 * 1e6 = 1e-10`` relative precision, the
+#: accuracy promised for exact correspondences; beyond it they sink into the larger one's rounding (at
+#: 1e10 the rank test sees a single camera, and the points came out NaN).
+MAX_SCALE_RATIO = 1e6
+
+
 def _common_scale(P1: npt.ArrayLike, P2: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Both camera matrices divided by ONE factor, the largest absolute entry of the two.
 
@@ -68,6 +75,14 @@ def _common_scale(P1: npt.ArrayLike, P2: npt.ArrayLike) -> tuple[np.ndarray, np.
     A2 = np.asarray(P2, dtype=np.float64)
     t1, t2 = float(np.abs(A1).max()), float(np.abs(A2).max())
     top = max(t1, t2)
+    if top / min(t1, t2) > MAX_SCALE_RATIO:
+        small, large = ("P1", "P2") if t1 < t2 else ("P2", "P1")
+        raise GeometryError(
+            f"{small}: {large} is {top / min(t1, t2):.1e} times its scale (largest entries); the linear method "
+            f"weighs each image's equations by its matrix's scale, so {small}'s would be lost in rounding. "
+            f"Give the two camera matrices comparable scales (within {MAX_SCALE_RATIO:.0e}), e.g. each divided "
+            "by its largest entry"
+        )
     return (A1 / t1) * (t1 / top), (A2 / t2) * (t2 / top)
 
 
@@ -234,7 +249,8 @@ def triangulate_linear(
 
     Args:
         P1: ``(3, 4)`` camera matrix of image 1 (any nonzero scale).
-        P2: ``(3, 4)`` camera matrix of image 2 (any nonzero scale).
+        P2: ``(3, 4)`` camera matrix of image 2 (any nonzero scale; within :data:`MAX_SCALE_RATIO` of
+            ``P1``'s).
         U1: ``(N, 2)`` pixels in image 1.
         U2: ``(N, 2)`` corresponding pixels in image 2.
 
@@ -246,7 +262,8 @@ def triangulate_linear(
     Raises:
         GeometryError: bad types or shapes, NaN/inf, empty input, mismatched
             ``N``, a zero or rank-deficient ``P``, pixels beyond
-            ``MAX_MAGNITUDE``.
+            ``MAX_MAGNITUDE``, scales of ``P1`` and ``P2`` more than
+            :data:`MAX_SCALE_RATIO` apart (naming the smaller).
         DegenerateConfigurationError: coincident camera centres.
     """
     P1, P2 = _common_scale(P1, P2)

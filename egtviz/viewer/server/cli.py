@@ -114,8 +114,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="teach a class: print the student URL (with its QR code) and a separate instructor URL "
                    "holding a secret token; students follow the instructor's scene (docs/classroom.md)")
     p.add_argument("--workers", metavar="N", type=_workers, default=1,
-                   help="serve from N processes behind the one URL (the kernel shares the connections among them; "
-                   "one that dies is restarted and its tabs reconnect); default 1")
+                   help="serve from N processes behind the one URL (a supervisor hands each new connection to the "
+                   "worker with the fewest; one that dies is restarted and its tabs reconnect); default 1")
     p.add_argument("--allow-host", metavar="NAME", action="append", default=[], type=_allow_host,
                    help="a name the page is reached under through a proxy (a JupyterHub's, e.g. hub.example.edu), "
                    "whose pages may then connect; repeatable; EGTVIZ_ALLOWED_HOSTS adds comma-separated names")
