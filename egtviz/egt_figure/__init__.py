@@ -22,10 +22,11 @@ at the end of each notebook cell and when the interpreter exits; in between
 they follow within a fraction of a second.
 
 The first drawing starts a local egtviz server (``127.0.0.1``, port 8080 or
-the next free one; viser serves from a daemon thread) and prints its URL once;
-later drawings reuse it. In a Jupyter kernel the page is also shown inline
+the next free one; :func:`use_port` or ``EGTVIZ_FIGURE_PORT`` choose another,
+0 any free one; viser serves from a daemon thread) and prints its URL once;
+later drawings reuse it. In a Jupyter kernel the page is shown inline instead
 (an ``IPython.display.IFrame``, once the tabs show the figure) when a figure
-is first drawn. With the
+is first drawn, and nothing is printed: the cell's output is the figure. With the
 environment variable ``EGTVIZ_FIGURE=off`` no server starts: figures are kept
 in memory only (headless scripts, tests), readable with :func:`current_figure`.
 
@@ -55,7 +56,7 @@ from typing import Any
 
 from ._builder import KINDS, Figure
 from ._publisher import Publisher
-from ._server import FigureServer, figures_enabled, in_jupyter, on_cell_end, show_inline
+from ._server import FigureServer, figure_port, figures_enabled, in_jupyter, on_cell_end, show_inline
 
 __all__ = [
     "KINDS",
@@ -72,6 +73,7 @@ __all__ = [
     "server_url",
     "show",
     "stop_server",
+    "use_port",
 ]
 
 _lock = threading.RLock()
@@ -79,6 +81,7 @@ _figures: dict[int, Figure] = {}
 _current: int | None = None
 _running: FigureServer | None = None
 _publisher: Publisher | None = None
+_port: int | None = None
 #: Seconds the interpreter's exit waits for the tabs to show the last drawing.
 EXIT_FLUSH_SECONDS = 10.0
 
@@ -99,11 +102,12 @@ def _publish(fig: Figure) -> None:
     if not figures_enabled():
         return
     if _running is None:
-        _running = FigureServer()
+        _running = FigureServer(_port)
         _publisher = Publisher(_running.show, settle=_running.catch_up)
         if in_jupyter():
             on_cell_end(lambda *_: flush())
-        print(f"egtviz figure: {_running.url}", flush=True)
+        else:  # a notebook shows the figure inline; its loopback address is one a hub's student cannot open
+            print(f"egtviz figure: {_running.url}", flush=True)
     assert _publisher is not None
     _publisher.submit(fig.scene())
     if not fig.displayed and in_jupyter():
@@ -180,6 +184,22 @@ def figures() -> dict[int, Figure]:
 def figure_server() -> FigureServer | None:
     """The running figure server (its viser ``server`` and egtviz ``app``), or None."""
     return _running
+
+
+def use_port(port: int | None) -> None:
+    """Start the figure server on ``port`` (0: any free one; None: ``EGTVIZ_FIGURE_PORT`` or 8080), from the
+    next drawing on; a server already running is stopped first, so the next drawing starts it there.
+
+    Raises:
+        ValueError: ``port`` is not a whole number 0..65535.
+    """
+    global _port
+    if port is not None:
+        figure_port(port)  # checked now, where the caller can see the mistake
+    with _lock:
+        _port = port
+        if _running is not None:
+            stop_server()
 
 
 def server_url() -> str | None:

@@ -8,7 +8,9 @@ path (:func:`notebook_url`), which the browser reaches wherever it runs.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import io
 import json
 import os
 import sys
@@ -18,13 +20,15 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-__all__ = ["FigureServer", "figures_enabled", "in_jupyter", "jupyter_base_url", "notebook_url", "on_cell_end",
-           "show_inline"]
+__all__ = ["FigureServer", "figure_port", "figures_enabled", "in_jupyter", "jupyter_base_url", "notebook_url",
+           "on_cell_end", "show_inline"]
 
 #: The first port tried; the server takes the next free one above it when it is busy.
 FIRST_PORT = 8080
 #: ``EGTVIZ_FIGURE=off``: no server; figures are kept in memory only (headless scripts, tests).
 ENV = "EGTVIZ_FIGURE"
+#: ``EGTVIZ_FIGURE_PORT=N``: the port the figure server starts on (0: any free one) instead of :data:`FIRST_PORT`.
+PORT_ENV = "EGTVIZ_FIGURE_PORT"
 #: Height of the inline frame in a notebook (CSS pixels).
 INLINE_HEIGHT = 640
 
@@ -34,6 +38,26 @@ def figures_enabled(environ: Mapping[str, str] = os.environ) -> bool:
     starts (headless scripts; the test suite sets it for every test and the scripts it runs)."""
     value = environ.get(ENV)
     return value is None or value.strip().lower() not in ("off", "0", "false", "no")
+
+
+def figure_port(port: int | None = None, environ: Mapping[str, str] = os.environ) -> int:
+    """The port the figure server starts on: ``port`` if given, else ``EGTVIZ_FIGURE_PORT``, else
+    :data:`FIRST_PORT`; a busy port makes the server take the next free one, and 0 any free one (what a shared
+    machine, a JupyterHub node, wants: students' kernels never race for one port).
+
+    Raises:
+        ValueError: the port (or the variable, named) is not a whole number 0..65535.
+    """
+    if port is None:
+        text = environ.get(PORT_ENV, "").strip()
+        if not text:
+            return FIRST_PORT
+        if not text.isdigit() or int(text) > 65535:
+            raise ValueError(f"{PORT_ENV}={text!r}: expected a port, a whole number 0..65535 (0: any free port)")
+        return int(text)
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+        raise ValueError(f"port: expected a whole number 0..65535 (0: any free port), got {port!r}")
+    return port
 
 
 def in_jupyter(modules: Mapping[str, Any] = sys.modules) -> bool:
@@ -130,21 +154,25 @@ def on_cell_end(callback: Any, modules: Mapping[str, Any] = sys.modules) -> bool
 
 
 class FigureServer:
-    """An egtviz viewer on the loopback interface (``127.0.0.1``, port 8080 or the next free one).
+    """An egtviz viewer on the loopback interface (``127.0.0.1``, on :func:`figure_port`).
 
     viser serves from its own daemon thread, so a script goes on while the page is open. Every tab shows
     the scene last given to :meth:`show`.
     """
 
     def __init__(self, port: int | None = None, *, viewer: tuple[Any, Any] | None = None) -> None:
-        """Start the viewer on ``port`` (None: :data:`FIRST_PORT` or the next free one); ``viewer``: an already
-        started ``(server, app)`` pair instead (tests)."""
+        """Start the viewer on :func:`figure_port` ``(port)`` or the next free one; ``viewer``: an already started
+        ``(server, app)`` pair instead (tests)."""
         if viewer is None:
             from ..viewer.server.cli import start
             from ..jupyter_proxy import hub_host_names
 
-            # Behind a hub's proxy the page is reached under the hub's name (EGTVIZ_ALLOWED_HOSTS adds others).
-            viewer = start("127.0.0.1", FIRST_PORT if port is None else port, allow_hosts=hub_host_names())
+            port = figure_port(port)
+            # viser prints a box with its address; the figure's own line (or the notebook's frame) gives the
+            # address to open, which behind a hub is not the loopback one.
+            with contextlib.redirect_stdout(io.StringIO()):
+                # Behind a hub's proxy the page is reached under the hub's name (EGTVIZ_ALLOWED_HOSTS adds others).
+                viewer = start("127.0.0.1", port, allow_hosts=hub_host_names())
         self.server, self.app = viewer
         self.url = f"http://127.0.0.1:{self.server.get_port()}"
         self._lock = threading.Lock()
