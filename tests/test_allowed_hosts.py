@@ -9,7 +9,6 @@ from __future__ import annotations
 import base64
 import os
 import socket
-import subprocess
 import sys
 
 import pytest
@@ -18,6 +17,9 @@ import viser
 from egtviz.viewer.server.cli import start
 from egtviz.hosts import ALLOWED_HOSTS_ENV, allowed_host, allowed_hosts
 from egtviz.viewer.server.guard import GuardLimits
+
+from _subprocesses import run
+from _waiting import PATIENCE
 
 EGTVIZ = [sys.executable, "-m", "egtviz.cli"]
 
@@ -62,7 +64,7 @@ def _handshake_status(port: int, host: str, origin: str) -> int:
     request = (f"GET / HTTP/1.1\r\nHost: {host}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\nOrigin: {origin}\r\n"
                f"Sec-WebSocket-Protocol: viser-v{viser.__version__}\r\n\r\n")
-    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=PATIENCE) as sock:  # waits for the server's answer
         sock.sendall(request.encode())
         status_line = sock.makefile("rb").readline().decode()
     return int(status_line.split()[1])
@@ -112,8 +114,8 @@ def test_without_the_option_a_hub_name_is_refused():
                                                       "'hub.example.edu:8000' is not a host name"),
 ])
 def test_a_bad_name_is_refused_before_serving_in_one_line_exit_2(args, env, message):
-    done = subprocess.run([*EGTVIZ, "serve", "--port", "0", *args], capture_output=True, text=True, timeout=60,
-                          env={**os.environ, **env})
+    done = run([*EGTVIZ, "serve", "--port", "0", *args], "egtviz serve to refuse the name and exit",
+               env={**os.environ, **env})
     assert done.returncode == 2, (done.stdout, done.stderr)
     assert message in done.stderr
     assert "Traceback" not in done.stderr and "running at" not in done.stdout

@@ -12,7 +12,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -30,6 +29,8 @@ from egtviz.scene import PinholeSpec, SceneModel, compute_derived, default_scene
 from egtviz.scene.camera_entry import CameraEntry, MeshBody
 from egtviz.scene.cameras import CAMERA_ENTRIES, CAMERA_KINDS, spec_for_model
 from egtviz.scene.io import scene_from_bytes, scene_to_bytes
+
+from _subprocesses import run
 
 PACKAGE = Path(egtviz.__file__).parent
 
@@ -112,7 +113,7 @@ def test_the_scene_layer_reads_a_fisheye_scene_without_the_viewer():
         "assert d.image_planes['fish1'].conics and d.image_planes['fish1'].rim is not None\n"
         "print(sorted(m for m in sys.modules if m.startswith(('egtviz.viewer', 'viser', 'trimesh'))))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = run([sys.executable, "-c", code], "a Python that reads a fisheye scene to exit", check=True)
     assert out.stdout.strip() == "[]"
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from types import SimpleNamespace
 
 import pytest
@@ -11,6 +10,8 @@ from egtviz.classroom import Classroom, Mode
 from egtviz.viewer.server import class_bus
 from egtviz.viewer.server.class_bus import ClassHub, ClassroomBus
 from egtviz.viewer.server.class_patch import TAB_SPAN, apply_patch, diff, global_tab, normal
+
+from _waiting import PATIENCE, wait_for
 
 
 class _Sender:
@@ -27,14 +28,6 @@ class _Sender:
         return self._n
 
 
-def _until(check, timeout: float = 5.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not check():
-        if time.monotonic() > deadline:
-            raise AssertionError("not reached in time")
-        time.sleep(0.02)
-
-
 @pytest.fixture
 def pair(monkeypatch):
     monkeypatch.setattr(class_bus, "SYNC_S", 0.01)
@@ -44,7 +37,7 @@ def pair(monkeypatch):
         room = Classroom(None, token="t" * 20, task_count=lambda name: 1)
         bus = ClassroomBus(hub.address, hub.authkey, i)
         bus.attach(SimpleNamespace(room=room, sender=_Sender()))
-        assert bus.wait_welcomed(5.0)
+        assert bus.wait_welcomed(PATIENCE), f"waited {PATIENCE:.0f} s for the hub to welcome worker {i}"
         rooms.append(room)
         buses.append(bus)
     yield hub, rooms, buses
@@ -60,14 +53,14 @@ def test_changes_made_at_once_in_two_workers_are_both_kept(pair) -> None:
     b.join(1, "Bob")  # the same tab id in another worker: another tab
     b.join(2, "Cy")
     a.ask("How far apart are the epipoles?")
-    _until(lambda: len(a.student_tabs()) == 3 and len(b.student_tabs()) == 3)
+    wait_for(lambda: len(a.student_tabs()) == 3 and len(b.student_tabs()) == 3, "both workers to see the 3 tabs")
     assert a.student_tabs() == {1: "Ada", global_tab(1, 1): "Bob", global_tab(1, 2): "Cy"}
     assert b.student_tabs() == {1: "Bob", 2: "Cy", global_tab(0, 1): "Ada"}
-    _until(lambda: b.asked() == "How far apart are the epipoles?")
+    wait_for(lambda: b.asked() == "How far apart are the epipoles?", "worker b to see the question")
     b.record_answer(1, "How far apart are the epipoles?", 2.5)
     a.record_answer(1, "How far apart are the epipoles?", 3.5)
-    _until(lambda: a.histogram("How far apart are the epipoles?").n == 2
-           and b.histogram("How far apart are the epipoles?").n == 2)
+    wait_for(lambda: a.histogram("How far apart are the epipoles?").n == 2
+             and b.histogram("How far apart are the epipoles?").n == 2, "both workers to count both answers")
     assert sorted(a.answers("How far apart are the epipoles?").values()) == [2.5, 3.5]
     assert [r.name for r in a.roster()] == [r.name for r in b.roster()] == ["Ada", "Bob", "Cy"]
 
@@ -76,23 +69,23 @@ def test_the_instructors_mode_releases_the_students_of_every_worker(pair) -> Non
     _, (a, b), _ = pair
     a.instructor_join(0)
     b.join(1, "Bob")
-    _until(lambda: global_tab(1, 1) in a.student_tabs())
+    wait_for(lambda: global_tab(1, 1) in a.student_tabs(), "worker a to see Bob's tab")
     assert b.is_following(1)
     a.set_mode(Mode.EXPLORE)
-    _until(lambda: not b.is_following(1))
+    wait_for(lambda: not b.is_following(1), "worker b to release Bob")
     assert b.mode is Mode.EXPLORE
     a.pause("Eyes to the front")
-    _until(lambda: b.paused() == "Eyes to the front")
+    wait_for(lambda: b.paused() == "Eyes to the front", "worker b to see the pause")
     b.follow(1, True)  # the student rejoins follow on their own
-    _until(lambda: a.is_following(global_tab(1, 1)))
+    wait_for(lambda: a.is_following(global_tab(1, 1)), "worker a to see Bob follow again")
 
 
 def test_a_worker_that_goes_takes_its_tabs_out_of_the_class(pair) -> None:
     hub, (a, b), (bus_a, bus_b) = pair
     b.join(3, "Bob")
-    _until(lambda: global_tab(1, 3) in a.student_tabs())
+    wait_for(lambda: global_tab(1, 3) in a.student_tabs(), "worker a to see Bob's tab")
     bus_b.close()
-    _until(lambda: global_tab(1, 3) not in a.student_tabs())
+    wait_for(lambda: global_tab(1, 3) not in a.student_tabs(), "worker a to see Bob's tab gone with its worker")
     assert "Bob" in [r.name for r in a.roster()]  # the student stays in the roster (they may reconnect)
     assert "Bob" in hub.state()["students"]
 

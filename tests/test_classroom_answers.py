@@ -14,6 +14,8 @@ from hypothesis import strategies as st
 from egtviz.classroom import AnswersChanged, Classroom, ClassroomError, Histogram
 from egtviz.classroom.answers import EVENT_INTERVAL_S
 
+from _waiting import PATIENCE
+
 
 class Clock:
     def __init__(self) -> None:
@@ -137,7 +139,8 @@ def test_concurrent_joins_and_answers_lose_nothing():
     for t in pool:
         t.start()
     for t in pool:
-        t.join(30)
+        t.join(PATIENCE)
+        assert not t.is_alive(), f"waited {PATIENCE:.0f} s for a thread's joins and answers (a deadlock?)"
     n = threads * per_thread
     assert len(room.roster()) == n
     h = room.histogram("q", bins=10)

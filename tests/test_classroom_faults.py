@@ -5,7 +5,6 @@ student who floods answers delays no other student's answer (the server's per-ta
 from __future__ import annotations
 
 import threading
-import time
 import types
 
 import msgspec
@@ -25,7 +24,8 @@ from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client
 from egtviz.viewer.workbench.app import EgtvizApp
 
-from _waiting import wait_until
+from _class_course import watch_opened
+from _waiting import PATIENCE, wait_for
 
 LESSON = "02-pinhole-projection"
 QUESTION = "How many points?"
@@ -36,7 +36,8 @@ class InstructorTab(FakeTab):
 
     def __init__(self, port: int, token: str) -> None:  # noqa: D107 - as FakeTab, on another path
         self.ws = connect(f"ws://127.0.0.1:{port}{INSTRUCTOR_PREFIX}/{token}",
-                          subprotocols=[Subprotocol(f"viser-v{viser.__version__}")], max_size=None, open_timeout=10)
+                          subprotocols=[Subprotocol(f"viser-v{viser.__version__}")], max_size=None,
+                          open_timeout=PATIENCE)
         self.received = 0
         self.ws.send(msgspec.msgpack.encode({
             "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [0.0, -10.0, 3.0], "fov": 1.0,
@@ -54,23 +55,25 @@ def served(tmp_path, monkeypatch):
     app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=ProgressStore(tmp_path / "progress.db"))
     host = ClassroomHost(app)
     tabs: list[FakeTab] = []
+    opened = watch_opened(host)
 
     def student(name: str) -> tuple[int, FakeTab]:
         before = set(server.get_clients())
         tabs.append(FakeTab(server.get_port()))
-        assert wait_until(lambda: set(server.get_clients()) - before, 30)
+        wait_for(lambda: set(server.get_clients()) - before, f"{name}'s tab to connect")
         (cid,) = set(server.get_clients()) - before
-        time.sleep(0.3)  # the tab is asked for a name it does not keep, then shown the join page
+        wait_for(lambda: cid in opened, f"{name}'s tab to be asked for a name it does not keep, then shown the "
+                 "join page")
         host.join(server.get_clients()[cid], name)
-        assert wait_until(lambda: cid in host.bars, 30)
+        wait_for(lambda: cid in host.bars, f"{name} to join and get the student's bar")
         return cid, tabs[-1]
 
     def instructor() -> tuple[int, InstructorTab]:
         before = set(server.get_clients())
         tabs.append(InstructorTab(server.get_port(), host.room.instructor_token))
-        assert wait_until(lambda: set(server.get_clients()) - before, 30)
+        wait_for(lambda: set(server.get_clients()) - before, "the instructor's tab to connect")
         (cid,) = set(server.get_clients()) - before
-        assert wait_until(lambda: cid in host.panels and cid in app.views, 30)
+        wait_for(lambda: cid in host.panels and cid in app.views, "the instructor's panel and workbench")
         return cid, tabs[-1]
 
     yield types.SimpleNamespace(server=server, app=app, host=host, student=student, instructor=instructor)
@@ -91,10 +94,11 @@ def test_an_instructor_who_disconnects_and_reconnects_keeps_the_class(served):
     host, app = served.host, served.app
     first, tab = served.instructor()
     follower_id, _ = served.student("Ada")
-    assert wait_until(lambda: follower_id in host.followers, 30)
+    wait_for(lambda: follower_id in host.followers, "Ada to follow the instructor")
     follower = host.followers[follower_id]
     _drag(app.views[first], "cam2", 0.5)
-    assert wait_until(lambda: follower.frame is not None and follower.frame.version == host.room.shared().version, 30)
+    wait_for(lambda: follower.frame is not None and follower.frame.version == host.room.shared().version,
+             "the instructor's drag to reach the follower")
     room = host.room
     room.lock_cameras(True)
     room.pause("Back in five minutes")
@@ -103,7 +107,8 @@ def test_an_instructor_who_disconnects_and_reconnects_keeps_the_class(served):
     room.record_answer(follower_id, QUESTION, 8.0)
     shared, version = room.shared().scene, room.shared().version
     tab.close()  # the instructor's laptop drops off the network
-    assert wait_until(lambda: not room.instructor_present() and first not in host.panels, 30)
+    wait_for(lambda: not room.instructor_present() and first not in host.panels,
+             "the class to see the instructor's tab gone")
     # The class carries on without them: the student still follows the room's scene, paused, locked, paced.
     assert room.is_following(follower_id) and host.followers.get(follower_id) is follower
     assert (room.mode, room.cameras_locked, room.paused()) == (Mode.FOLLOW, True, "Back in five minutes")
@@ -119,7 +124,7 @@ def test_an_instructor_who_disconnects_and_reconnects_keeps_the_class(served):
     # The followers follow the new tab: its drag reaches them.
     before = follower.frame.version
     _drag(app.views[second], "cam2", -0.3)
-    assert wait_until(lambda: follower.frame.version > before, 30)
+    wait_for(lambda: follower.frame.version > before, "the new instructor tab's drag to reach the follower")
     assert np.array_equal(follower.frame.scene.camera("cam2").position,
                           app.views[second].model.scene.camera("cam2").position)
 
@@ -133,7 +138,8 @@ def test_a_flood_of_answers_from_one_student_delays_no_other_student(served):
     flooder_id, flooder = served.student("Flo")
     other_id, other = served.student("Bo")
     host.room.ask(QUESTION)
-    assert wait_until(lambda: host.bars[flooder_id].question == QUESTION and host.bars[other_id].question == QUESTION)
+    wait_for(lambda: host.bars[flooder_id].question == QUESTION and host.bars[other_id].question == QUESTION,
+             "both students' bars to show the question")
     order: list[tuple[int, object]] = []
     record = host.room.record_answer
 
@@ -151,11 +157,12 @@ def test_a_flood_of_answers_from_one_student_delays_no_other_student(served):
     assert before < FLOOD // 2  # most of the flood is still to be handled when the other student answers
     other.send("GuiUpdateMessage", uuid=other_bar.answer._impl.uuid, updates={"value": "42"})
     other.send("GuiUpdateMessage", uuid=other_bar.btn_answer._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: (other_id, 42.0) in order, 60)
+    wait_for(lambda: (other_id, 42.0) in order, "the other student's answer to reach the class")
     ahead = sum(t == flooder_id for t, _ in order[:order.index((other_id, 42.0))]) - before
     # Served in turn: the other student's answer does not wait for the rest of the flood (a first-come queue
     # would run every answer of the flood already read before it).
     assert ahead < (FLOOD - before) // 2, (before, ahead)
     # Latest wins: the flooder's last answer is the one the class keeps, whatever was merged on the way.
-    assert wait_until(lambda: host.room.answers(QUESTION).get("Flo") == float(FLOOD - 1), 60)
+    wait_for(lambda: host.room.answers(QUESTION).get("Flo") == float(FLOOD - 1),
+             "the flooder's last answer to be the one the class keeps")
     assert host.room.answers(QUESTION)["Bo"] == 42.0

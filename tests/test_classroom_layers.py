@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import ast
-import subprocess
 import sys
 from pathlib import Path
 
 import egtviz.classroom
+
+from _subprocesses import run
 
 PACKAGE = Path(egtviz.classroom.__file__).parent
 
@@ -29,5 +30,5 @@ def test_no_module_imports_viser_or_the_viewer():
 
 def test_importing_it_loads_no_viser():
     code = "import sys, egtviz.classroom; print('viser' in sys.modules, 'egtviz.viewer' in sys.modules)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    out = run([sys.executable, "-c", code], "a Python that imports egtviz.classroom to exit", check=True).stdout
     assert out.split() == ["False", "False"]

@@ -10,7 +10,7 @@ from egtviz.viewer.classroom.instructor_panel import InstructorPanel
 from egtviz.viewer.classroom.pacing_form import pacing_html, paced_step
 from egtviz.viewer.workbench.fields import FieldError
 
-from _waiting import wait_until
+from _waiting import wait_for
 from test_classroom_pacing_start import OPEN, classroom  # noqa: F401 - the fixture
 
 STEPS = 6
@@ -52,12 +52,12 @@ def test_the_panel_refuses_a_step_beyond_the_lesson_and_keeps_the_pacing(classro
     host.room.pace(OPEN, 0)
     for field, value in ((panel.lesson, OPEN), (panel.max_step, "999"), (panel.apply_pacing, True)):
         fake.send("GuiUpdateMessage", uuid=field._impl.uuid, updates={"value": value})
-    assert wait_until(lambda: refused, 10)
+    wait_for(lambda: refused, "the panel to refuse step 999")
     assert str(refused[-1]) == (f"up to step: {OPEN} has {steps} steps: type 1 to {steps}, "
                                 "or leave it blank for every step")
     assert host.room.pacing() == (None, {OPEN: 0})  # as it was: not silently "every step"
     for field, value in ((panel.max_step, str(steps)), (panel.apply_pacing, True)):
         fake.send("GuiUpdateMessage", uuid=field._impl.uuid, updates={"value": value})
-    assert wait_until(lambda: host.room.pacing() == (None, {OPEN: steps - 1}), 10)
+    wait_for(lambda: host.room.pacing() == (None, {OPEN: steps - 1}), f"the class to be paced up to step {steps}")
     panel.refresh()
     assert f"{OPEN}: up to step {steps} of {steps}" in panel.pacing.content

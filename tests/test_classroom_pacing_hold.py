@@ -10,8 +10,6 @@
 
 from __future__ import annotations
 
-import time
-
 import viser
 
 from egtviz.classroom import Classroom
@@ -22,8 +20,8 @@ from egtviz.viewer.course.start_page import StartPage
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.workbench.app import EgtvizApp
 
-from _class_course import classroom  # noqa: F401 - the fixture
-from _waiting import wait_until
+from _class_course import classroom, paced  # noqa: F401 - the fixture
+from _waiting import PATIENCE, wait_for
 
 LESSON = "07-fundamental-and-essential"  # seven steps
 
@@ -39,7 +37,7 @@ def _open_lesson(app, cid, fake) -> LessonPanel:
     app.course.remember(cid, app.course.gate.room.name_of(cid))  # as a lesson the class opened for them did
     page = app.course.show_start(app.views[cid].client)
     fake.send("GuiUpdateMessage", uuid=page.buttons[LESSON]._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), 30)
+    wait_for(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), f"the click to open {LESSON} in the tab")
     return app.course.tabs[cid]
 
 
@@ -51,7 +49,7 @@ def test_a_students_name_on_the_start_page_is_the_joined_one_and_cannot_be_chang
     assert page.name.value == "Ada" and page.name.disabled and page.learner == "Ada"
     assert page.name.hint == HELD_NAME_HINT
     fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Bea"})
-    assert wait_until(lambda: notes, 10)
+    wait_for(lambda: notes, "the start page to refuse the name sent")
     assert notes[-1][0] == "Value refused" and "Ada" in notes[-1][1]
     assert page.learner == "Ada" and page.name.value == "Ada"
     assert app.course.tabs[cid] is page and app.course.show_start(page.client).learner == "Ada"
@@ -66,7 +64,7 @@ def test_a_students_name_in_the_lesson_panel_cannot_be_changed(classroom):
     assert panel.learner.value == "Ada" and panel.learner.disabled and panel.run.learner == "Ada"
     assert panel.learner.hint == HELD_NAME_HINT
     fake.send("GuiUpdateMessage", uuid=panel.learner._impl.uuid, updates={"value": "Bea"})
-    assert wait_until(lambda: notes, 10)
+    wait_for(lambda: notes, "the lesson panel to refuse the name sent")
     assert notes[-1][0] == "Value refused" and "Ada" in notes[-1][1]
     assert app.course.tabs[cid] is panel and panel.run.learner == "Ada" and panel.learner.value == "Ada"
     assert progress.current_step("Bea", LESSON) == 2
@@ -81,13 +79,13 @@ def test_the_instructors_name_fields_stay_free(classroom):
     page = app.course.show_start(app.views[cid].client)
     assert not page.name.disabled
     fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Zed"})
-    assert wait_until(lambda: page.learner == "Zed", 10)
+    wait_for(lambda: page.learner == "Zed", "the instructor's start page to take the name Zed")
     fake.send("GuiUpdateMessage", uuid=page.buttons[LESSON]._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), 30)
+    wait_for(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), f"the click to open {LESSON} in the tab")
     panel = app.course.tabs[cid]
     assert not panel.learner.disabled and panel.run.learner == "Zed"
     fake.send("GuiUpdateMessage", uuid=panel.learner._impl.uuid, updates={"value": "Ann"})
-    assert wait_until(lambda: panel.run.learner == "Ann", 10)
+    wait_for(lambda: panel.run.learner == "Ann", "the instructor's lesson panel to take the name Ann")
 
 
 def test_a_course_without_a_class_keeps_its_name_field(tmp_path):
@@ -96,10 +94,10 @@ def test_a_course_without_a_class_keeps_its_name_field(tmp_path):
         progress = ProgressStore(tmp_path / "p.db")
         app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=progress)
         fake = FakeTab(server.get_port())
-        (page,) = app.course.wait_for_tab(StartPage)
+        (page,) = app.course.wait_for_tab(StartPage, timeout=PATIENCE)
         assert not page.name.disabled
         fake.send("GuiUpdateMessage", uuid=page.name._impl.uuid, updates={"value": "Cy"})
-        assert wait_until(lambda: page.learner == "Cy", 10)
+        wait_for(lambda: page.learner == "Cy", "the start page to take the name Cy")
         fake.close()
     finally:
         server.stop()
@@ -113,8 +111,8 @@ def test_tightening_the_pacing_moves_a_student_past_it_back_with_a_note(classroo
     assert panel.run.step_index == 3
     notes = _notes(panel.view.client)
     host.room.pace(LESSON, 1)
-    assert wait_until(lambda: panel.run.step_index == 1, 10)
-    assert wait_until(lambda: notes, 10)
+    wait_for(lambda: panel.run.step_index == 1, "the pacing to move the lesson back to step 2")
+    wait_for(lambda: notes, "the note that the pacing moved the tab")
     assert notes[-1][0] == "Paced by the instructor" and "step 2" in notes[-1][1]
     assert 'data-step="1"' in panel.nav.head.content
     # The furthest step reached stays in the progress database: the pacing moved the tab, not the learner.
@@ -123,8 +121,8 @@ def test_tightening_the_pacing_moves_a_student_past_it_back_with_a_note(classroo
     client = panel.view.client
     notes2 = _notes(client)
     host.room.allow_lessons([])
-    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), StartPage), 10)
-    assert wait_until(lambda: notes2, 10)
+    wait_for(lambda: isinstance(app.course.tabs.get(cid), StartPage), "the closed lesson's tab sent to the start page")
+    wait_for(lambda: notes2, "the note that the closed lesson's tab was moved")
     assert notes2[-1][0] == "Paced by the instructor"
     assert app.course.tabs[cid].buttons[LESSON].disabled
     assert progress.current_step("Ada", LESSON) == 3
@@ -137,7 +135,7 @@ def test_a_student_within_the_pacing_and_the_instructor_stay_where_they_are(clas
     panel = _open_lesson(app, cid, fake)
     notes = _notes(panel.view.client)
     host.room.pace(LESSON, 2)
-    time.sleep(0.5)
+    paced(host)
     assert panel.run.step_index == 1 and not notes and app.course.tabs[cid] is panel
 
 
@@ -192,7 +190,7 @@ def test_a_lesson_back_from_a_servo_demo_follows_a_pacing_tightened_meanwhile(cl
     client = panel.view.client
     assert app.open_demo(client, "pinhole") is not None  # the step's "Open the demo" button
     host.room.pace(LESSON, 1)
-    time.sleep(0.3)  # the gate moves no tab showing a demo: its lesson view is closed
+    paced(host)  # the gate moves no tab showing a demo: its lesson view is closed
     app.close_demo(client)  # the demo's Back button
     back = app.course.tabs[cid]
     assert isinstance(back, LessonPanel) and back.run is panel.run

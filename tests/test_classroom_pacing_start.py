@@ -16,7 +16,7 @@ from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.workbench.app import EgtvizApp
 
 from _class_course import classroom  # noqa: F401 - the fixture
-from _waiting import wait_until
+from _waiting import PATIENCE, wait_for
 
 OPEN, CLOSED = "02-pinhole-projection", "03-intrinsics"
 
@@ -59,12 +59,12 @@ def test_a_students_start_page_shows_the_lessons_not_yet_open_and_refuses_a_forg
     assert f"open up to step 2 of {steps}" in page.status[OPEN].content
     # A click on the disabled button, forged by a raw message: refused in the tab, the page stays.
     fake.send("GuiUpdateMessage", uuid=page.buttons[CLOSED]._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: page.notes, 10)
+    wait_for(lambda: page.notes, "the start page to refuse the forged click")
     assert page.notes[-1] == ("Value refused", f"{app.course.lessons[CLOSED].title}: {NOT_OPEN}")
     assert app.course.tabs[cid] is page
     # The instructor opens the lesson: the page says so at once.
     host.room.allow_lessons(None)
-    assert wait_until(lambda: not page.buttons[CLOSED].disabled, 10)
+    wait_for(lambda: not page.buttons[CLOSED].disabled, f"the start page to show {CLOSED} open")
     assert 'data-open="true"' in page.status[CLOSED].content
 
 
@@ -76,13 +76,13 @@ def test_a_lesson_opened_from_the_start_page_starts_at_a_step_the_pacing_allows(
     host.room.pace(OPEN, 1)
     page = _start_page(app, cid, "Bea")
     fake.send("GuiUpdateMessage", uuid=page.buttons[OPEN]._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), 30)
+    wait_for(lambda: isinstance(app.course.tabs.get(cid), LessonPanel), f"the click to open {OPEN} in the tab")
     panel = app.course.tabs[cid]
     assert panel.run.lesson.name == OPEN and panel.run.step_index == 1
     notes = []
     panel.view.client.add_notification = lambda title, body, **kw: notes.append((title, body))
     fake.send("GuiUpdateMessage", uuid=panel.nav.buttons._impl.uuid, updates={"value": "next"})
-    assert wait_until(lambda: notes, 10)
+    wait_for(lambda: notes, "the lesson panel to refuse the step the pacing keeps closed")
     assert notes[-1] == ("Value refused", "step 3: the instructor has not opened it yet")
     assert panel.run.step_index == 1
 
@@ -92,7 +92,7 @@ def test_the_pacing_leaves_a_course_without_a_class_alone(tmp_path):
     try:
         app = EgtvizApp(server, None, field_delay=0.0, course=True, progress=ProgressStore(tmp_path / "p.db"))
         fake = FakeTab(server.get_port())
-        (page,) = app.course.wait_for_tab(StartPage)
+        (page,) = app.course.wait_for_tab(StartPage, timeout=PATIENCE)
         assert app.course.gate is None and not any(b.disabled for b in page.buttons.values())
         assert all('data-open="true"' in s.content for s in page.status.values())
         fake.close()
@@ -106,9 +106,9 @@ def test_the_workbench_opened_from_a_students_start_page_is_their_own_scene(clas
     own = app.views[cid].model
     cam = own.scene.camera("cam2")
     own.set_camera_pose("cam2", (cam.position[0] + 0.4, *cam.position[1:]), cam.pose.R)  # their work
-    assert wait_until(lambda: host.room.own_scene("Cy") is own.scene, 10)
+    wait_for(lambda: host.room.own_scene("Cy") is own.scene, "the class to keep Cy's edited scene")
     page = _start_page(app, cid, "Cy")
     fake.send("GuiUpdateMessage", uuid=page.btn_workbench._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: app.course.tabs.get(cid) is not page and cid in app.views, 30)
+    wait_for(lambda: app.course.tabs.get(cid) is not page and cid in app.views, "the click to open the workbench")
     assert app.views[cid].model is own
-    assert wait_until(lambda: host.room.own_scene("Cy") is own.scene, 10)
+    wait_for(lambda: host.room.own_scene("Cy") is own.scene, "the class to keep Cy's scene, the workbench's")

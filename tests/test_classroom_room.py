@@ -12,6 +12,8 @@ from egtviz.classroom import (
 from egtviz.lessons.progress import LearnerNameError
 from egtviz.scene import default_scene
 
+from _waiting import PATIENCE
+
 
 def _room():
     room = Classroom(token="t" * 32, task_count=lambda lesson: 4)
@@ -200,7 +202,8 @@ def test_listeners_run_outside_the_lock():
     import threading
     t = threading.Thread(target=room.pause, args=("hi",))
     t.start()
-    t.join(5)
+    t.join(PATIENCE)
+    assert not t.is_alive(), f"waited {PATIENCE:.0f} s for the pause in another thread (a deadlock)"
     assert seen == ["hi"]
 
 

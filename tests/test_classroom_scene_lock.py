@@ -3,7 +3,6 @@ lifted on unlock without lifting a lesson step's locks, and applied on every wor
 
 from __future__ import annotations
 
-import time
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,13 +15,7 @@ from egtviz.viewer.classroom.scene_lock import LOCKED_TITLE, SceneLocks
 from egtviz.viewer.server import class_bus
 from egtviz.viewer.server.class_bus import ClassHub, ClassroomBus
 
-
-def _until(check, timeout: float = 5.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not check():
-        if time.monotonic() > deadline:
-            raise AssertionError("not reached in time")
-        time.sleep(0.02)
+from _waiting import PATIENCE, wait_for
 
 
 class _Flag:
@@ -82,9 +75,9 @@ def test_a_camera_unlocked_by_a_loaded_scene_or_added_while_locked_is_locked_aga
     assert model.scene.locked == set(model.scene.camera_names)
     assert not model.undo()  # the lock ended the student's history (see the test below)
     model.load_scene(model.scene.replace(locked=frozenset()))  # an uploaded scene file has no locks
-    _until(lambda: model.scene.locked == set(model.scene.camera_names))
+    wait_for(lambda: model.scene.locked == set(model.scene.camera_names), "the loaded scene's cameras locked again")
     name = model.add_camera()
-    _until(lambda: name in model.scene.locked)
+    wait_for(lambda: name in model.scene.locked, "the added camera locked")
     with pytest.raises(SceneError, match="locked"):
         model.update_camera(name, position=(0.0, 0.0, -4.0))
 
@@ -105,7 +98,7 @@ def test_the_lock_adopted_from_another_worker_locks_this_workers_released_studen
             room = Classroom(None, token="t" * 20, task_count=lambda name: 1)
             bus = ClassroomBus(hub.address, hub.authkey, i)
             bus.attach(SimpleNamespace(room=room, sender=SimpleNamespace(post=lambda f: None, latest=None)))
-            assert bus.wait_welcomed(5.0)
+            assert bus.wait_welcomed(PATIENCE), f"waited {PATIENCE:.0f} s for the hub to welcome worker {i}"
             rooms.append(room)
             buses.append(bus)
         a, b = rooms
@@ -115,13 +108,14 @@ def test_the_lock_adopted_from_another_worker_locks_this_workers_released_studen
         cameras.released(view, shown=True)  # released while the class does not lock: nothing said
         b.subscribe(lambda e: isinstance(e, CamerasLocked) and cameras.class_changed())
         a.lock_cameras(True)  # the instructor is on the other worker
-        _until(lambda: model.scene.locked == set(model.scene.camera_names) and told == [LOCKED_TITLE])
+        wait_for(lambda: model.scene.locked == set(model.scene.camera_names) and told == [LOCKED_TITLE],
+                 "the lock from worker a to lock worker b's released student, with a note")
         name = model.scene.camera_names[0]
         before = np.array(model.scene.camera(name).position)
         with pytest.raises(SceneError, match="locked"):
             model.update_camera(name, position=tuple(before + 1.0))
         a.lock_cameras(False)
-        _until(lambda: not model.scene.locked and len(told) == 2)
+        wait_for(lambda: not model.scene.locked and len(told) == 2, "the unlock from worker a to reach the student")
         assert told[1] != LOCKED_TITLE
         model.update_camera(name, position=tuple(before + 1.0))
         assert np.allclose(model.scene.camera(name).position, before + 1.0)

@@ -9,7 +9,6 @@ import re
 import signal
 import subprocess
 import sys
-import time
 import urllib.request
 import xml.etree.ElementTree as ET
 
@@ -20,6 +19,9 @@ from egtviz.viewer.classroom.links import (
     INSTRUCTOR_PREFIX, instructor_url, qr_svg, qr_terminal, shown_url, token_from_path,
 )
 from egtviz.viewer.classroom.room_html import histogram_html, pause_html, roster_html, student_status_html
+
+from _subprocesses import Printed
+from _waiting import PATIENCE, wait_for
 
 TOKEN = "abcdefghijklmnop-0123456789_XYZ"
 
@@ -112,32 +114,23 @@ def test_serve_classroom_prints_the_student_url_its_qr_code_and_the_instructor_u
     env = {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "120"}
     proc = subprocess.Popen([sys.executable, "-m", "egtviz.cli", "serve", "--classroom", "--port", "0",
                              "--scene", "default"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    printed = Printed(proc)
     try:
-        out = []
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
-            line = proc.stdout.readline()
-            if not line:
-                break
-            out.append(line)
-            if "instructor (keep this secret)" in line:
-                break
-        text = "".join(out)
+        printed.wait_line("instructor (keep this secret)", "egtviz serve --classroom to print the instructor's URL")
+        text = "".join(printed.out)
         instructor = re.search(r"instructor \(keep this secret\) (\S+)", text).group(1)
         student = re.search(r"students open (\S+)", text).group(1)
         token = instructor.rsplit("/", 1)[1]
         assert instructor == f"{student}{INSTRUCTOR_PREFIX}/{token}" and len(token) >= 16
         assert "\u2588" in text  # the QR code's blocks
         # The instructor's page is served (the same page as the student's); the token is checked on connect.
-        page = urllib.request.urlopen(instructor, timeout=30).read()
-        assert page == urllib.request.urlopen(student, timeout=30).read()
+        page = urllib.request.urlopen(instructor, timeout=PATIENCE).read()
+        assert page == urllib.request.urlopen(student, timeout=PATIENCE).read()
         proc.send_signal(signal.SIGINT)
-        rest, err = proc.communicate(timeout=30)
+        out, err = printed.finish("egtviz serve --classroom to stop on Ctrl-C")
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(10)
-    everything = text + rest + err
+        printed.kill()
+    everything = out + err
     assert everything.count(token) == 1, everything
 
 
@@ -175,16 +168,14 @@ def test_the_page_under_the_instructor_prefix_and_the_handshake_path():
             serve_page_under(server, "egtviz-instructor/")
         serve_page_under(server, INSTRUCTOR_PREFIX)
         base = f"http://127.0.0.1:{server.get_port()}"
-        page = urllib.request.urlopen(base + "/", timeout=30).read()
+        page = urllib.request.urlopen(base + "/", timeout=PATIENCE).read()
         for path in (f"{INSTRUCTOR_PREFIX}/{TOKEN}", f"{INSTRUCTOR_PREFIX}/{TOKEN}/", f"{INSTRUCTOR_PREFIX}/"):
-            assert urllib.request.urlopen(base + path, timeout=30).read() == page
+            assert urllib.request.urlopen(base + path, timeout=PATIENCE).read() == page
         for path in (f"{INSTRUCTOR_PREFIX}/a/../../pyproject.toml", f"{INSTRUCTOR_PREFIX}x/{TOKEN}"):
             with pytest.raises(urllib.error.HTTPError, match="404"):
-                urllib.request.urlopen(base + path, timeout=30)
+                urllib.request.urlopen(base + path, timeout=PATIENCE)
         student = FakeTab(server.get_port())
-        deadline = time.monotonic() + 30
-        while not server.get_clients() and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_for(lambda: server.get_clients(), "the headless tab to connect")
         (cid,) = server.get_clients()
         shake = handshake_of(server, cid)
         assert shake is not None and shake.path == "/" and shake.peer == "127.0.0.1"

@@ -46,6 +46,8 @@ from egtviz.scene import SCENES, SceneFileError, SceneModel, compute_derived, sc
 from egtviz.scene.annotations import Annotations, Frame, PlanarMirror, Plot, PlotCircle, annotations_from_dict
 from egtviz.scene.specs import SceneError
 
+from _waiting import PATIENCE
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
@@ -495,6 +497,7 @@ def test_the_server_starts_once_prints_its_url_once_and_tabs_show_the_current_fi
     from egtviz.viewer.server.headless import FakeTab
 
     monkeypatch.setenv("EGTVIZ_FIGURE", "on")
+    monkeypatch.setenv("EGTVIZ_FIGURE_PORT", "0")  # any free port: another test process may be serving figures
     try:
         f_3Dwf("k", 1)
         url = ef.server_url()
@@ -504,22 +507,22 @@ def test_the_server_starts_once_prints_its_url_once_and_tabs_show_the_current_fi
         assert out.count("egtviz figure: http://127.0.0.1:") == 1
         server = ef.figure_server()
         tab = FakeTab(server.server.get_port())
-        (view,) = server.app.wait_for_view()
-        assert ef.flush()
+        (view,) = server.app.wait_for_view(timeout=PATIENCE)
+        assert ef.flush(PATIENCE)
         assert view.model.scene.title == "Figure 1" and len(view.model.scene.cameras) == 1
         f_scenepnt(np.array([[0.0, 0.0, 1.0]]).T)
-        assert ef.flush()
+        assert ef.flush(PATIENCE)
         assert len(view.model.scene.points) == 1  # pushed to the open tab
         f_perspproj(np.array([[0.0, 0.0, 1.0]]).T, f_Rt2H(eye(3), [0, -5, 0]), eye(3), 1)
-        assert ef.flush()
+        assert ef.flush(PATIENCE)
         plots = [svg for svg in view.svgs.values() if 'data-plot="1"' in svg]
         assert len(plots) == 1 and _kinds(plots[0])["point"] == 1  # the plot has its panel in the tab
         with pytest.warns(RuntimeWarning):
             ef.draw("hologram")
-        assert ef.flush()
+        assert ef.flush(PATIENCE)
         assert view.title.content.count('data-egtviz="figure-message"') == 1  # the reason, under the title
         figure(2)
-        assert ef.flush()
+        assert ef.flush(PATIENCE)
         assert view.model.scene.title == "Figure 2" and not view.model.scene.cameras
         tab.close()
     finally:

@@ -13,6 +13,8 @@ from egtviz.lessons.markup import render_markdown
 from egtviz.viewer.export import MARKER, ExportError, export_lesson, export_scene
 from egtviz.viewer.export.page import markdown_to_html
 
+from _subprocesses import run
+
 EGTVIZ = [sys.executable, "-m", "egtviz.cli"]
 
 
@@ -33,9 +35,9 @@ def test_markup_in_a_lesson_text_stays_text():
     assert "&lt;script&gt;" in html
 
 
-def _run(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([*EGTVIZ, "export", *args], capture_output=True, text=True, timeout=timeout,
-                          env={**os.environ, "PYTHONUNBUFFERED": "1"})
+def _run(*args: str) -> subprocess.CompletedProcess:
+    return run([*EGTVIZ, "export", *args], f"egtviz export {' '.join(args)} to exit",
+               env={**os.environ, "PYTHONUNBUFFERED": "1"})
 
 
 @pytest.mark.parametrize(("args", "message"), [

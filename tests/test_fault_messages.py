@@ -8,6 +8,8 @@ import pytest
 from egtviz.cli import main
 from egtviz.viewer.server.cli import ServeAddressError, check_bind
 
+from _waiting import PATIENCE
+
 ESCAPES = "\x1b[31mX\x07"
 SHOWN = "'\\x1b[31mX\\x07': expected a host name or an IP address"
 
@@ -59,7 +61,7 @@ def zoom_step_tab(tmp_path):
         app = EgtvizApp(server, field_delay=0.0, course=True, progress=ProgressStore(tmp_path / "p.sqlite3"),
                         lesson="03-intrinsics")
         tab = FakeTab(server.get_port())
-        (panel,) = app.course.wait_for_tab(LessonPanel)
+        (panel,) = app.course.wait_for_tab(LessonPanel, timeout=PATIENCE)
         panel.go_to(1)
         told: list[tuple[str, str]] = []
         panel.view.client.add_notification = lambda title, body, **_: told.append((title, body))

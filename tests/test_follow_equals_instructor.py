@@ -3,8 +3,6 @@ change of the point count: the same SVG strings in its panels and read-out, the 
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 import viser
@@ -16,6 +14,8 @@ from egtviz.viewer.classroom.room_sender import frame_from_scene
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.workbench.scene3d import Scene3D
 
+from _waiting import wait_for
+
 FOLLOWERS = 3
 _PROPS = ("points", "colors", "vertices", "faces", "position", "wxyz", "visible", "text", "fov", "aspect", "scale")
 
@@ -24,9 +24,7 @@ _PROPS = ("points", "colors", "vertices", "faces", "position", "wxyz", "visible"
 def clients():
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     tabs = [FakeTab(server.get_port()) for _ in range(FOLLOWERS + 1)]
-    deadline = time.monotonic() + 30
-    while len(server.get_clients()) < len(tabs) and time.monotonic() < deadline:
-        time.sleep(0.02)
+    wait_for(lambda: len(server.get_clients()) == len(tabs), f"the {len(tabs)} headless tabs to connect")
     found = [c for _, c in sorted(server.get_clients().items())]
     assert len(found) == len(tabs)
     yield found

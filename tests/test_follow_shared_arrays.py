@@ -3,8 +3,6 @@ the same ones; each follower's 3D scene still equals the instructor's, and a fre
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 import viser
@@ -17,6 +15,8 @@ from egtviz.viewer.workbench.models.pinhole import IMAGE_PLANE_DEPTH
 from egtviz.viewer.workbench.models.shared import SharedArrays
 from egtviz.viewer.workbench.scene3d import Scene3D
 
+from _waiting import wait_for
+
 FOLLOWERS = 4
 
 
@@ -25,9 +25,7 @@ def room():
     """``(instructor's Scene3D, followers)`` on a real viser server, one fake tab each."""
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     tabs = [FakeTab(server.get_port()) for _ in range(FOLLOWERS + 1)]
-    deadline = time.monotonic() + 30
-    while len(server.get_clients()) < len(tabs) and time.monotonic() < deadline:
-        time.sleep(0.02)
+    wait_for(lambda: len(server.get_clients()) == len(tabs), f"the {len(tabs)} headless tabs to connect")
     clients = [c for _, c in sorted(server.get_clients().items())]
     assert len(clients) == len(tabs)
     state: dict = {"server": server, "clients": clients}

@@ -33,7 +33,8 @@ from egtviz.viewer.workbench.fields import (
 )
 from egtviz.viewer.server.headless import start_headless
 
-from _waiting import wait_until  # noqa: E402
+from _threads import joined  # noqa: E402
+from _waiting import wait_for  # noqa: E402
 
 FOCAL = NumberRule("focal length", "mm", 0.1, 10_000.0)
 
@@ -133,13 +134,17 @@ def test_a_rule_accepts_exactly_its_range(x, hi):
 
 def test_debouncer_runs_only_the_text_the_user_stopped_at():
     seen = []
-    typing = Debouncer(0.15)
+    typing = Debouncer(1.0)  # keystrokes 0.02 s apart: well inside the delay even when a busy machine stretches them
     for text in ("0", "0.", "0.5"):
         typing.submit("focal", lambda t=text: seen.append(t))
         time.sleep(0.02)
-    assert wait_until(lambda: seen == ["0.5"])
-    time.sleep(0.3)
+    wait_for(lambda: seen, "the debounced text to run")
     assert seen == ["0.5"] and not typing.pending()
+    # A later text, typed after the user stopped: by the time it runs, a replaced text that had been left to run
+    # would have run too (it was due earlier).
+    typing.submit("focal", lambda: seen.append("0.7"))
+    wait_for(lambda: len(seen) >= 2, "the later text to run")
+    assert seen == ["0.5", "0.7"] and not typing.pending()
 
 
 def test_safe_callback_reports_instead_of_raising():
@@ -240,19 +245,22 @@ def test_numbers_left_as_shown_keep_their_full_precision(tab):
 
 
 def test_typing_partial_text_commits_only_the_final_value():
-    server, app, fakes, views = start_headless(default_scene(), field_delay=0.15)
+    # Keystrokes 0.02 s apart, well inside the field's delay even when a busy machine stretches them.
+    server, app, fakes, views = start_headless(default_scene(), field_delay=1.0)
     try:
         view = record_notes(views[0])
         field = view._cam_fields["cam1"]["focal"]
         for text in ("0", "0.", "0.5"):  # keystrokes of "0.5": "0" alone would be refused
             field.value = text
             time.sleep(0.02)
-        assert wait_until(lambda: view.model.scene.camera("cam1").focal_length == pytest.approx(0.0005))
-        time.sleep(0.3)
+        wait_for(lambda: view.model.scene.camera("cam1").focal_length == pytest.approx(0.0005),
+                 "the field's last text, 0.5, to be committed")
         assert view.notes == [] and field.value == "0.5"
         field.value = "-"  # left as is: judged once the user stops
-        assert wait_until(lambda: len(view.notes) == 1)
+        # Its refusal is the first note: "0", due before it, was not judged (it would have been refused first).
+        wait_for(lambda: view.notes, "the refusal of '-'")
         assert view.notes[0][1] == "cam1: focal length: expected a number, got '-'" and field.value == "0.5"
+        assert len(view.notes) == 1
     finally:
         fakes[0].close()
         server.stop()
@@ -276,15 +284,16 @@ def test_points_count_is_enforced_by_the_server(tab):
 def test_a_forged_gui_message_over_the_websocket_is_refused(tab):
     app, fake, view = tab
     fake.send("GuiUpdateMessage", uuid=view.n_points._impl.uuid, updates={"value": 100000})
-    assert wait_until(lambda: view.notes)
+    wait_for(lambda: view.notes, "the refusal of 100000 points")
     assert view.notes[-1] == ("Value refused", f"how many points must be between 0 and {limits.MAX_POINTS}, got 100000")
-    assert wait_until(lambda: view.n_points.value == "8")
+    wait_for(lambda: view.n_points.value == "8", "the field to show 8 points again")
+    points = view.model.scene.points
     fake.send("GuiUpdateMessage", uuid=view.btn_random._impl.uuid, updates={"value": True})
-    time.sleep(0.3)
-    assert len(view.model.scene.points) == 8
+    wait_for(lambda: view.model.scene.points != points, "the click on 'Randomise points' to run")
+    assert len(view.model.scene.points) == 8  # the count the server kept, not the forged one
     fake.send("GuiUpdateMessage", uuid=view.surface_kind._impl.uuid, updates={"value": "mesh: /etc/passwd"})
     fake.send("GuiUpdateMessage", uuid=view.btn_surface._impl.uuid, updates={"value": True})
-    assert wait_until(lambda: len(view.notes) >= 2)
+    wait_for(lambda: len(view.notes) >= 2, "the refusal of the forged surface")
     assert view.notes[-1] == ("Value refused", "surface: no surface 'mesh: /etc/passwd'")
     assert view.model.scene.surfaces == ()
 
@@ -298,14 +307,14 @@ def test_forged_gizmo_messages_are_refused_and_the_gizmo_goes_back(tab):
                            ((math.inf, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0))):
         n = len(view.notes)
         fake.send("TransformControlsUpdateMessage", name=gizmo.name, wxyz=wxyz, position=position, owner=owner)
-        assert wait_until(lambda: len(view.notes) > n)
+        wait_for(lambda: len(view.notes) > n, f"the refusal of the forged gizmo pose {wxyz} {position}")
         assert view.model.scene.camera("cam1") == before
-        assert wait_until(lambda: np.allclose(gizmo.position, before.position))
+        wait_for(lambda: np.allclose(gizmo.position, before.position), "the gizmo to go back")
     assert all(title == "Value refused" for title, _ in view.notes), view.notes
     g = view.scene3d._point_gizmos[0]
     fake.send("TransformControlsUpdateMessage", name=g.name, wxyz=(1.0, 0.0, 0.0, 0.0),
               position=(math.nan, 1.0, 1.0), owner=owner)
-    assert wait_until(lambda: len(view.notes) == 4)
+    wait_for(lambda: len(view.notes) == 4, "the refusal of the forged point gizmo pose")
     assert "point 1" in view.notes[-1][1] and view.model.scene.points[0] == default_scene().points[0]
     # the tab still works
     view._cam_fields["cam1"]["focal"].value = "12"
@@ -563,7 +572,7 @@ def test_bad_and_good_edits_from_many_threads_end_in_a_valid_state(tab):
     for t in threads:
         t.start()
     for t in threads:
-        t.join()
+        joined(t, "an edit's thread")
     f = view.model.scene.camera("cam1").focal_length
     assert f * 1e3 in (pytest.approx(12.0), pytest.approx(14.0), pytest.approx(9.0))
     view._resync()

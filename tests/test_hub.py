@@ -119,9 +119,9 @@ def test_without_jupyter_server_proxy_the_figure_keeps_its_loopback_address(monk
 
 def test_the_entry_imports_neither_the_viewer_nor_numpy():
     """The proxy loads the entry in every user's Jupyter server at its start: it must stay light."""
-    import subprocess
+    from _subprocesses import run
 
-    done = subprocess.run([sys.executable, "-c", "import sys, egtviz.jupyter_proxy as j; j.setup_egtviz(); "
-                           "print(sorted(m for m in ('viser', 'numpy', 'egtviz.viewer', 'scipy') if m in sys.modules))"],
-                          capture_output=True, text=True, timeout=60, check=True)
+    done = run([sys.executable, "-c", "import sys, egtviz.jupyter_proxy as j; j.setup_egtviz(); "
+                "print(sorted(m for m in ('viser', 'numpy', 'egtviz.viewer', 'scipy') if m in sys.modules))"],
+               "a Python that imports the proxy's entry to exit", check=True)
     assert done.stdout.strip() == "[]"

@@ -29,6 +29,8 @@ from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.lessons.markup import PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, formula_width_px
 
+from _waiting import PATIENCE
+
 LESSON = """\
 title = "A lesson"
 summary = "For the tests."
@@ -99,9 +101,9 @@ def lesson_at(tmp_path, name: str, step: int):
     app = EgtvizApp(server, field_delay=0.0, course=True, progress=ProgressStore(tmp_path / "p.sqlite3"))
     tab = FakeTab(server.get_port())
     try:
-        (page,) = app.course.wait_for_tab(StartPage)
+        (page,) = app.course.wait_for_tab(StartPage, timeout=PATIENCE)
         page.buttons[name].value = True
-        (panel,) = app.course.wait_for_tab(LessonPanel)
+        (panel,) = app.course.wait_for_tab(LessonPanel, timeout=PATIENCE)
         for _ in range(step - 1):
             panel.nav.buttons.value = "next"
         yield panel

@@ -34,7 +34,7 @@ from egtviz.viewer.render.panels import (
 )
 from egtviz.viewer.render.svg import NORMAL, PRESENT, panel_layout
 
-from _waiting import wait_until  # noqa: E402
+from _waiting import PATIENCE, wait_for, wait_until  # noqa: E402
 
 
 def _cams(n, w=640, h=480):
@@ -353,9 +353,9 @@ def test_downloads_send_the_panel_as_shown(four_camera_tab):
     uuid = view.panel_buttons["cam1"]["download panel"]._impl.uuid
     # One click at a time: viser's event carries the handle, whose value a second click would already have changed.
     fake.send("GuiUpdateMessage", uuid=uuid, updates={"value": "SVG"})
-    assert wait_until(lambda: len(sent) == 1, timeout=20)
+    wait_for(lambda: len(sent) == 1, "the SVG download")
     fake.send("GuiUpdateMessage", uuid=uuid, updates={"value": "PNG"})
-    assert wait_until(lambda: len(sent) == 2, timeout=20)
+    wait_for(lambda: len(sent) == 2, "the PNG download (rendered by a worker process)")
     files = dict(sent)
     assert set(files) == {"cam1-image-plane.svg", "cam1-image-plane.png"}
     svg, png = files["cam1-image-plane.svg"], files["cam1-image-plane.png"]
@@ -394,7 +394,7 @@ def test_present_option_starts_every_tab_in_presentation_mode():
     try:
         app = EgtvizApp(server, default_scene(), field_delay=0.0, present=True)
         fake = FakeTab(server.get_port())
-        (view,) = app.wait_for_view()
+        (view,) = app.wait_for_view(timeout=PATIENCE)
         assert view.present and view.present_checkbox.value is True
         assert all(_svg_root(s).get("data-style") == "present" for s in view.svgs.values())
         fake.close()

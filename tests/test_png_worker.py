@@ -20,7 +20,7 @@ from egtviz.viewer.server.headless import start_headless
 from egtviz.viewer.render.png_worker import PngDownloads, PngJob, PngRenderer, PngRenderError, WorkerProcess
 from egtviz.viewer.render.svg import NORMAL
 
-from _waiting import wait_until  # noqa: E402
+from _waiting import PATIENCE, wait_for  # noqa: E402
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -39,7 +39,7 @@ class HeldWorker:
         self.pid = None
 
     def render(self, svg: str, scale: float) -> bytes:
-        assert self.gate.wait(timeout=20)
+        assert self.gate.wait(timeout=PATIENCE), "the test never let the held render go"
         self.rendered.append(svg)
         return svg.encode()
 
@@ -100,11 +100,11 @@ def test_twenty_rapid_requests_from_one_tab_render_twice_the_first_and_the_last(
     tab = PngDownloads(client, renderer)
     try:
         assert tab.request("click0.png", tiny_svg("click 0"))
-        assert wait_until(lambda: renderer.renders == 1)  # the first click's render runs (held by the test)
+        wait_for(lambda: renderer.renders == 1, "the first click's render to run (held by the test)")
         for k in range(1, 20):
             assert tab.request(f"click{k}.png", tiny_svg(f"click {k}"))
         workers[0].gate.set()
-        assert wait_until(renderer.idle_now, timeout=10)
+        wait_for(renderer.idle_now, "the renderer to finish every job")
         assert renderer.renders == 2
         assert [name for name, _ in client.files] == ["click0.png", "click19.png"]
         assert b"click 19" in client.files[1][1]
@@ -123,12 +123,12 @@ def test_a_flooding_tab_does_not_delay_another_tab_by_more_than_one_render():
     a, b = PngDownloads(flood, renderer), PngDownloads(other, renderer)
     try:
         a.request("a0.png", tiny_svg("a0"))
-        assert wait_until(lambda: renderer.renders == 1)
+        wait_for(lambda: renderer.renders == 1, "a's first render to run (held by the test)")
         for k in range(1, 20):
             a.request(f"a{k}.png", tiny_svg(f"a{k}"))
         b.request("b.png", tiny_svg("b"))
         workers[0].gate.set()
-        assert wait_until(renderer.idle_now, timeout=10)
+        wait_for(renderer.idle_now, "the renderer to finish every job")
         # a's first render, then b (which waited during it), then a's latest click.
         assert list(renderer.started) == [id(a), id(b), id(a)]
         assert [n for n, _ in flood.files] == ["a0.png", "a19.png"] and [n for n, _ in other.files] == ["b.png"]
@@ -139,18 +139,21 @@ def test_a_flooding_tab_does_not_delay_another_tab_by_more_than_one_render():
 
 def test_a_tab_never_has_two_renders_at_once_even_with_two_workers():
     renderer, workers = held_renderer(workers=2)
-    client = RecordingClient()
-    tab = PngDownloads(client, renderer)
+    client, other_client = RecordingClient(), RecordingClient()
+    tab, other = PngDownloads(client, renderer), PngDownloads(other_client, renderer)
     try:
         tab.request("first.png", tiny_svg("first"))
-        assert wait_until(lambda: renderer.renders == 1)
+        wait_for(lambda: renderer.renders == 1, "the tab's first render to run (held by the test)")
         tab.request("second.png", tiny_svg("second"))
-        threading.Event().wait(0.2)  # a free second worker must not take the tab's waiting job
-        assert renderer.renders == 1 and renderer.busy(tab)
+        # A free second worker must not take the tab's waiting job: it takes the job of another tab, asked later.
+        other.request("other.png", tiny_svg("other"))
+        wait_for(lambda: renderer.renders == 2, "the free worker to take a job")
+        assert list(renderer.started) == [id(tab), id(other)] and renderer.busy(tab)
         for w in workers:
             w.gate.set()
-        assert wait_until(renderer.idle_now, timeout=10)
+        wait_for(renderer.idle_now, "the renderer to finish every job")
         assert [n for n, _ in client.files] == ["first.png", "second.png"]
+        assert [n for n, _ in other_client.files] == ["other.png"]
     finally:
         for w in workers:
             w.gate.set()
@@ -163,11 +166,11 @@ def test_a_closed_tab_gets_nothing_and_its_waiting_job_is_dropped():
     tab = PngDownloads(client, renderer)
     try:
         tab.request("running.png", tiny_svg("running"))
-        assert wait_until(lambda: renderer.renders == 1)
+        wait_for(lambda: renderer.renders == 1, "the tab's first render to run (held by the test)")
         tab.request("waiting.png", tiny_svg("waiting"))
         tab.close()
         workers[0].gate.set()
-        assert wait_until(renderer.idle_now, timeout=10)
+        wait_for(renderer.idle_now, "the renderer to finish every job")
         assert renderer.renders == 1 and client.files == []
         assert tab.request("after.png", tiny_svg("after")) is False
     finally:
@@ -191,14 +194,14 @@ def test_twenty_png_clicks_in_the_viewer_send_two_files_and_svg_stays_immediate(
         view.png = PngDownloads(view.client, renderer)
         group = view.panel_buttons["cam1"]["download panel"]
         click(group, view, "PNG")
-        assert wait_until(lambda: renderer.renders == 1)
+        wait_for(lambda: renderer.renders == 1, "the first click's render to run (held by the test)")
         for _ in range(19):
             click(group, view, "PNG")
         click(view.panel_buttons["cam2"]["download panel"], view, "PNG")  # the latest click: cam2's panel
         click(group, view, "SVG")  # not queued: sent at once
         assert sent == ["cam1-image-plane.svg"]
         workers[0].gate.set()
-        assert wait_until(renderer.idle_now, timeout=10)
+        wait_for(renderer.idle_now, "the renderer to finish every job")
         assert renderer.renders == 2
         assert sent == ["cam1-image-plane.svg", "cam1-image-plane.png", "cam2-image-plane.png"]
         assert b'data-camera="cam2"' in workers[0].rendered[1].encode()
@@ -267,7 +270,7 @@ def test_the_viewer_refuses_the_png_of_a_tall_image_in_that_tab():
         view.client.send_file_download = lambda name, data, **kw: sent.append(name)
         view.model.update_camera("cam1", width=1, height=8192)
         click(view.panel_buttons["cam1"]["download panel"], view, "PNG")
-        assert wait_until(lambda: notes)
+        wait_for(lambda: notes, "the tab to be told the PNG is too large")
         title, body = notes[0]
         assert title == "PNG not made: the figure is too large"
         assert body.startswith("cam1-image-plane.png: the PNG would be 960 x ")
@@ -283,7 +286,7 @@ def test_the_viewer_refuses_the_png_of_a_tall_image_in_that_tab():
 
 @pytest.fixture(scope="module")
 def worker():
-    w = WorkerProcess(timeout=60)
+    w = WorkerProcess(timeout=PATIENCE)  # the first render starts the process, on a busy machine slowly
     yield w
     w.close()
 
@@ -306,38 +309,39 @@ def test_an_svg_the_renderer_cannot_read_is_reported_and_the_worker_carries_on(w
 
 
 def test_a_render_over_the_timeout_is_stopped():
-    slow = WorkerProcess(timeout=60)
+    slow = WorkerProcess(timeout=PATIENCE)
     try:
         slow.render(tiny_svg("warm"), 1.0)  # started and imported: what follows is the render alone
         slow.timeout = 0.3
         with pytest.raises(PngRenderError, match="longer than 0.3 s"):
             slow.render(heavy_svg(), 2.0)
         assert slow.pid is None
-        slow.timeout = 60
+        slow.timeout = PATIENCE
         assert png_width(slow.render(tiny_svg("again", width=30), 1.0)) == 30  # a new worker
     finally:
         slow.close()
 
 
 def test_a_worker_that_dies_becomes_a_notification_and_the_next_png_works():
-    renderer = PngRenderer(1)
+    renderer = PngRenderer(1, timeout=PATIENCE)
     client = RecordingClient()
     tab = PngDownloads(client, renderer)
     try:
         tab.request("warm.png", tiny_svg("warm", width=12))
-        assert wait_until(lambda: len(client.files) == 1, timeout=30)
+        wait_for(lambda: len(client.files) == 1, "the first PNG (the worker process started)")
         (pid,) = renderer.worker_pids()
         assert png_refusal(heavy_svg()) is None
         tab.request("heavy.png", heavy_svg())
-        assert wait_until(lambda: renderer.renders == 2)
+        wait_for(lambda: renderer.renders == 2, "the heavy render to start")
         os.kill(pid, signal.SIGKILL)
-        assert wait_until(lambda: any(n.title == "Could not make the PNG" for n in client.notes), timeout=30)
+        wait_for(lambda: any(n.title == "Could not make the PNG" for n in client.notes),
+                 "the tab to be told the renderer stopped")
         failed = next(n for n in client.notes if n.title == "Could not make the PNG")
         assert failed.body == ("heavy.png: the PNG renderer stopped unexpectedly; try again. "
                                "The SVG download still works.")
         assert all(n.removed for n in client.notes if n.title == "Rendering PNG...")
         tab.request("next.png", tiny_svg("next", width=14))
-        assert wait_until(lambda: len(client.files) == 2, timeout=30)
+        wait_for(lambda: len(client.files) == 2, "the next PNG, from a new worker")
         assert client.files[1][0] == "next.png" and png_width(client.files[1][1]) == 2 * 14  # scale 2
         assert renderer.worker_pids() != [pid]
     finally:

@@ -9,17 +9,20 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 from egtviz.lessons.progress import ProgressStore
 
+from _subprocesses import Printed
+from _waiting import wait_for
+
 _WRITER = r"""
-import json, sys, time
+import json, sys
 from egtviz.lessons.progress import ProgressStore
-path, who, n, start = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
+path, who, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
 store = ProgressStore(path)
-time.sleep(max(0.0, start - time.time()))
+print("ready", flush=True)
+sys.stdin.readline()  # "go": every writer is imported and ready before the first write
 for k in range(n):
     store.record_attempt(f"{who} {k % 7}", "01_pinhole", k % 3, f"task{k % 5}", passed=(k % 11 == 0), hint_tiers=2)
     if k % 50 == 0:
@@ -35,11 +38,21 @@ ATTEMPTS = 500
 def test_four_processes_writing_at_once_lose_no_attempt(tmp_path: Path) -> None:
     path = tmp_path / "progress.sqlite3"
     ProgressStore(path)  # made once, as the supervising process's first worker would
-    start = time.time() + 3.0  # every writer imported and ready before the first write
-    procs = [subprocess.Popen([sys.executable, "-c", _WRITER, str(path), f"w{i}", str(ATTEMPTS), repr(start)],
-                              stdout=subprocess.PIPE, text=True) for i in range(PROCESSES)]
-    outs = [json.loads(p.communicate(timeout=120)[0]) for p in procs]
-    assert all(p.returncode == 0 for p in procs)
+    procs = [subprocess.Popen([sys.executable, "-c", _WRITER, str(path), f"w{i}", str(ATTEMPTS)],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for i in range(PROCESSES)]
+    printed = [Printed(p) for p in procs]
+    try:
+        wait_for(lambda: all(p.out for p in printed), f"the {PROCESSES} writers to be ready")
+        for p in procs:  # all at once
+            p.stdin.write("go\n")
+            p.stdin.flush()
+        outs = [json.loads(p.finish(f"writer {i} to record its {ATTEMPTS} attempts")[0].splitlines()[-1])
+                for i, p in enumerate(printed)]
+    finally:
+        for p in printed:
+            p.kill()
+    assert all(p.returncode == 0 for p in procs), [p.said() for p in printed]
     assert outs == [{"problem": None, "persistent": True}] * PROCESSES  # no process fell back to memory
     records = ProgressStore(path, read_only=True).task_records()
     assert sum(r.attempts for r in records) == PROCESSES * ATTEMPTS
@@ -48,7 +61,6 @@ def test_four_processes_writing_at_once_lose_no_attempt(tmp_path: Path) -> None:
 
 def test_a_file_locked_past_the_busy_timeout_is_tried_again_not_given_up(tmp_path: Path, monkeypatch) -> None:
     import sqlite3
-    import threading
 
     from egtviz.lessons import progress
 
@@ -57,13 +69,24 @@ def test_a_file_locked_past_the_busy_timeout_is_tried_again_not_given_up(tmp_pat
     store = ProgressStore(path)
     other = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
     other.execute("BEGIN EXCLUSIVE")  # another worker's long transaction
-    release = threading.Timer(0.5, lambda: other.execute("COMMIT"))
-    release.start()
+    told_busy = []
+    busy = progress._busy
+
+    def busy_then_released(exc: BaseException) -> bool:
+        # The other worker ends its transaction once the store has waited its whole busy timeout and been told
+        # the file is locked (an event, not a time that a busy machine might overrun).
+        said = busy(exc)
+        if said and not told_busy:
+            told_busy.append(exc)
+            other.execute("COMMIT")
+        return said
+
+    monkeypatch.setattr(progress, "_busy", busy_then_released)
     try:
         store.record_attempt("Ada", "01_pinhole", 0, "task", passed=True)
     finally:
-        release.join()
         other.close()
+    assert told_busy, "the store never found the file locked"
     assert store.problem is None and store.persistent
     assert store.attempts("Ada", "01_pinhole", 0, "task") == 1
     assert [r.attempts for r in ProgressStore(path, read_only=True).task_records()] == [1]

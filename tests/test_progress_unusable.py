@@ -24,6 +24,8 @@ from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 
+from _waiting import PATIENCE
+
 LESSON6 = "06-pinhole-epipolar"
 MEET = "at the epipole e1, the image of cam2's centre"
 CASES = ("random bytes", "newer schema", "folder", "FIFO", "read-only folder", "full disk")
@@ -49,12 +51,12 @@ def course(progress: ProgressStore | None, field_delay: float = 0.0, **kwargs):
 
 
 def start_page(app: EgtvizApp) -> StartPage:
-    return app.course.wait_for_tab(StartPage)[-1]
+    return app.course.wait_for_tab(StartPage, timeout=PATIENCE)[-1]
 
 
 def open_lesson(app: EgtvizApp, page: StartPage, name: str) -> LessonPanel:
     page.buttons[name].value = True
-    (panel,) = app.course.wait_for_tab(LessonPanel)
+    (panel,) = app.course.wait_for_tab(LessonPanel, timeout=PATIENCE)
     return panel
 
 
@@ -171,7 +173,7 @@ def test_the_course_starts_and_says_why_progress_is_not_kept(unusable):
         page = start_page(app)
         assert 'data-status="step' in page.status[LESSON6].content  # kept for the session
         page.btn_workbench.value = True  # the workbench opens too
-        (view,) = app.course.wait_for_tab(ClientView)
+        (view,) = app.course.wait_for_tab(ClientView, timeout=PATIENCE)
         assert view.model.scene.cameras
     assert snapshot(path.parent) == before
 

@@ -12,6 +12,7 @@ import os
 import re
 import signal
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import msgspec.msgpack
@@ -21,11 +22,17 @@ import websockets.asyncio.client
 from websockets.typing import Subprotocol
 
 from egtviz.bench.ws_client import CAMERA, decode_frame
+from egtviz.scene import default_scene
 from egtviz.viewer.server.workers import Supervisor, WorkerOptions, reserve_port, worker_of_connection
+
+from _threads import joined
+from _waiting import PATIENCE, wait_for
 
 pytestmark = pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux's /proc")
 
 _PANEL = re.compile(r'data-egtviz="image-plane" data-camera="([^"]*)"')
+CAMERAS = len(default_scene().cameras)
+"""Panels of the scene the class starts on."""
 
 
 class Tab:
@@ -65,10 +72,11 @@ class Tab:
                 self.panels[_PANEL.search(item).group(1)] = item
         return replies
 
-    async def read(self, seconds: float, *, until_panels: bool = False) -> None:
-        """Read for ``seconds`` (``until_panels``: at most, stopping once a panel came)."""
+    async def read(self, seconds: float) -> None:
+        """Read (answering as a browser's tab does) for ``seconds``: a pause between a drag's moves, or one slice of
+        :func:`read_until`."""
         deadline = time.monotonic() + seconds
-        while (left := deadline - time.monotonic()) > 0 and not (until_panels and self.panels):
+        while (left := deadline - time.monotonic()) > 0:
             try:
                 frame = await asyncio.wait_for(self.ws.recv(decode=False), min(left, 0.2))
             except TimeoutError:
@@ -77,12 +85,29 @@ class Tab:
                 for reply in self._take(message):
                     await self.send(reply)
 
+    async def read_until(self, done: Callable[[], object], what: str) -> None:
+        """Read until ``done()``; fail naming ``what`` if it is not within :data:`PATIENCE`."""
+        await read_until([self], done, what)
+
+
+async def read_until(tabs: list[Tab], done: Callable[[], object], what: str) -> None:
+    """Read every one of ``tabs`` at once until ``done()``.
+
+    Raises:
+        AssertionError: not done within :data:`PATIENCE`, naming ``what`` was awaited.
+    """
+    deadline = time.monotonic() + PATIENCE
+    while not done():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"waited {PATIENCE:.0f} s for {what}")
+        await asyncio.gather(*(tab.read(0.2) for tab in tabs))
+
 
 @contextlib.asynccontextmanager
 async def open_tab(port: int, path: str = "", name: str | None = None):
     async with websockets.asyncio.client.connect(
             f"ws://127.0.0.1:{port}{path}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")],
-            max_size=None, open_timeout=20) as ws:
+            max_size=None, open_timeout=PATIENCE) as ws:
         tab = Tab(ws, name)
         await tab.send({**CAMERA, "image_width": 1366, "image_height": 768})
         yield tab
@@ -138,7 +163,7 @@ def test_a_reserved_port_is_busy_for_others_and_a_listened_port_is_passed_over()
 def sup():
     """Two workers teaching a class (one start for the tests below: a worker takes seconds to start)."""
     sup = Supervisor(2, 0, WorkerOptions(classroom=True))
-    sup.start()
+    sup.start(timeout=PATIENCE)
     yield sup
     sup.stop()
 
@@ -149,33 +174,31 @@ def test_a_follower_on_each_worker_sees_the_instructors_scene(sup: Supervisor) -
         async with contextlib.AsyncExitStack() as stack:
             teacher = await stack.enter_async_context(
                 open_tab(sup.port, path=f"/egtviz-instructor/{sup.token}"))
-            await teacher.read(3.0)
+            await teacher.read_until(lambda: teacher.gizmo is not None and {"position", "wxyz"} <= set(teacher.pose)
+                                     and len(teacher.panels) == CAMERAS,
+                                     "the instructor's workbench: its gizmo, pose and panels")
             students = await tabs_on_each_worker(stack, sup, name="student")
-            for tab in students.values():
-                await tab.read(2.0)
+            await read_until([teacher, *students.values()],
+                             lambda: all(len(tab.panels) == CAMERAS for tab in students.values()),
+                             "each worker's follower to show the room's panels")
             assert teacher.gizmo is not None
             x, y, z = [float(v) for v in teacher.pose["position"]]
             base = {"name": "/egt/cam_0", "owner": teacher.gizmo["owner"]}
+            before = dict(teacher.panels)
             await teacher.send({"type": "TransformControlsDragStartMessage", **base})
             for k in range(5):
                 await teacher.send({"type": "TransformControlsUpdateMessage", **base, "wxyz": teacher.pose["wxyz"],
                                     "position": [x + 0.05 * (k + 1), y + 0.02, z]})
                 await teacher.read(0.1)
             await teacher.send({"type": "TransformControlsDragEndMessage", **base})
-            await teacher.read(1.5)
-            assert teacher.panels, "the instructor's tab drew its panels"
+            # The instructor's tab and the followers are read together until they agree on panels the drag redrew
+            # (a loaded machine may take a while): each follower shows what the instructor's tab shows.
+            await read_until([teacher, *students.values()],
+                             lambda: teacher.panels != before
+                             and all(tab.panels == teacher.panels for tab in students.values()),
+                             "each worker's follower to show the instructor's panels after the drag")
 
-            async def settle(tab: Tab) -> None:  # a loaded machine may take seconds: read until it matches
-                for _ in range(40):
-                    await tab.read(0.5)
-                    if tab.panels == teacher.panels:
-                        return
-
-            await asyncio.gather(*(settle(tab) for tab in students.values()))
-            for pid, tab in students.items():
-                assert tab.panels == teacher.panels, f"the follower on worker {pid} shows the instructor's panels"
-
-    asyncio.run(asyncio.wait_for(scenario(), 90))
+    asyncio.run(asyncio.wait_for(scenario(), 3 * PATIENCE))
 
 
 def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup: Supervisor) -> None:
@@ -183,9 +206,8 @@ def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup:
     async def scenario() -> None:
         async with contextlib.AsyncExitStack() as stack:
             tabs = await tabs_on_each_worker(stack, sup, name="restart")
-            for tab in tabs.values():
-                await tab.read(20.0, until_panels=True)
-                assert tab.panels, "each worker showed the room's frame"
+            await read_until(list(tabs.values()), lambda: all(tab.panels for tab in tabs.values()),
+                             "each worker to show the room's frame")
             victim = sorted(tabs)[0]
             os.kill(victim, signal.SIGKILL)
             with pytest.raises(websockets.exceptions.ConnectionClosed):
@@ -193,27 +215,29 @@ def test_a_killed_worker_is_restarted_and_a_tab_reconnects_to_a_live_worker(sup:
                     await tabs[victim].ws.recv()
             # The tab reconnects, retrying as viser's client does (a connection made while the dead worker's
             # listening socket was still being closed is refused): a live worker takes it.
-            for attempt in range(20):
+            deadline = time.monotonic() + PATIENCE
+            while True:
                 try:
                     async with open_tab(sup.port, name="restart again") as again:
-                        await again.read(20.0, until_panels=True)
-                        assert again.panels, "the reconnected tab was served"
+                        await again.read_until(lambda: again.panels, "the reconnected tab to be served")
                     break
-                except (OSError, websockets.exceptions.InvalidMessage, websockets.exceptions.ConnectionClosed):
-                    assert attempt < 19
+                except (OSError, websockets.exceptions.InvalidMessage, websockets.exceptions.ConnectionClosed) as exc:
+                    assert time.monotonic() < deadline, f"waited {PATIENCE:.0f} s for a live worker to take a " \
+                                                        f"reconnecting tab (last: {exc!r})"
                     await asyncio.sleep(0.25)
-            assert sup.wait_ready(60.0)
+            # (In a thread: the tabs' connections keep answering the server's pings meanwhile.)
+            assert await asyncio.to_thread(sup.wait_ready, PATIENCE), \
+                f"waited {PATIENCE:.0f} s for the killed worker to be restarted"
             pids = sup.pids()
             assert victim not in pids and None not in pids and len(set(pids)) == 2
             assert sum(s.restarts for s in sup.slots) == 1
             # The restarted worker is in the class: its followers show the room's frame, as the other's do.
             fresh = await tabs_on_each_worker(stack, sup, name="after restart")
-            for tab in fresh.values():
-                await tab.read(20.0, until_panels=True)
             first, second = fresh.values()
-            assert first.panels and first.panels == second.panels
+            await read_until([first, second], lambda: len(first.panels) == CAMERAS and first.panels == second.panels,
+                             "the followers on the restarted worker and on the other to show the same room's frame")
 
-    asyncio.run(asyncio.wait_for(scenario(), 90))
+    asyncio.run(asyncio.wait_for(scenario(), 3 * PATIENCE))
 
 
 def test_options_a_worker_would_refuse_are_refused_before_any_worker_starts(capsys) -> None:
@@ -232,7 +256,7 @@ def test_options_a_worker_would_refuse_are_refused_before_any_worker_starts(caps
 def test_a_worker_that_cannot_start_stops_the_start_with_its_status() -> None:
     sup = Supervisor(2, 0, WorkerOptions(), worker_module="egtviz.no_such_worker_module")
     with pytest.raises(RuntimeError, match=r"worker 0 did not start \(it ended with status 1\)"):
-        sup.start(timeout=30.0)
+        sup.start(timeout=PATIENCE)
     assert all(s.proc is not None and s.proc.poll() is not None for s in sup.slots)  # none left running
 
 
@@ -261,14 +285,17 @@ def test_serve_workers_says_where_it_serves_and_stops_its_workers(capsys) -> Non
         runner = threading.Thread(target=lambda: status.append(
             serve_workers(1, port, WorkerOptions(classroom=True), stop_event=stop)))
         runner.start()
-        deadline = time.monotonic() + 60
-        while "instructor (keep this secret)" not in out:
-            assert time.monotonic() < deadline and runner.is_alive()
-            time.sleep(0.2)
+
+        def printed_the_instructors_url() -> bool:
+            nonlocal out, err
             more = capsys.readouterr()
             out, err = out + more.out, err + more.err
+            assert runner.is_alive() or "instructor (keep this secret)" in out, (out, err, status)
+            return "instructor (keep this secret)" in out
+
+        wait_for(printed_the_instructors_url, "serve_workers to print the instructor's URL")
         stop.set()
-        runner.join(30)
+        joined(runner, "serve_workers to stop its workers")
     assert status == [0]
     assert f"egtviz: port {port} is busy on 127.0.0.1; using " in err
     served = re.search(r"egtviz running at http://127\.0\.0\.1:(\d+) \(1 worker\)", out)

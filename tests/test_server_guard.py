@@ -24,13 +24,19 @@ import viser
 import websockets.asyncio.client
 import websockets.asyncio.server
 import websockets.exceptions
+from websockets.typing import Origin, Subprotocol
 
 from egtviz.bench import ws_client
 from egtviz.bench.ws_client import CAMERA
 from egtviz.viewer.server import guard
 from egtviz.viewer.server.guard import FairExecutor, GuardLimits, install_guards, origin_allowed
 
+from _subprocesses import Printed
+from _waiting import PATIENCE, wait_for
+
 CALLBACK_SECONDS = 0.003
+BLOCKED_S = 2 * PATIENCE
+"""How long a job held at a gate waits at most: longer than any wait of the test that holds it."""
 
 
 def _busy(seconds: float) -> None:
@@ -48,6 +54,7 @@ class TabApp:
         self.lock = threading.Lock()
         self.slider_runs: dict[int, list[tuple[float, float]]] = {}
         self.gizmo_runs: dict[int, int] = {}
+        self.callbacks: list[tuple[int, float]] = []  # (tab, when) of every slider and gizmo callback, in order
         self.uploads: list[bytes] = []
         self.ready: set[int] = set()
         server.on_client_connect(self._connect)
@@ -62,13 +69,16 @@ class TabApp:
         def _(event: viser.GuiEvent) -> None:
             _busy(CALLBACK_SECONDS)
             with self.lock:
-                self.slider_runs.setdefault(cid, []).append((time.perf_counter(), event.target.value))
+                now = time.perf_counter()
+                self.slider_runs.setdefault(cid, []).append((now, event.target.value))
+                self.callbacks.append((cid, now))
 
         @gizmo.on_update
         def _(event: viser.TransformControlsEvent) -> None:
             _busy(CALLBACK_SECONDS)
             with self.lock:
                 self.gizmo_runs[cid] = self.gizmo_runs.get(cid, 0) + 1
+                self.callbacks.append((cid, time.perf_counter()))
 
         @upload.on_upload
         def _(event: viser.GuiEvent) -> None:
@@ -91,16 +101,35 @@ def guarded_server(limits: GuardLimits | None = None):
 
 
 class RawClient(ws_client.RawClient):
-    """The shared raw client, joining this module's small app."""
+    """The shared raw client, joining this module's small app, as patient as the tests."""
+
+    @classmethod
+    @contextlib.asynccontextmanager
+    async def connect(cls, port: int, *, origin: str | None = None):
+        async with websockets.asyncio.client.connect(
+            f"ws://127.0.0.1:{port}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")],
+            origin=None if origin is None else Origin(origin), max_size=None, open_timeout=PATIENCE,
+        ) as ws:
+            yield cls(ws)
 
     async def join(self, app: TabApp) -> int:
         """Send the first camera (viser then runs the connect callbacks) and wait for the tab's widgets."""
-        await self.wait_for(("GuiSliderMessage", "TransformControlsMessage", "GuiUploadButtonMessage"))
+        await self.wait_for(("GuiSliderMessage", "TransformControlsMessage", "GuiUploadButtonMessage"),
+                            timeout=PATIENCE)
         return int(self.find("TransformControlsMessage")["owner"])
 
 
 def _run(coro) -> None:
-    asyncio.run(asyncio.wait_for(coro, 60.0))
+    """Run a scenario (its own waits are bounded and say what they waited for; this bound is the last resort)."""
+    asyncio.run(asyncio.wait_for(coro, 3 * PATIENCE))
+
+
+async def _until(check, what: str) -> None:
+    """Poll ``check`` from the event loop until it is true (an upload arrived, a flood reached the server)."""
+    deadline = time.monotonic() + PATIENCE
+    while not check():
+        assert time.monotonic() < deadline, f"waited {PATIENCE:.0f} s for {what}"
+        await asyncio.sleep(0.01)
 
 
 def _rss_bytes() -> int:
@@ -222,10 +251,7 @@ def test_a_legitimate_upload_arrives_whole():
                 await c.send(_upload_start(button, "t1", len(data), 2))
                 await c.send(_upload_part(button, "t1", 0, data[:524288]))
                 await c.send(_upload_part(button, "t1", 1, data[524288:]))
-                for _ in range(100):
-                    if app.uploads:
-                        break
-                    await asyncio.sleep(0.05)
+                await _until(lambda: app.uploads, "the upload to arrive")
                 assert app.uploads == [data]
 
         _run(scenario())
@@ -256,13 +282,23 @@ def test_forged_uploads_are_refused_without_pinning_memory():
                 # Parts beyond a transfer's declared size are dropped, whatever source they name.
                 await c.send(_upload_part(button, "a", 0, b"x" * 200_000))
                 await c.send({**_upload_part(button, "b", 0, b"x" * 200_000), "source_component_uuid": None})
-                await c.read_until_quiet(0.5)
+
+                def notes() -> list[dict]:
+                    return [m for m in c.messages if m["type"] == "NotificationShowMessage"]
+
+                def handled() -> bool:  # every message above handled, the refusals told to the tab
+                    bodies = [n["props"]["body"] for n in notes()]
+                    return (guards.stats.refused_uploads == 3 and guards.stats.dropped_parts == 802
+                            and any("larger than" in b for b in bodies) and any("uploads at once" in b for b in bodies))
+
+                deadline = time.monotonic() + PATIENCE
+                while not handled():
+                    assert time.monotonic() < deadline, (f"waited {PATIENCE:.0f} s for the forged uploads to be "
+                                                         f"refused and the tab told: {guards.stats}, {notes()}")
+                    await c.read_until_quiet(0.1, limit=1.0)
                 grown = _rss_bytes() - rss0
                 assert grown < 20 * 2**20, f"memory grew by {grown / 2**20:.1f} MB"
-                # The refusals reached the tab as notifications.
-                notes = [m for m in c.messages if m["type"] == "NotificationShowMessage"]
-                assert any("larger than" in n["props"]["body"] for n in notes), notes
-                assert any("uploads at once" in n["props"]["body"] for n in notes), notes
+                # The refusals reached the tab as notifications (awaited above).
 
         _run(scenario())
         assert guards.stats.refused_uploads == 3  # huge, confetti, c
@@ -291,8 +327,8 @@ def test_a_message_over_the_size_limit_closes_only_that_connection():
 # -- floods and disconnects --------------------------------------------------------------------------------------
 
 
-async def _slider_latency(c: RawClient, app: TabApp, *, n: int, spacing: float = 0.05) -> list[float]:
-    """Seconds from sending a slider value to its callback having run, ``n`` times."""
+async def _slider_probes(c: RawClient, app: TabApp, *, n: int, spacing: float = 0.05) -> list[tuple[float, float]]:
+    """``n`` times: when a slider value was sent and when its callback had run (``time.perf_counter``)."""
     uuid = c.find("GuiSliderMessage")["uuid"]
     cid = int(c.find("TransformControlsMessage")["owner"])
     out = []
@@ -305,12 +341,17 @@ async def _slider_latency(c: RawClient, app: TabApp, *, n: int, spacing: float =
                 runs = list(app.slider_runs.get(cid, ()))
             done = next((t for t, v in runs if v == value and t >= t0), None)
             if done is not None:
-                out.append(done - t0)
+                out.append((t0, done))
                 break
-            assert time.perf_counter() - t0 < 10.0, "the tab's callback never ran"
+            assert time.perf_counter() - t0 < PATIENCE, f"waited {PATIENCE:.0f} s for the tab's slider callback"
             await asyncio.sleep(0.0005)
         await asyncio.sleep(spacing)
     return out
+
+
+async def _slider_latency(c: RawClient, app: TabApp, *, n: int, spacing: float = 0.05) -> list[float]:
+    """Seconds from sending a slider value to its callback having run, ``n`` times."""
+    return [done - t0 for t0, done in await _slider_probes(c, app, n=n, spacing=spacing)]
 
 
 async def _flood(c: RawClient, count: int) -> None:
@@ -331,16 +372,18 @@ def flooder_main(port: int, count: int) -> None:
     async def main() -> None:
         async with RawClient.connect(port) as c:
             await c.send(CAMERA)
+            deadline = time.monotonic() + PATIENCE
             while not (c.find("GuiSliderMessage") and c.find("TransformControlsMessage")):
+                assert time.monotonic() < deadline, f"waited {PATIENCE:.0f} s for the flooder's tab to join"
                 await c.read_until_quiet(0.2)
             print("joined", c.find("TransformControlsMessage")["owner"], flush=True)
             await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)
             t0 = time.perf_counter()
             await _flood(c, count)
             print(f"sent {2 * count} in {time.perf_counter() - t0:.2f} s", flush=True)
-            await c.read_until_quiet(1.0, limit=60.0)
+            await c.read_until_quiet(1.0, limit=PATIENCE)
 
-    asyncio.run(asyncio.wait_for(main(), 120.0))
+    asyncio.run(asyncio.wait_for(main(), 3 * PATIENCE))
 
 
 @contextlib.contextmanager
@@ -351,10 +394,11 @@ def flooder(port: int, count: int):
 
     code = (f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); "
             f"import test_server_guard as t; t.flooder_main({port}, {count})")
-    proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    printed = Printed(proc)
     try:
-        line = proc.stdout.readline()
-        assert line.startswith("joined"), line
+        line = printed.wait_line("joined", "the flooding tab to join")
 
         def go() -> None:
             proc.stdin.write("go\n")
@@ -362,24 +406,34 @@ def flooder(port: int, count: int):
 
         yield int(line.split()[1]), go
         proc.stdin.close()
-        proc.wait(60)
+        printed.finish("the flooding tab's process to end")
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(10)
+        printed.kill()
+
+
+MAX_AHEAD = 10
+"""The most of the flooder's callbacks that may run while one of the victim's values waits for its own."""
 
 
 def measure_flood(app: TabApp, port: int, count: int = 5000) -> dict[str, list[float]]:
-    """The victim tab's slider latency idle and while another process floods; the flooder's callback counts."""
+    """The victim tab's slider latency idle and while another process floods; the flooder's callback counts: in
+    all, and while each of the victim's values waited for its callback (``ahead``)."""
     result: dict[str, list[float]] = {}
     with flooder(port, count) as (flood_id, go):
+        def flood_callbacks() -> list[float]:
+            with app.lock:
+                return [t for cid, t in app.callbacks if cid == flood_id]
+
         async def scenario() -> None:
             async with RawClient.connect(port) as victim:
                 await victim.join(app)
                 result["idle"] = await _slider_latency(victim, app, n=10)
                 go()
-                await asyncio.sleep(0.05)
-                result["flooded"] = await _slider_latency(victim, app, n=30)
+                await _until(flood_callbacks, "the flood to reach the server")
+                probes = await _slider_probes(victim, app, n=30)
+                result["flooded"] = [done - t0 for t0, done in probes]
+                ran = flood_callbacks()
+                result["ahead"] = [float(sum(t0 < t < done for t in ran)) for t0, done in probes]
 
         _run(scenario())
     with app.lock:
@@ -392,13 +446,18 @@ def test_a_flooding_tab_does_not_delay_another():
         result = measure_flood(app, server.get_port())
     flooded = sorted(result["flooded"])
     p95 = flooded[int(0.95 * (len(flooded) - 1))]
-    print(f"\nvictim slider latency: idle median {1e3 * statistics.median(result['idle']):.1f} ms; "
+    idle = statistics.median(result["idle"])
+    print(f"\nvictim slider latency: idle median {1e3 * idle:.1f} ms; "
           f"under a 10 000-message flood median {1e3 * statistics.median(flooded):.1f} ms, "
           f"p95 {1e3 * p95:.1f} ms, max {1e3 * flooded[-1]:.1f} ms; the flooder's callbacks ran "
-          f"{result['flood_runs'][0]} times for 10 000 messages")
-    # A frame or two is ~33 ms; the bound is loose because the test machine is shared.
-    assert statistics.median(flooded) < 0.1
-    assert p95 < 0.25
+          f"{result['flood_runs'][0]} times for 10 000 messages, at most {max(result['ahead']):.0f} of them while "
+          f"one of the victim's values waited")
+    # Against this run's own figures, not a number of milliseconds a shared machine may overrun: the victim's
+    # values are answered about as fast as before the flood, and while one waits, the flooder's callbacks do not
+    # run ahead of it (a queue that serves the flood first runs tens of them; taking turns, a few: those already
+    # running, and the flood's messages read before the victim's).
+    assert statistics.median(flooded) < 10 * idle, (result["flooded"], result["idle"])
+    assert max(result["ahead"]) <= MAX_AHEAD, result["ahead"]
     # Latest wins: the flooder's 5 000 + 5 000 events were merged into far fewer callbacks.
     assert result["flood_runs"][0] < 5000
     assert guards.stats.coalesced_events + guards.stats.coalesced_messages > 5000
@@ -450,28 +509,29 @@ def test_fair_executor_runs_one_job_per_tab_and_round_robin():
         with lock:
             running[event.client_id] += 1
             peak[event.client_id] = max(peak[event.client_id], running[event.client_id])
-        gate.wait(5)
+        gate.wait(BLOCKED_S)
         with lock:
             running[event.client_id] -= 1
             order.append((event.client_id, k))
 
     def wait_running(tab: int) -> None:
-        for _ in range(1000):
+        def started() -> bool:
             with lock:
-                if running[tab]:
-                    return
-            time.sleep(0.01)
+                return bool(running[tab])
 
-    futures = [fair.submit(job, _Event(0), 0)]
-    wait_running(0)  # so that exactly 1, 2, 3 wait and 4, 5 are dropped
-    futures += [fair.submit(job, _Event(0), k) for k in range(1, 6)]
-    futures += [fair.submit(job, _Event(1), k) for k in range(2)]
-    wait_running(1)
-    time.sleep(0.05)
-    assert fair.pending() == 4  # 1, 2, 3 of tab 0 and 1 of tab 1 (tab 1's first job is running)
-    gate.set()
+        wait_for(started, f"tab {tab}'s first job to run")
+
+    try:
+        futures = [fair.submit(job, _Event(0), 0)]
+        wait_running(0)  # so that exactly 1, 2, 3 wait and 4, 5 are dropped
+        futures += [fair.submit(job, _Event(0), k) for k in range(1, 6)]
+        futures += [fair.submit(job, _Event(1), k) for k in range(2)]
+        wait_running(1)
+        assert fair.pending() == 4  # 1, 2, 3 of tab 0 and 1 of tab 1 (tab 1's first job is running)
+    finally:
+        gate.set()
     for f in futures:
-        f.result(timeout=5)
+        f.result(timeout=PATIENCE)
     pool.shutdown()
     assert peak == {0: 1, 1: 1}  # one job per tab at a time
     assert stats.dropped_events == 2
@@ -496,20 +556,19 @@ def test_fair_executor_latest_event_replaces_the_waiting_one():
     slider = _Target()
 
     def blocker(event: _Event) -> None:
-        gate.wait(5)
+        gate.wait(BLOCKED_S)
 
     def on_value(event: viser.GuiEvent) -> None:
         seen.append(event.client)  # the test's marker of which event this is
 
-    first = fair.submit(blocker, _Event(7))
-    for k in range(50):
-        fair.submit(on_value, viser.GuiEvent(client=k, client_id=7, target=slider))  # type: ignore[arg-type]
-    gate.set()
-    first.result(timeout=5)
-    for _ in range(200):
-        if not fair.pending():
-            break
-        time.sleep(0.01)
+    try:
+        first = fair.submit(blocker, _Event(7))
+        for k in range(50):
+            fair.submit(on_value, viser.GuiEvent(client=k, client_id=7, target=slider))  # type: ignore[arg-type]
+    finally:
+        gate.set()
+    first.result(timeout=PATIENCE)
+    wait_for(lambda: not fair.pending(), "the tab's waiting job to run")
     pool.shutdown()
     assert seen == [49]  # 50 updates of one handle while the tab was busy: one callback, the newest
     assert stats.coalesced_events == 49

@@ -9,7 +9,6 @@ from __future__ import annotations
 import gc
 import re
 import threading
-import time
 
 import pytest
 import viser
@@ -18,6 +17,9 @@ from egtviz.scene.limits import SERVO_DEMO_STEPS, SERVO_SERVER_FRAMES
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.servo.servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy
 from egtviz.viewer.servo.servo_demo import make_servo_demo
+
+from _threads import joined
+from _waiting import PATIENCE, wait_for
 
 STEPS = 40
 """Steps of the test runs: too few for the pin-hole demo to converge, so each run has STEPS + 1 frames."""
@@ -29,10 +31,7 @@ def clients():
     got = []
     server.on_client_connect(got.append)
     tabs = [FakeTab(server.get_port()) for _ in range(3)]
-    deadline = time.time() + 10
-    while len(got) < 3 and time.time() < deadline:
-        time.sleep(0.02)
-    assert len(got) == 3
+    wait_for(lambda: len(got) == 3, "the 3 headless tabs to connect")
     yield got
     for tab in tabs:
         tab.close()
@@ -89,12 +88,13 @@ def test_a_run_that_does_not_fit_waits_for_frames_and_is_told_why():
 
     thread = threading.Thread(target=wait_for_frames)
     thread.start()
-    time.sleep(0.3)
-    assert not got.is_set() and told == ["The server is busy with 1 other servo run (100 of its 100 frames); this "
-                                         "run needs up to 60; it waits up to 30 s for them."]
+    wait_for(lambda: told, "the waiting run to be told why it waits")
+    assert told == ["The server is busy with 1 other servo run (100 of its 100 frames); this "
+                    "run needs up to 60; it waits up to 30 s for them."]
+    assert not got.is_set() and budget.held(b) == 0  # it waits: nothing reserved for it yet
     budget.shrink(a, 40)  # a's run converged early: the waiting run fits
-    assert got.wait(5.0) and budget.held(b) == 60
-    thread.join()
+    assert got.wait(PATIENCE) and budget.held(b) == 60
+    joined(thread, "the waiting run's thread")
     closed = threading.Event()
     errors = []
 
@@ -107,8 +107,8 @@ def test_a_run_that_does_not_fit_waits_for_frames_and_is_told_why():
     thread = threading.Thread(target=cancelled_wait)
     thread.start()
     closed.set()  # its tab closed
-    thread.join(5.0)
-    assert not thread.is_alive() and "busy with 2 other servo runs" in errors[0]
+    joined(thread, "the cancelled wait to end")
+    assert "busy with 2 other servo runs" in errors[0]
 
 
 def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another_closes(clients, notes):
@@ -118,10 +118,10 @@ def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another
         for client in clients[:2]:
             demo = make_servo_demo(client, "pinhole", steps=STEPS, autoplay=False, budget=budget)
             demos.append(demo)
-            assert demo.wait(60) and demo.result is not None and demo.result.n_samples == STEPS + 1
+            assert demo.wait(PATIENCE) and demo.result is not None and demo.result.n_samples == STEPS + 1
         third = make_servo_demo(clients[2], "pinhole", steps=STEPS, autoplay=False, budget=budget)
         demos.append(third)
-        assert third.wait(30) and not third.running and third.result is None  # refused: nothing simulated
+        assert third.wait(PATIENCE) and not third.running and third.result is None  # refused: nothing simulated
         assert not third.btn_run.disabled
         assert notes[2] == [("Server busy", notes[2][0][1])]
         assert re.search(r"busy with 2 other servo runs .*Try again in a moment", notes[2][0][1])
@@ -130,7 +130,7 @@ def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another
         assert budget.held() == 2 * (STEPS + 1)
         demos[0].close()  # a tab closes: its frames are free
         assert budget.held() == STEPS + 1
-        assert third.run(wait=True) and third.result is not None and third.result.n_samples == STEPS + 1
+        assert third.run(wait=True, timeout=PATIENCE) and third.result is not None and third.result.n_samples == STEPS + 1
         assert budget.held() == 2 * (STEPS + 1)
     finally:
         for demo in demos:
@@ -144,15 +144,15 @@ def test_a_run_replaced_by_a_shorter_one_or_failing_frees_its_frames(clients, no
     budget = ServoBudget(frames=STEPS + 1)
     demo = make_servo_demo(clients[0], "pinhole", steps=STEPS, autoplay=False, budget=budget)
     try:
-        assert demo.wait(60) and budget.held(demo) == STEPS + 1
+        assert demo.wait(PATIENCE) and budget.held(demo) == STEPS + 1
         demo.set_params(steps=10)
-        assert demo.run(wait=True) and budget.held(demo) == 11  # the new run replaced the old one's frames
+        assert demo.run(wait=True, timeout=PATIENCE) and budget.held(demo) == 11  # the new run replaced the old one's frames
 
         def refuse(**kw):
             raise ValueError("the simulation refused it")
 
         monkeypatch.setattr(servo_pinhole_demo, "simulate_pinhole", refuse)
-        assert demo.run(wait=True) and demo.result is None and budget.held(demo) == 0
+        assert demo.run(wait=True, timeout=PATIENCE) and demo.result is None and budget.held(demo) == 0
     finally:
         demo.close()
 
@@ -161,7 +161,7 @@ def test_a_converged_run_keeps_only_the_frames_it_has(clients):
     budget = ServoBudget(frames=SERVO_DEMO_STEPS.high + 1)
     demo = make_servo_demo(clients[0], "pinhole", steps=SERVO_DEMO_STEPS.high, autoplay=False, budget=budget)
     try:
-        assert demo.wait(120) and demo.result is not None and demo.result.converged
+        assert demo.wait(PATIENCE) and demo.result is not None and demo.result.converged
         assert budget.held(demo) == demo.result.n_samples < SERVO_DEMO_STEPS.high
     finally:
         demo.close()
@@ -192,15 +192,13 @@ def test_a_queued_run_says_so_and_runs_when_another_tab_closes(clients, notes):
     first = make_servo_demo(clients[0], "pinhole", steps=STEPS, autoplay=False, budget=budget)
     second = None
     try:
-        assert first.wait(60) and first.result is not None
+        assert first.wait(PATIENCE) and first.result is not None
         second = make_servo_demo(clients[1], "pinhole", steps=STEPS, autoplay=False, budget=budget)
-        deadline = time.time() + 10
-        while "Queued" not in second.status.content and time.time() < deadline:
-            time.sleep(0.02)
+        wait_for(lambda: "Queued" in second.status.content, "the second run to say it is queued")
         assert "Queued: The server is busy with 1 other servo run" in second.status.content
         assert second.running and second.result is None
         first.close()
-        assert second.wait(60) and second.result is not None and second.result.n_samples == STEPS + 1
+        assert second.wait(PATIENCE) and second.result is not None and second.result.n_samples == STEPS + 1
         assert notes[1] == []  # queued, not refused
     finally:
         first.close()

@@ -9,6 +9,8 @@ from egtviz.lessons import LessonRun, ProgressStore, load
 from egtviz.lessons.tasks import TaskContext, parse_task
 from egtviz.scene import SCENES
 
+from _waiting import PATIENCE
+
 INTRINSICS = "03-intrinsics"  # step 1: "focal-pixels", a number in px (800)
 FRAMES = "01-frames-and-poses"
 
@@ -66,7 +68,7 @@ def test_the_panel_says_an_answer_was_not_read_with_no_verdict_and_keeps_the_hin
     try:
         app = EgtvizApp(server, field_delay=0.0, course=True, progress=store, lesson=INTRINSICS)
         tab = FakeTab(server.get_port())
-        (panel,) = app.course.wait_for_tab(LessonPanel)
+        (panel,) = app.course.wait_for_tab(LessonPanel, timeout=PATIENCE)
         panel.learner.value = "Ada"
         row = panel.row("focal-pixels")
         row.answer.value = "900"

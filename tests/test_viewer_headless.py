@@ -20,6 +20,9 @@ import pytest
 from egtviz.scene import default_scene, scene_from_bytes
 from egtviz.viewer.server.headless import start_headless
 
+from _threads import joined
+from _waiting import wait_for
+
 
 def kinds(svg: str, kind: str) -> list[ET.Element]:
     return [el for el in ET.fromstring(svg).iter() if el.get("data-kind") == kind]
@@ -253,10 +256,8 @@ def test_disconnect_drops_the_view():
     try:
         view = views[0]
         fakes[0].close()
-        deadline = time.time() + 5
-        while app.views and time.time() < deadline:
-            time.sleep(0.02)
-        assert not app.views and view.closed
+        wait_for(lambda: not app.views, "the server to drop the closed tab's view")
+        assert view.closed
         # a late gizmo event after the tab left changes nothing
         gizmo = view.scene3d._cams["cam1"]["gizmo"]
         scene = view.model.scene
@@ -278,7 +279,7 @@ def test_concurrent_events_end_in_the_latest_state(tabs):
     for t in threads:
         t.start()
     for t in threads:
-        t.join()
+        joined(t, "an edit's thread")
     final = view.model.scene.camera("cam1").position
     assert [float(x) for x in field.value.split(",")] == pytest.approx(final)
     assert np.allclose(view.scene3d._cams["cam1"]["gizmo"].position, final)
@@ -296,14 +297,17 @@ def test_cli_serve_reports_the_real_port_and_bad_scene(tmp_path, capsys):
     rc = []
     th = threading.Thread(target=lambda: rc.append(serve("127.0.0.1", 0, None, stop_event=stop)))
     th.start()
-    deadline = time.time() + 10
-    out = ""
-    while "running at" not in out and time.time() < deadline:
-        time.sleep(0.05)
-        out += capsys.readouterr().out
+    printed: list[str] = []
+
+    def running() -> bool:
+        printed.append(capsys.readouterr().out)
+        return "running at" in "".join(printed) or not th.is_alive()
+
+    wait_for(running, "serve to say it is running")
     stop.set()
-    th.join(10)
+    joined(th, "serve to stop")
     assert rc == [0]
+    out = "".join(printed)
     port = int(out.split("http://127.0.0.1:")[1].split()[0])
     assert port > 0
 

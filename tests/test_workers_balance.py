@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import socket
-import time
 from collections import Counter
 from pathlib import Path
 
@@ -12,6 +11,8 @@ import pytest
 from egtviz.viewer.server.balance import CLOSED, Dispatcher
 from egtviz.viewer.server.workers import Supervisor, WorkerOptions, worker_of_connection
 
+from _waiting import PATIENCE, wait_for
+
 pytestmark = pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux's /proc")
 
 
@@ -19,30 +20,25 @@ def _where(sup: Supervisor, conns: list[socket.socket]) -> list[int | None]:
     pids = [p for p in sup.pids() if p is not None]
     out: list[int | None] = []
     for conn in conns:
-        pid = None
-        for _ in range(100):  # the worker adopts a handed connection a moment after the supervisor accepted it
-            pid = worker_of_connection(sup.port, conn.getsockname()[1], pids)
-            if pid is not None:
-                break
-            time.sleep(0.02)
-        out.append(pid)
+        port = conn.getsockname()[1]
+        # The worker adopts a handed connection a moment after the supervisor accepted it.
+        wait_for(lambda: worker_of_connection(sup.port, port, pids) is not None,
+                 f"a worker to adopt the connection from port {port}")
+        out.append(worker_of_connection(sup.port, port, pids))
     return out
 
 
 def _settle(sup: Supervisor, want: dict[int, int]) -> None:
     assert sup.dispatcher is not None
-    for _ in range(200):
-        if sup.dispatcher.open_connections() == want:
-            return
-        time.sleep(0.02)
-    assert sup.dispatcher.open_connections() == want
+    wait_for(lambda: sup.dispatcher.open_connections() == want,
+             f"the dispatcher to count {want} open connections")
 
 
 def test_connections_are_split_evenly_and_fill_the_emptier_worker():
     sup = Supervisor(2, 0, WorkerOptions())
     conns: list[socket.socket] = []
     try:
-        sup.start()
+        sup.start(timeout=PATIENCE)
         conns = [socket.create_connection(("127.0.0.1", sup.port)) for _ in range(8)]
         where = _where(sup, conns)
         assert None not in where
@@ -73,26 +69,17 @@ def test_a_dead_worker_is_passed_over():
         alive = dispatcher.channel_for(1)
         dispatcher.mark_ready(0)
         dispatcher.mark_ready(1)
-        for _ in range(100):  # the dispatcher hears the closed channel
-            if 0 not in dispatcher.open_connections():
-                break
-            time.sleep(0.01)
+        wait_for(lambda: 0 not in dispatcher.open_connections(), "the dispatcher to hear the closed channel")
         client = socket.create_connection(listener.getsockname())
         msg, fds, _flags, _addr = socket.recv_fds(alive, 16, 4)
         assert len(fds) == 1
-        for _ in range(100):  # counted by the dispatcher's thread once the send returned
-            if dispatcher.handed:
-                break
-            time.sleep(0.01)
+        # Counted by the dispatcher's thread once the send returned.
+        wait_for(lambda: dispatcher.handed, "the dispatcher to count the connection it handed")
         assert dispatcher.handed == {1: 1}
         with socket.socket(fileno=fds[0]) as handed:
             assert handed.getpeername() == client.getsockname()  # the browser's own connection
         alive.sendall(CLOSED)
-        for _ in range(100):
-            if dispatcher.open_connections() == {1: 0}:
-                break
-            time.sleep(0.01)
-        assert dispatcher.open_connections() == {1: 0}
+        wait_for(lambda: dispatcher.open_connections() == {1: 0}, "the dispatcher to hear the connection closed")
         client.close()
         alive.close()
     finally:

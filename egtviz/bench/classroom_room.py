@@ -195,10 +195,10 @@ async def _drag(tab: _Tab, j: int, tabs: int, seconds: float, rate: float, t0: f
     await tab.send({"type": "TransformControlsDragEndMessage", **base})
 
 
-def _quiet_after(done: asyncio.Event) -> Any:
+def _quiet_after(done: asyncio.Event, quiet_s: float) -> Any:
     def until(tab: _Tab) -> bool:
         last = tab.panels[-1][1] if tab.panels else 0.0
-        return done.is_set() and time.time() - max(last, tab.sends[-1][1] if tab.sends else 0.0) > QUIET_S
+        return done.is_set() and time.time() - max(last, tab.sends[-1][1] if tab.sends else 0.0) > quiet_s
 
     return until
 
@@ -237,7 +237,7 @@ async def _tabs_main(config: dict[str, Any]) -> None:
             await asyncio.gather(*(_drag(t, j, len(draggers), seconds, rate, t0) for j, t in enumerate(draggers)))
             done.set()
 
-        until = _quiet_after(done)
+        until = _quiet_after(done, config.get("quiet_s", QUIET_S))
         for t in followers:
             t.sends = draggers[0].sends  # a follower answers the instructor's sends
         await asyncio.gather(drag_all(), *(t.listen(until) for t in everyone))
@@ -325,7 +325,8 @@ def _line(proc: subprocess.Popen, what: str) -> dict:
     return json.loads(line)
 
 
-def _run(kind: str, workers: int, count: int, seconds: float, rate: float, scene: str | None) -> RoomRun:
+def _run(kind: str, workers: int, count: int, seconds: float, rate: float, scene: str | None,
+         quiet_s: float = QUIET_S) -> RoomRun:
     from ..viewer.server.workers import Supervisor, WorkerOptions, worker_of_connection
 
     sup = Supervisor(workers, 0, WorkerOptions(scene=scene, classroom=kind == "follow"),
@@ -334,6 +335,7 @@ def _run(kind: str, workers: int, count: int, seconds: float, rate: float, scene
     try:
         sup.start()
         config = {"port": sup.port, "mode": kind, "seconds": seconds, "rate": rate, "token": sup.token,
+                  "quiet_s": quiet_s,
                   "tabs": count if kind == "drag" else 1, "followers": count if kind == "follow" else 0}
         proc = _spawn_tabs(config)
         joined = _line(proc, "every tab joined")
@@ -393,15 +395,17 @@ def _lag_summary(kind: str, tabs: list[dict], joined: dict, where: list[int | No
 
 
 def run_drag(workers: int, tabs: int = DRAG_TABS, *, seconds: float = DRAG_SECONDS, rate: float = RATE_HZ,
-             scene: str | None = None) -> RoomRun:
-    """``tabs`` tabs each dragging camera 1 at ``rate`` Hz on ``workers`` workers."""
-    return _run("drag", workers, tabs, seconds, rate, scene)
+             scene: str | None = None, quiet_s: float = QUIET_S) -> RoomRun:
+    """``tabs`` tabs each dragging camera 1 at ``rate`` Hz on ``workers`` workers; a tab stops listening
+    ``quiet_s`` seconds after its last panel (a test on a busy machine gives it longer)."""
+    return _run("drag", workers, tabs, seconds, rate, scene, quiet_s)
 
 
 def run_followers(workers: int, followers: int, *, seconds: float = DRAG_SECONDS, rate: float = RATE_HZ,
-                  scene: str | None = None) -> RoomRun:
-    """One instructor dragging camera 1 at ``rate`` Hz, ``followers`` students following, on ``workers`` workers."""
-    return _run("follow", workers, followers, seconds, rate, scene)
+                  scene: str | None = None, quiet_s: float = QUIET_S) -> RoomRun:
+    """One instructor dragging camera 1 at ``rate`` Hz, ``followers`` students following, on ``workers`` workers;
+    ``quiet_s`` as :func:`run_drag`."""
+    return _run("follow", workers, followers, seconds, rate, scene, quiet_s)
 
 
 def format_room(runs: Sequence[RoomRun]) -> str:

@@ -73,7 +73,7 @@ class RawClient:
         async with websockets.asyncio.client.connect(
             f"ws://127.0.0.1:{port}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")],
             origin=None if origin is None else Origin(origin),
-            max_size=None, open_timeout=5,
+            max_size=None, open_timeout=60,
         ) as ws:
             yield cls(ws)
 

@@ -14,11 +14,16 @@ from websockets.sync.client import connect
 from websockets.typing import Subprotocol
 
 
+#: Seconds a fake tab waits for its connection and :func:`start_headless` for each tab's view: minutes, since a
+#: test on a busy machine is slow but must not fail for it (a broken server still fails, after this bound).
+CONNECT_TIMEOUT = 300.0
+
+
 class FakeTab:
     def __init__(self, port: int) -> None:
         self.ws = connect(
             f"ws://127.0.0.1:{port}", subprotocols=[Subprotocol(f"viser-v{viser.__version__}")], max_size=None,
-            open_timeout=10,
+            open_timeout=CONNECT_TIMEOUT,
         )
         self.received = 0
         self.ws.send(
@@ -71,6 +76,6 @@ def start_headless(scene=None, *, tabs: int = 1, field_delay: float = 0.0):
     views = []
     for k in range(tabs):
         fakes.append(FakeTab(server.get_port()))
-        app.wait_for_view(count=k + 1)
+        app.wait_for_view(count=k + 1, timeout=CONNECT_TIMEOUT)
         views = sorted(app.views.items())
     return server, app, fakes, [v for _, v in views]
