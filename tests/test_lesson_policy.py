@@ -9,6 +9,7 @@ import pytest
 
 from egtviz.bench.viewer import _drag_event
 from egtviz.scene import default_scene
+from egtviz.scene.constraints import CameraRanges
 from egtviz.viewer.workbench.fields import FieldError
 from egtviz.viewer.server.headless import start_headless
 from egtviz.viewer.workbench.lesson_policy import ALLOW_ALL, LessonPolicy
@@ -24,11 +25,8 @@ def view():
 
 
 def test_the_workbench_policy_allows_everything():
-    R = np.eye(3)
     assert ALLOW_ALL.panels("scene", "derived") == ("derived", frozenset())
     assert ALLOW_ALL.refusal("cam1", {"position": (1.0, 2.0, 3.0)}) is None
-    position, R2 = ALLOW_ALL.pose("cam1", np.ones(3), R)
-    assert np.array_equal(position, np.ones(3)) and R2 is R
 
 
 def test_a_policys_field_guard_refuses_a_typed_value_and_the_model_keeps_its_own(view):
@@ -40,8 +38,11 @@ def test_a_policys_field_guard_refuses_a_typed_value_and_the_model_keeps_its_own
     assert view.model.scene.camera("cam1").position == before
 
 
-def test_a_policys_pose_guard_decides_where_a_dragged_camera_goes(view):
-    view.policy = LessonPolicy(pose_guard=lambda camera, position, R: (np.minimum(position, 0.5), R))
+def test_a_dragged_camera_goes_where_the_models_constraints_put_it(view):
+    # No policy hook rewrites a gizmo's pose: the scene model's ranges stop the camera.
+    assert not hasattr(LessonPolicy(), "pose_guard")
+    limit = type("Limit", (), {"low": -1.0, "high": 0.5})
+    view.model.set_constraints(CameraRanges(lambda: {("cam1", "position"): limit}))
     gizmo = view.scene3d.gizmo("cam1")
     view.drag.camera_event("cam1", _drag_event(gizmo, np.array([2.0, 0.25, 3.0])))
     assert view.model.scene.camera("cam1").position == pytest.approx((0.5, 0.25, 0.5))

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..geometry import GeometryError, PinholeCamera
 from ..geometry.camera_model import CAMERA_MODELS
+from ..geometry.poses import Pose
 from .constraints import CameraRanges
 from .derived import Derived, compute_derived
 from .limits import COORDINATE, MAX_POINTS, Range
@@ -277,32 +278,40 @@ class SceneModel:
             new_spec = spec.with_pose(**fields) if drag else spec.with_fields(**fields)
         except (TypeError, GeometryError) as exc:
             raise SceneError(f"camera {name!r}: {exc}") from exc
-        self._place(spec, new_spec, drag, merge_key)
+        self._place(spec, self._allowed(spec, new_spec, drag), merge_key)
 
-    def set_camera_pose(self, name: str, position: Any, R_world: Any, *, drag_id: object = None) -> None:
-        """Place a camera at a world pose (a gizmo drag): the spec holds that pose (its fields show its angles).
+    def set_camera_pose(self, name: str, position: Any, R_world: Any, *, drag_id: object = None,
+                        unmoved: Callable[[Pose, Pose], bool] | None = None) -> bool:
+        """Place a camera at a world pose (a gizmo drag) as the model's ranges allow it; returns whether it moved.
 
-        Successive calls with the same non-None ``drag_id`` (one drag) are one undo step.
-        """
+        The spec holds that pose (its fields show its angles). Calls with the same non-None ``drag_id`` (one drag)
+        are one undo step. Nothing is committed when ``unmoved(current, allowed)`` (a gizmo resends its pose,
+        rounded)."""
         spec = self._scene.camera(name)
         R = np.asarray(R_world, dtype=np.float64)
         if R.shape != (3, 3) or (not math.isfinite(R.sum()) and not np.isfinite(R).all()):
             raise SceneError("R_world: expected a finite 3x3 rotation")
         new_spec = spec.with_world_pose(_triple(position, "position"), R)  # GeometryError: not a rotation
-        self._place(spec, new_spec, True, None if drag_id is None else ("camera", name, drag_id))
+        new_spec = self._allowed(spec, new_spec, True)
+        if unmoved is not None and unmoved(spec.pose, new_spec.pose):
+            return False
+        return self._place(spec, new_spec, None if drag_id is None else ("camera", name, drag_id))
 
-    def _place(self, spec: Any, new_spec: Any, drag: bool, merge_key: object) -> None:
-        """Commit ``new_spec`` in place of ``spec`` (an edit in place), as the model's ranges allow it."""
-        ranges, scene, name = self._ranges, self._scene, spec.name
-        if ranges is not None and not self._has_authority():
-            new_spec = ranges.judge(spec, new_spec, drag=drag)
+    def _allowed(self, spec: Any, new_spec: Any, drag: bool) -> Any:
+        """``new_spec`` in place of ``spec`` as the model's ranges allow it (they do not bind a lesson step)."""
+        ranges = None if self._has_authority() else self._ranges
+        return new_spec if ranges is None else ranges.judge(spec, new_spec, drag=drag)
+
+    def _place(self, spec: Any, new_spec: Any, merge_key: object) -> bool:
+        """Commit ``new_spec``, already allowed, in place of ``spec`` (an edit in place); False: nothing changed."""
+        scene, name = self._scene, spec.name
         if new_spec == spec:
-            return
+            return False
         cameras = tuple(new_spec if c.name == name else c for c in scene.cameras)
         pair = scene.pair
         if new_spec.name == name:
             self._replace(Change("camera", (name,), in_place=True), merge_key, cameras=cameras, pair=pair)
-            return
+            return True
         rename = {name: new_spec.name}
         self._replace(
             Change("camera", (name, new_spec.name), in_place=True), merge_key, cameras=cameras,
@@ -310,6 +319,7 @@ class SceneModel:
             locked=frozenset(rename.get(m, m) for m in scene.locked),
             highlighted=frozenset(rename.get(m, m) for m in scene.highlighted),
         )
+        return True
 
     def add_camera(self, kind: str = PinholeCamera.kind, name: str | None = None, **fields: Any) -> str:
         """Add a camera of a registered model ``kind`` (``egtviz.geometry.CAMERA_MODELS``, e.g. ``"unified"``; a

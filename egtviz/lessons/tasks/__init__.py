@@ -20,7 +20,11 @@ read strictly (:func:`egtviz.lessons.answers.read_number`).
 Every task also has ``id`` (unique in its step), ``prompt``, ``hint`` and optional ``solution`` (a list of
 changes, as in ``[[steps.changes]]``, that solves it from the step's starting scene).
 
+Each task declares what the lesson page needs for it (:attr:`Task.needs`, a :class:`TaskNeeds`: its answer
+widget, the lab or lens it is judged on), so that the page never asks which kind a task is.
+
 One job per module: :mod:`.base` (the :class:`Task` base, its context and result, per-learner draws),
+:mod:`.needs` (what a task needs of the page),
 :mod:`.common` (ranges and scene checks several kinds share), one module per family of kinds
 (:mod:`.questions`, :mod:`.servo`, :mod:`.epipolar`, :mod:`.lens`, :mod:`.cameras`, :mod:`.estimation`) and
 :mod:`.registry` (:data:`TASK_KINDS`, :func:`parse_task`). This package's names below are its public
@@ -49,6 +53,15 @@ from .estimation import SampsonBelowTask as SampsonBelowTask
 from .estimation import TriangulationErrorTask as TriangulationErrorTask
 from .estimation import triangulation_rms as triangulation_rms
 from .lens import PointOnLineTask as PointOnLineTask
+from .needs import ANSWER_WIDGETS as ANSWER_WIDGETS
+from .needs import CHOICE as CHOICE
+from .needs import NO_ANSWER as NO_ANSWER
+from .needs import NUMBER as NUMBER
+from .needs import TEXT as TEXT
+from .needs import AnswerNeeds as AnswerNeeds
+from .needs import LabNeeds as LabNeeds
+from .needs import TaskNeeds as TaskNeeds
+from .needs import number_answer as number_answer
 from .questions import ChoiceTask as ChoiceTask
 from .questions import NumberTask as NumberTask
 from .registry import TASK_KINDS as TASK_KINDS
@@ -56,12 +69,19 @@ from .registry import parse_task as parse_task
 from .servo import ServoNumberTask as ServoNumberTask
 
 __all__ = [
+    "ANSWER_WIDGETS",
+    "CHOICE",
+    "NO_ANSWER",
+    "NUMBER",
     "RESET_ADVICE",
     "TASK_KINDS",
+    "TEXT",
+    "AnswerNeeds",
     "CameraFieldTask",
     "ChoiceTask",
     "EpipoleNearTask",
     "InliersRecallTask",
+    "LabNeeds",
     "LinesParallelTask",
     "NumberTask",
     "Param",
@@ -72,12 +92,14 @@ __all__ = [
     "ServoNumberTask",
     "Task",
     "TaskContext",
+    "TaskNeeds",
     "TaskResult",
     "TriangulationErrorTask",
     "Uniform",
     "XiBetweenTask",
     "camera_xi",
     "direction_spread_deg",
+    "number_answer",
     "parse_task",
     "point_label",
     "rotation_angle_deg",

@@ -24,6 +24,7 @@ from .. import fields
 from ..changes import Change
 from ..errors import EntryError
 from ..servo_runs import DemoRun
+from .needs import NO_ANSWER, TaskNeeds
 
 __all__ = ["RESET_ADVICE", "Param", "Task", "TaskContext", "TaskResult", "Uniform", "read_param", "task_seed"]
 
@@ -143,8 +144,17 @@ class Task:
     table_keys: ClassVar[tuple[str, ...]] = ()
     """The keys of the kind's table besides the common ones (``kind``, ``id``, ``prompt``, ``hint``,
     ``solution``); any other key is refused."""
-    question: ClassVar[bool] = False
-    """Answered by typing (number, choice) rather than by acting in the scene."""
+
+    @property
+    def needs(self) -> TaskNeeds:
+        """What the lesson page shows for this task: its answer widget, the lab or lens it is judged on (nothing
+        by default: a task done in the scene)."""
+        return TaskNeeds()
+
+    @property
+    def question(self) -> bool:
+        """Answered by typing (number, choice) rather than by acting in the scene."""
+        return self.needs.answer.widget != NO_ANSWER
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> Task:  # pragma: no cover - abstract

@@ -22,6 +22,7 @@ from ..errors import EntryError
 from ..mistakes import QUANTITIES, Mistake, Quantity, Where
 from .base import Task, TaskContext, TaskResult
 from .common import POINT_INDEX, TOLERANCE, camera_gone, camera_in, fmt, point_gone, point_in, point_label
+from .needs import NUMBER, TEXT, AnswerNeeds, TaskNeeds
 
 __all__ = ["LINE_SPAN_PX", "ComputedTask", "distance", "typed_text"]
 
@@ -81,7 +82,6 @@ class ComputedTask(Task):
 
     kind: ClassVar[str] = "computed"
     table_keys: ClassVar[tuple[str, ...]] = ("quantity", "camera", "other", "point", "tolerance")
-    question: ClassVar[bool] = True
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> ComputedTask:
@@ -122,6 +122,11 @@ class ComputedTask(Task):
         if len(shape) == 1:
             return f"{shape[0]} numbers in brackets, e.g. [{', '.join([EXAMPLE] * shape[0])}]{tail}{scale}."
         return f"A {shape[0]} x {shape[1]} matrix row by row, e.g. [a, b, c; d, e, f; g, h, i]{scale}."
+
+    @property
+    def needs(self) -> TaskNeeds:
+        widget = NUMBER if self.spec.shape == () else TEXT
+        return TaskNeeds(AnswerNeeds(widget, unit=self.unit, hint=self.answer_format))
 
     @property
     def where(self) -> Where:

@@ -29,6 +29,7 @@ from .common import (
     point_label,
     projective_pair,
 )
+from .needs import LabNeeds, TaskNeeds
 
 __all__ = ["DEFAULT_MIN_PRECISION", "InliersRecallTask", "SampsonBelowTask", "TriangulationErrorTask",
            "default_max_sampson_px2", "held_out_correspondences", "triangulation_rms"]
@@ -124,6 +125,10 @@ class SampsonBelowTask(_LabFitJudged, Task):
     kind: ClassVar[str] = "sampson_below"
     table_keys: ClassVar[tuple[str, ...]] = ("method", "below_px2", "against", "held_out_below_px2", *_LAB_KEYS)
 
+    @property
+    def needs(self) -> TaskNeeds:
+        return TaskNeeds(lab=LabNeeds())
+
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> SampsonBelowTask:
         minimums = _lab_minimums(table)
@@ -178,6 +183,11 @@ class InliersRecallTask(_LabFitJudged, Task):
 
     kind: ClassVar[str] = "inliers_recall"
     table_keys: ClassVar[tuple[str, ...]] = ("method", "at_least", "min_precision", "max_sampson_px2", *_LAB_KEYS)
+
+    @property
+    def needs(self) -> TaskNeeds:
+        # RANSAC whichever robust fit the task judges: the lab's threshold slider is RANSAC's tau.
+        return TaskNeeds(lab=LabNeeds(draws="ransac"))
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> InliersRecallTask:

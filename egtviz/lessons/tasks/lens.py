@@ -11,6 +11,7 @@ from ...scene import Scene
 from .. import fields
 from .base import Param, Task, TaskContext, TaskResult
 from .common import POINT_INDEX, WITHIN_PX, in_pair, pair_gone, point_gone, point_in, point_label
+from .needs import TaskNeeds
 
 __all__ = ["PointOnLineTask"]
 
@@ -26,6 +27,10 @@ class PointOnLineTask(Task):
 
     kind: ClassVar[str] = "point_on_line"
     table_keys: ClassVar[tuple[str, ...]] = ("point", "camera", "within_px")
+
+    @property
+    def needs(self) -> TaskNeeds:
+        return TaskNeeds(lens=True)
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> PointOnLineTask:

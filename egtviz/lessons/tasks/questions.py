@@ -14,6 +14,7 @@ from ..answers import AnswerError, read_number
 from ..errors import EntryError
 from .base import Task, TaskContext, TaskResult
 from .common import ANSWER, TOLERANCE, fmt
+from .needs import CHOICE, AnswerNeeds, TaskNeeds, number_answer
 
 __all__ = ["ChoiceTask", "NumberTask", "compare_number"]
 
@@ -45,7 +46,10 @@ class NumberTask(Task):
 
     kind: ClassVar[str] = "number"
     table_keys: ClassVar[tuple[str, ...]] = ("answer", "tolerance", "unit")
-    question: ClassVar[bool] = True
+
+    @property
+    def needs(self) -> TaskNeeds:
+        return TaskNeeds(number_answer(self.unit))
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> NumberTask:
@@ -69,7 +73,11 @@ class ChoiceTask(Task):
 
     kind: ClassVar[str] = "choice"
     table_keys: ClassVar[tuple[str, ...]] = ("options", "answer", "feedback")
-    question: ClassVar[bool] = True
+
+    @property
+    def needs(self) -> TaskNeeds:
+        # Any choice may be a diagnosis: it is one while the step's lens has a mistake on.
+        return TaskNeeds(AnswerNeeds(CHOICE, options=self.options), diagnosis=True)
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> ChoiceTask:

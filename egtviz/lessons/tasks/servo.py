@@ -12,6 +12,7 @@ from ..errors import EntryError
 from ..servo_runs import MEASURES, DemoRun, measure_run
 from .base import Param, Task, TaskContext, TaskResult
 from .common import TOLERANCE
+from .needs import TaskNeeds, number_answer
 from .questions import compare_number
 
 __all__ = ["ServoNumberTask"]
@@ -31,7 +32,6 @@ class ServoNumberTask(Task):
 
     kind: ClassVar[str] = "servo_number"
     table_keys: ClassVar[tuple[str, ...]] = ("measure", "below", "tolerance")
-    question: ClassVar[bool] = True
 
     @classmethod
     def from_table(cls, table: dict, common: dict[str, Any]) -> ServoNumberTask:
@@ -50,6 +50,10 @@ class ServoNumberTask(Task):
     def unit(self) -> str:
         """The measure's unit (s, steps, deg, cm)."""
         return MEASURES[self.measure].unit
+
+    @property
+    def needs(self) -> TaskNeeds:
+        return TaskNeeds(number_answer(self.unit))
 
     def params(self) -> dict[str, Param]:
         return {"tolerance": self.tolerance, **({"below": self.below} if self.below is not None else {})}

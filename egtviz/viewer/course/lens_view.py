@@ -14,9 +14,9 @@ A working lens gives residuals near zero; a broken one does not.
 The toggles belong to the lesson (:attr:`egtviz.lessons.LessonRun.lens`): a click applies a ``set_lens``
 change through the run, so the lesson's checks see what the panels show.
 
-A step that asks which mistake is on (a ``choice`` task while its lens has a mistake on: a diagnosis) hides
-the lens's settings (:func:`hidden_lens`): the panels show the mistake's effect, and each box shows whether the
-learner switched that step of the computation since the step began, not whether the mistake is on
+A step that asks which mistake is on (a task that declares a possible diagnosis, while its lens has a mistake
+on) hides the lens's settings (:func:`hidden_lens`): the panels show the mistake's effect, and each box shows
+whether the learner switched that step of the computation since the step began, not whether the mistake is on
 (:meth:`~egtviz.scene.lens.LensToggles.switched`). Ticking the box of the hidden mistake repairs the lens.
 """
 
@@ -30,6 +30,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ...lessons import instruments
 from ...lessons.changes import SetLens
 from ...scene import Derived, Scene, SceneError
 from ...scene.derived import with_pair_lines
@@ -63,22 +64,12 @@ class LessonInstruments(Protocol):
 
 
 def hidden_lens(run: Any) -> LensToggles | None:
-    """The lens the current step set, when the step hides it; None when the lens shows its settings.
-
-    A step hides its lens while it asks which mistake is on: it has a ``choice`` task and its lens (the
-    ``set_lens`` changes of the steps so far, replayed) has a mistake on. A run without a lesson hides nothing.
-    """
+    """The lens the current step set, when the step hides it (:func:`egtviz.lessons.instruments.hidden_lens`);
+    None when the lens shows its settings. A run without a lesson hides nothing."""
     lesson, index = getattr(run, "lesson", None), getattr(run, "step_index", None)
-    if lesson is None or not isinstance(index, int) or not 0 <= index < len(lesson.steps):
+    if lesson is None or not isinstance(index, int):
         return None
-    if not any(t.kind == "choice" for t in lesson.steps[index].tasks):
-        return None
-    lens = LensToggles()
-    for step in lesson.steps[: index + 1]:
-        for change in step.changes:
-            if isinstance(change, SetLens):
-                lens = change.applied_to(lens)
-    return lens if lens.any else None
+    return instruments.hidden_lens(lesson, index)
 
 
 def _num(x: float, digits: int = 3) -> str:

@@ -7,24 +7,28 @@ it (gizmos, fields, panels) is the learner's instrument, and the run's checks re
 * the lesson's title, "step k of n" and a progress bar;
 * "previous", "reset step" and "next" (entering a step applies its scene changes through the run);
 * the step's text (Markdown with the formulas as MathML);
-* each task: its prompt, an answer field when the task is a question (a text field for a number, a list of
-  the options for a choice), a "Check" button, the feedback on each attempt and the hint after a failed one;
+* each task: its prompt, the answer widget it declares (:attr:`~egtviz.lessons.tasks.Task.needs`, built by its
+  skin in :mod:`egtviz.viewer.course.answers`), a "Check" button, the feedback on each attempt and the hint
+  after a failed one;
 * the learner's name: progress (the step, the tasks passed) is kept under it in the
   :class:`~egtviz.lessons.ProgressStore`, so a reload, a new tab or a restarted server resumes there;
 * the estimation lab (:mod:`egtviz.viewer.course.lab_view`) or the convention lens (:mod:`egtviz.viewer.course.lens_view`)
-  when the lesson uses them; they draw the panels through the tab's lesson policy's ``panel_filter``;
+  when the lesson uses them (:func:`egtviz.lessons.instruments.lesson_needs`); they draw the panels through the
+  tab's lesson policy's ``panel_filter``;
 * when the step has a servo run (an ``open_demo`` change), its settings and a button that opens that demo
   with them in this tab (the demo's *Back* button returns to the lesson, at the same step).
 
-A ``set_range`` change of a step limits a camera field: the tab's lesson policy (``field_guard``) refuses a typed value
-outside it (the field reverts, with the range in the message, in the field's own unit), the panel lists it,
-and a task is not checked while the scene breaks it (a script may still move a camera out of a range). A
-gizmo drag cannot (:func:`pose_within_ranges`, the lesson policy's ``pose_guard``): a ``position`` range stops the camera at its edge,
-each coordinate clamped like a mechanical stop; under a ``ypr_deg`` range the camera keeps the last
-orientation that respected it. The gizmo follows the pointer while it is held and shows the applied pose when
-the drag ends. The browser's own gizmo limits (viser's ``translation_limits``, ``rotation_limits``) are not
-used: they bound the offset along each of the gizmo's own, rotated, axes accumulated since the gizmo was
-drawn, not the camera centre's world coordinates, and a pose the server sets does not reset them.
+A ``set_range`` change of a step limits a camera field. The rule is the scene's
+(:class:`~egtviz.scene.constraints.CameraRanges`, :func:`lesson_ranges` words it as the GUI fields): the model
+holds it for every edit, the tab's lesson policy (``field_guard``) asks it so that a typed value outside is
+refused with the range in the field's own unit (the field reverts), the panel lists the ranges, and a task is
+not checked while the scene breaks them (:func:`range_refusal`: a script may still move a camera out of a
+range). A gizmo drag is not refused but stopped, by the model, once per update: a ``position`` range stops the
+camera at its edge, each coordinate clamped like a mechanical stop; under a ``ypr_deg`` range the camera keeps
+the last orientation that respected it. The gizmo follows the pointer while it is held and shows the applied
+pose when the drag ends. The browser's own gizmo limits (viser's ``translation_limits``, ``rotation_limits``)
+are not used: they bound the offset along each of the gizmo's own, rotated, axes accumulated since the gizmo
+was drawn, not the camera centre's world coordinates, and a pose the server sets does not reset them.
 
 A lock is the scene model's (it refuses every edit of a locked pose); a check also fails, with *reset step*
 as the way back, when a camera locked at the step's start (the model's undo barrier) has gone or moved
@@ -44,25 +48,25 @@ from typing import Any
 import numpy as np
 
 from ...lessons import Lesson, LessonRun, ProgressStore
-from ...lessons.answers import EXAMPLE
-from ...lessons.changes import RANGED_FIELDS, SetLab, SetLens, SetRange
+from ...lessons.changes import RANGED_FIELDS
+from ...lessons.instruments import lesson_needs
 from ...lessons.progress import LearnerNameError, learner_key
 from ...lessons.runner import ResolvedTask
-from ...lessons.tasks import RESET_ADVICE, ChoiceTask
+from ...lessons.tasks import RESET_ADVICE
 from ...scene import SceneError
 from ...scene.constraints import CameraRanges
 from ..workbench.camera_fields import field_of_spec
-from ..workbench.fields import MAX_FIELD_CHARS, Debouncer, FieldError, NumberRule, format_number, on_event
+from ..workbench.fields import Debouncer, FieldError, NumberRule, format_number, on_event
+from .answers import answer_widget
+from .answers.choice import CHOOSE
 from .progress_notice import progress_notice_html, show_name_in_use
 from ..workbench.lesson_policy import LessonPolicy
 
 __all__ = [
-    "CHOOSE", "HELD_NAME_HINT", "LessonPanel", "StepNav", "TaskRow", "field_range_refusal", "lesson_instruments",
+    "CHOOSE", "HELD_NAME_HINT", "LessonPanel", "StepNav", "TaskRow", "lesson_instruments", "lesson_ranges",
     "lock_refusal", "pose_within_ranges", "range_refusal", "refuse_held_name", "typed_learner_key",
 ]
 
-#: The choice field's value before the learner picks an option.
-CHOOSE = "(choose an answer)"
 #: The step buttons, in their group's order.
 STEP_BUTTONS = ("previous", "reset step", "next")
 #: Where the lesson's folders sit in the control panel (viser puts smaller orders first; the workbench's own
@@ -73,31 +77,18 @@ LENS_ORDER = -80.0
 MATH_CSS = ('<style>math[display="block"]{max-width:100%;overflow-x:auto;overflow-y:hidden;'
             "font-size:0.92em;padding:0.35em 0 0.2em}</style>")
 DEMO_TITLES = {"pinhole": "the pin-hole demo (Puma 560)", "panoramic": "the panoramic demo (mobile robot)"}
-LAB_TASKS = frozenset({"sampson_below", "inliers_recall"})
-LENS_TASKS = frozenset({"point_on_line"})
-#: A value this close to a range (relative to the larger of 1 and the bounds' magnitudes) counts as inside it: a
-#: pose's angles come back from its rotation matrix up to ~1e-14 off (a camera left at yaw 30 reads 30.000000000000004).
-RANGE_SLACK = 1e-9
 
 
 def lesson_instruments(lesson: Lesson) -> tuple[bool, bool]:
     """``(lab, lens)``: whether the lesson uses the estimation lab, the convention lens (its changes or tasks)."""
-    changes = [c for s in lesson.steps for c in s.changes]
-    kinds = {t.kind for s in lesson.steps for t in s.tasks}
-    lab = any(isinstance(c, SetLab) for c in changes) or bool(kinds & LAB_TASKS)
-    lens = any(isinstance(c, SetLens) for c in changes) or bool(kinds & LENS_TASKS)
-    return lab, lens
+    needs = lesson_needs(lesson)
+    return needs.lab, needs.lens
 
 
 def range_refusal(run: LessonRun) -> str | None:
     """Why the scene breaks the step's ``set_range`` limits (a camera field outside its range), or None."""
-    scene = run.model.scene
-    for camera in scene.camera_names:
-        spec = scene.camera(camera)
-        refusal = field_range_refusal(run, camera, {f: getattr(spec, f, None) for c, f in run.ranges if c == camera})
-        if refusal is not None:
-            return refusal + "; bring it back into that range and check again."
-    return None
+    refusal = lesson_ranges(lambda: run).scene_refusal(run.model.scene)
+    return None if refusal is None else refusal + "; bring it back into that range and check again."
 
 
 def lock_refusal(run: LessonRun) -> str | None:
@@ -154,56 +145,38 @@ def _range_terms(run: LessonRun, camera: str, field: str) -> _RangeTerms:
     return _RangeTerms(label, NumberRule(label, unit, lo, hi), convert, lo, hi)
 
 
-def field_range_refusal(run: LessonRun, camera: str, fields: dict[str, Any]) -> str | None:
-    """Why new values of ``camera``'s spec ``fields`` break the step's ``set_range`` limits, or None (the tab's
-    ``field_guard``: the field is refused and reverts). The message uses the GUI field's words and unit (the
-    focal length in mm, the pixel size in µm), as the field the learner types in."""
-    for field, value in sorted(fields.items()):
-        limit = run.ranges.get((camera, field))
-        if limit is None:
-            continue
-        values = value if isinstance(value, tuple) else (value,)
-        if any(not isinstance(v, (int, float)) or not _inside(limit, float(v)) for v in values):
-            terms = _range_terms(run, camera, field)
-            rule = terms.rule
-            shown = ", ".join(rule.with_units(terms.convert(float(v))) for v in values if isinstance(v, (int, float)))
-            return (f"In this step {camera}'s {terms.label} must stay between {rule.with_units(terms.lo)} and "
-                    f"{rule.with_units(terms.hi)} (it is {shown})")
-    return None
+def _range_words(run: LessonRun, camera: str, fields: dict[str, Any]) -> str:
+    """A breach of the step's ``set_range`` limit of ``camera``'s field (``fields``: that field and its value) in
+    the GUI field's words and unit (the focal length in mm, the pixel size in µm), as the learner types it."""
+    ((field, value),) = fields.items()
+    terms = _range_terms(run, camera, field)
+    rule = terms.rule
+    values = value if isinstance(value, tuple) else (value,)
+    shown = ", ".join(rule.with_units(terms.convert(float(v))) for v in values if isinstance(v, (int, float)))
+    return (f"In this step {camera}'s {terms.label} must stay between {rule.with_units(terms.lo)} and "
+            f"{rule.with_units(terms.hi)} (it is {shown})")
 
 
-def _inside(limit: SetRange, value: float) -> bool:
-    """Whether ``value`` is in ``limit.low..limit.high``, up to :data:`RANGE_SLACK`."""
-    slack = RANGE_SLACK * max(1.0, abs(limit.low), abs(limit.high))
-    return limit.low - slack <= value <= limit.high + slack
+def lesson_ranges(run: Callable[[], LessonRun]) -> CameraRanges:
+    """The step's ``set_range`` limits as the scene's constraints, worded as the GUI fields (``run()``: the run
+    whose current step holds them)."""
+    return CameraRanges(lambda: run().ranges, lambda camera, fields: _range_words(run(), camera, fields))
 
 
 def pose_within_ranges(run: LessonRun, camera: str, position: np.ndarray,
                        R_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    r"""The pose a gizmo drag gives ``camera`` under the step's ``set_range`` limits (the lesson policy's ``pose_guard``).
-
-    Args:
-        run: the lesson run (its ``ranges`` and its model's scene).
-        camera: a camera of the run's scene.
-        position: ``(3,)`` the camera centre the gizmo sent, world coordinates.
-        R_world: ``(3, 3)`` the pose rotation the gizmo sent.
+    """The pose the scene's constraints give ``camera`` when a gizmo sends ``(position, R_world)`` under the
+    step's ``set_range`` limits: what the model applies to that drag (:meth:`CameraRanges.judge`), as a pose.
 
     Returns:
-        ``(position, R_world)`` to apply. Under a ``position`` range ``[low, high]`` each coordinate is clamped,
-        :math:`t_i \leftarrow \min(\max(t_i, \mathrm{low}), \mathrm{high})`: the nearest point of the
-        allowed box, so the camera stops at its edge and still slides along it. Under a ``ypr_deg`` range the
-        sent rotation is kept if its yaw, pitch and roll are all in the range, else the camera's current one
-        (during a drag, the last sent rotation that respected the range). Clamping each angle on its own would not stop the camera: an angle
-        wraps at 180 degrees, so a yaw dragged past 180 in a range ``-30..30`` would jump from 30 to -30.
+        ``(position, R_world)``: the centre clamped into a ``position`` range (the nearest point of the box); the
+        sent rotation itself, or the camera's current one when the sent one leaves a ``ypr_deg`` range.
     """
     spec = run.model.scene.camera(camera)
-    limit = run.ranges.get((camera, "position"))
-    if limit is not None:
-        position = np.clip(np.asarray(position, float), limit.low, limit.high)
-    limit = run.ranges.get((camera, "ypr_deg"))
-    if limit is not None and not all(_inside(limit, a) for a in spec.ypr_from_world_rotation(R_world)):
-        R_world = spec.camera().pose.R
-    return position, R_world
+    sent = spec.with_world_pose(tuple(np.asarray(position, float).tolist()), R_world)
+    allowed = lesson_ranges(lambda: run).judge(spec, sent, drag=True)
+    kept = np.array_equal(allowed.pose.R, sent.pose.R)
+    return np.array(allowed.position), R_world if kept else allowed.pose.R
 
 
 def typed_learner_key(name: Any) -> str:
@@ -254,42 +227,21 @@ def _feedback_markdown(passed: bool, feedback: str, hint: str | None, *, unread:
 
 
 class TaskRow:
-    """One task of the step in the panel: prompt, answer field, Check button, feedback."""
+    """One task of the step in the panel: prompt, the answer widget the task declares, Check button, feedback."""
 
     def __init__(self, gui: Any, number: int, resolved: ResolvedTask, *, passed_before: bool) -> None:
-        task = resolved.task
-        self.task_id = task.id
+        self.task_id = resolved.task.id
         self.number = number
         self.prompt = gui.add_markdown(f"**Task {number}.** {resolved.prompt_html}")
-        self.answer: Any = None
-        self.options: tuple[str, ...] = ()
-        if isinstance(task, ChoiceTask):  # the only task kind "choice"
-            self.options = tuple(task.options)
-            self.answer = gui.add_dropdown(f"answer {number}", (CHOOSE, *self.options), initial_value=CHOOSE)
-        elif task.question:
-            unit = getattr(task, "unit", "")
-            self.answer = gui.add_text(f"answer {number}" + (f" ({unit})" if unit else ""), "",
-                                       hint=getattr(task, "answer_format", None)
-                                       or f"One number, e.g. {EXAMPLE}" + (f", in {unit} (the unit may follow it)"
-                                                                           if unit else "") + ".")
+        self.widget = answer_widget(gui, f"answer {number}", resolved.task.needs.answer)
+        #: The GUI handle the learner answers in (None: the task is done in the scene).
+        self.answer: Any = self.widget.field
         self.button = gui.add_button(f"Check task {number}")
         self.feedback = gui.add_markdown("\u2713 passed before." if passed_before else "")
 
     def answer_text(self) -> str | None:
         """The learner's answer, checked for what the page can send (None: the task asks no question)."""
-        if self.answer is None:
-            return None
-        value = self.answer.value
-        if not isinstance(value, str):
-            raise FieldError(f"answer {self.number}: expected text, got {type(value).__name__}")
-        if len(value) > MAX_FIELD_CHARS:
-            raise FieldError(f"answer {self.number}: at most {MAX_FIELD_CHARS} characters, got {len(value)}")
-        if self.options:
-            if value == CHOOSE:
-                return ""
-            if value not in self.options:  # a raw client can send any string
-                raise FieldError(f"answer {self.number}: not one of the options")
-        return value
+        return self.widget.text()
 
 
 class StepNav:
@@ -321,6 +273,8 @@ class LessonPanel:
             raise SceneError("the lesson's scene could not be drawn in this tab")
         self.view = view
         self.run = run
+        #: The step's ranges as the scene's constraints: the model and the typed fields ask them.
+        self.constraints = lesson_ranges(lambda: self.run)
         self.progress = progress
         self._on_learner = on_learner
         #: ``may_enter(lesson, step)``: whether "next" may open that step (a class's pacing); None: always.
@@ -357,28 +311,24 @@ class LessonPanel:
                                             hint="Your progress is kept under this name: type it again in any tab, "
                                                  "or after a restart, to resume where you were.")
                 self.btn_back = gui.add_button("Back to the course") if on_back is not None else None
-            use_lab, use_lens = lesson_instruments(lesson)
+            needs = lesson_needs(lesson)
             panel_filter = None
-            if use_lab:
+            if needs.lab:
                 from .lab_view import LabPanel
 
                 self.lab = LabPanel(client, run, redraw=view.redraw, report=view.report, order=LAB_ORDER,
-                                    drawn="ransac" if any(t.kind == "inliers_recall" for s in lesson.steps
-                                                          for t in s.tasks) else "normalized")
+                                    drawn=needs.lab_draws)
                 panel_filter = self.lab.panel_filter
-            elif use_lens:
+            elif needs.lens:
                 from .lens_view import LensPanel
 
                 self.lens = LensPanel(gui, run, redraw=view.redraw, report=view.report, order=LENS_ORDER)
                 panel_filter = self.lens.panel_filter
-            view.policy = LessonPolicy(
-                panel_filter=panel_filter,
-                field_guard=lambda camera, fields: field_range_refusal(self.run, camera, fields),
-                pose_guard=lambda camera, position, R: pose_within_ranges(self.run, camera, position, R),
-                display=lambda: self.run.step.display)
-            # The model holds the ranges too, for every route into it (a raw client message, a script).
-            view.model.set_constraints(CameraRanges(lambda: self.run.ranges,
-                                                    lambda camera, fields: field_range_refusal(self.run, camera, fields)))
+            # The model holds the ranges, for every route into it (a gizmo, a raw client message, a script); a typed
+            # field asks them first (the policy's field_guard) so that its refusal says the range and nothing else.
+            view.model.set_constraints(self.constraints)
+            view.policy = LessonPolicy(panel_filter=panel_filter, field_guard=self.constraints.refusal,
+                                       display=lambda: self.run.step.display)
             self._show_step()
             view.redraw()
         self._on(self.nav.buttons.on_click, lambda e: self._navigate(e.target.value))

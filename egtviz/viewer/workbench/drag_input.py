@@ -2,7 +2,8 @@
 
 viser runs callbacks in a thread pool, so a gizmo's events can arrive out of order: an event older than one already
 applied is dropped. A drag's ``start`` opens a new drag id; every update of that drag merges into one undo step.
-The pose a camera gizmo sent passes through the tab's lesson policy before the model sees it.
+The pose a camera gizmo sent goes to the scene model as sent: the model's constraints (a lesson's ranges) decide
+where the camera goes, once (:mod:`egtviz.scene.constraints`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ...geometry import GeometryError
-from ...geometry.poses import matrix_from_quat_wxyz
+from ...geometry.poses import Pose, matrix_from_quat_wxyz
 from ...scene import SceneError
 
 if TYPE_CHECKING:
@@ -25,6 +26,11 @@ __all__ = ["DragInput"]
 def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:
     """``np.allclose(a, b, atol=atol)`` (rtol 1e-5) without its per-call overhead (runs on every drag event)."""
     return bool((np.abs(a - b) <= atol + 1e-5 * np.abs(b)).all())
+
+
+def _unmoved(current: Pose, allowed: Pose) -> bool:
+    """Whether a gizmo's pose, as the model allows it, is where the camera is (the gizmo resends it rounded)."""
+    return _allclose(current.t, allowed.t, 1e-9) and _allclose(current.R, allowed.R, 1e-9)
 
 
 def _position(target: Any, who: str) -> np.ndarray:
@@ -90,14 +96,11 @@ class DragInput:
             R = matrix_from_quat_wxyz(target.wxyz)
         except GeometryError as exc:
             raise SceneError(f"{name}: the gizmo sent an orientation that is not a rotation ({exc})") from exc
-        position = _position(target, name)
-        position, R = self.view.policy.pose(name, position, R)  # whatever the browser sent: what the lesson allows
-        pose = model.scene.camera(name).camera().pose  # the spec's cached camera: no new Pose
-        if _allclose(pose.t, position, 1e-9) and _allclose(pose.R, R, 1e-9):
-            if phase == "end":  # nothing moved since the last update: just resync the fields
-                self.view.redraw_now()
-            return
-        model.set_camera_pose(name, tuple(position), R, drag_id=self._seq.get(name))
+        # The model applies its ranges to whatever the browser sent: the pose may stop short of the pointer.
+        moved = model.set_camera_pose(name, tuple(_position(target, name)), R, drag_id=self._seq.get(name),
+                                      unmoved=_unmoved)
+        if not moved and phase == "end":  # put the gizmo (perhaps past a range's stop) and the fields on the camera
+            self.view.redraw_now()
 
     def point_event(self, index: int, event: Any) -> None:
         """A point gizmo moved; its drag's start selects the point."""

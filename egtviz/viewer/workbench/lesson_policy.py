@@ -1,8 +1,9 @@
 """What a lesson allows in a workbench tab: one policy object instead of three loose hooks.
 
-A lesson view supplies a :class:`LessonPolicy` (its convention lens or estimation lab's panel filter, its narrower
-field ranges, its gizmo pose ranges); the plain workbench uses :data:`ALLOW_ALL`, which draws the model's geometry
-and allows every edit the scene model accepts.
+A lesson view supplies a :class:`LessonPolicy` (its convention lens or estimation lab's panel filter, the refusal
+of a typed value outside the step's ranges, what the step's panels show); the plain workbench uses
+:data:`ALLOW_ALL`, which draws the model's geometry and allows every edit the scene model accepts. A gizmo's pose
+has no hook here: the scene model's constraints decide where a dragged camera goes (:mod:`egtviz.scene.constraints`).
 """
 
 from __future__ import annotations
@@ -12,8 +13,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from ...lessons.display import PanelDisplay, thin_lines
 from ...scene import Scene
 from ..render.panel_view import ViewBox
@@ -22,14 +21,12 @@ from ..render.panels import PanelView
 if TYPE_CHECKING:
     from ...scene.derived import Derived
 
-__all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter", "PoseGuard"]
+__all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter"]
 
 #: ``panel_filter(scene, derived) -> (derived for the panels, point indices to ring)``.
 PanelFilter = Callable[[Scene, Any], tuple[Any, frozenset[int]]]
 #: ``field_guard(camera, spec_fields) -> refusal message or None``.
 FieldGuard = Callable[[str, dict[str, Any]], str | None]
-#: ``pose_guard(camera, position, R_world) -> (position, R_world)``.
-PoseGuard = Callable[[str, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True)
@@ -41,15 +38,12 @@ class LessonPolicy:
             convention lens or estimation lab). The 3D view and the read-out always show the model's.
         field_guard: asked before a camera field's new value is committed; a refusal reverts the field with
             that message.
-        pose_guard: turns the pose a gizmo sent into the pose to apply (one inside the lesson's ranges); the
-            gizmo shows the applied pose when the drag ends.
         display: the current step's :class:`~egtviz.lessons.display.PanelDisplay` (how many epipolar lines,
             which point numbers, which view per camera).
     """
 
     panel_filter: PanelFilter | None = None
     field_guard: FieldGuard | None = None
-    pose_guard: PoseGuard | None = None
     #: ``display() -> PanelDisplay``: what the current step lets the panels show (lines, numbers, views).
     display: Callable[[], PanelDisplay] | None = None
 
@@ -84,10 +78,6 @@ class LessonPolicy:
     def refusal(self, camera: str, fields: dict[str, Any]) -> str | None:
         """Why ``camera`` may not take ``fields`` now, or None when it may."""
         return None if self.field_guard is None else self.field_guard(camera, fields)
-
-    def pose(self, camera: str, position: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The pose to apply when a gizmo sent ``(position, R)`` for ``camera``."""
-        return (position, R) if self.pose_guard is None else self.pose_guard(camera, position, R)
 
 
 #: The plain workbench's policy: the model's geometry in the panels, every edit the model accepts.
