@@ -206,10 +206,10 @@ def test_a_viewer_drag_update_checks_only_the_dragged_pose(monkeypatch):
         view = views[0]
         gizmo = view.scene3d._cams["cam1"]["gizmo"]
         start = np.array(gizmo.position, float)
-        view._camera_gizmo_event("cam1", _drag_event(gizmo, start + [0.002, 0.0, 0.0]))  # warm
+        view.drag.camera_event("cam1", _drag_event(gizmo, start + [0.002, 0.0, 0.0]))  # warm
         before = view.model.scene.camera("cam1").position
         counter = _Counter(monkeypatch)
-        view._camera_gizmo_event("cam1", _drag_event(gizmo, start + [0.004, 0.0, 0.0]))
+        view.drag.camera_event("cam1", _drag_event(gizmo, start + [0.004, 0.0, 0.0]))
         assert view.model.scene.camera("cam1").position != before  # the drag was applied and drawn
         # One conversion of each kind: the gizmo's quaternion from the browser (matrix_from_quat_wxyz).
         assert counter.count("to_float64") == 1 and counter.count("_refuse_non_finite_or_huge") == 1

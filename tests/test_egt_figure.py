@@ -520,7 +520,7 @@ def test_the_server_starts_once_prints_its_url_once_and_tabs_show_the_current_fi
         with pytest.warns(RuntimeWarning):
             ef.draw("hologram")
         assert ef.flush(PATIENCE)
-        assert view.title.content.count('data-egtviz="figure-message"') == 1  # the reason, under the title
+        assert view.controls.title.content.count('data-egtviz="figure-message"') == 1  # the reason, under the title
         figure(2)
         assert ef.flush(PATIENCE)
         assert view.model.scene.title == "Figure 2" and not view.model.scene.cameras

@@ -76,7 +76,7 @@ def zoom_step_tab(tmp_path):
 def test_a_typed_focal_length_outside_the_steps_range_is_refused_in_mm(zoom_step_tab, typed, shown):
     panel, told = zoom_step_tab
     before = panel.view.model.scene.camera("cam1").focal_length
-    panel.view._cam_fields["cam1"]["focal"].value = typed
+    panel.view.cameras["cam1"].fields["focal"].value = typed
     assert panel.view.model.scene.camera("cam1").focal_length == before
     assert told == [("Value refused", f"In this step cam1's focal length must stay between 2 mm and 50 mm (it is "
                                       f"{shown})")]
@@ -89,12 +89,12 @@ def test_a_pixel_size_range_is_said_in_micrometres_with_its_bounds_in_order(zoom
     panel, told = zoom_step_tab
     panel.run.apply(SetRange("cam1", "pixels_per_metre", 50_000.0, 200_000.0))  # pixels of 5 to 20 µm
     before = panel.view.model.scene.camera("cam1").pixels_per_metre
-    panel.view._cam_fields["cam1"]["pixel"].value = "1, 1"
+    panel.view.cameras["cam1"].fields["pixel"].value = "1, 1"
     expected = "In this step cam1's pixel size must stay between 5 µm and 20 µm (it is 1 µm, 1 µm)"
     assert told == [("Value refused", expected)]
     with pytest.raises(SceneError) as info:  # a raw edit (a script, a client message) hears the same words
         panel.view.model.update_camera("cam1", pixels_per_metre=(1e6, 1e6))
     assert str(info.value) == expected
     assert panel.view.model.scene.camera("cam1").pixels_per_metre == before
-    panel.view._cam_fields["cam1"]["pixel"].value = "8, 8"  # inside the range: taken
+    panel.view.cameras["cam1"].fields["pixel"].value = "8, 8"  # inside the range: taken
     assert panel.view.model.scene.camera("cam1").pixels_per_metre == pytest.approx((125_000.0, 125_000.0))

@@ -133,7 +133,7 @@ def test_the_workbench_adds_a_fisheye_and_draws_its_epipolar_curves_through_the_
     server, _app, fakes, views = start_headless(default_scene())
     try:
         view = views[0]
-        view.add_buttons["fisheye"].value = True  # the workbench's "Add equidistant fisheye camera"
+        view.controls.add_buttons["fisheye"].value = True  # the workbench's "Add equidistant fisheye camera"
         (name,) = [c.name for c in view.model.scene.cameras if c.model_kind == "fisheye"]
         assert view.scene3d._cams[name]["lens"].visible
         view.model.set_pair("cam1", name)
@@ -147,7 +147,7 @@ def test_the_workbench_adds_a_fisheye_and_draws_its_epipolar_curves_through_the_
         for i in np.flatnonzero(ip.visible):
             (arc,) = ip.conics[i]
             assert distance_to_polyline(ip.points[i], arc) < 0.05
-        assert {"position", "ypr"} <= set(view._cam_fields[name]) and len(view._cam_fields[name]) >= 5
+        assert {"position", "ypr"} <= set(view.cameras[name].fields) and len(view.cameras[name].fields) >= 5
     finally:
         for f in fakes:
             f.close()

@@ -173,7 +173,7 @@ def test_safe_callback_reports_instead_of_raising():
 )
 def test_bad_field_text_is_refused_in_the_fields_units_and_reverted(tab, key, text, message):
     app, fake, view = tab
-    field = view._cam_fields["cam1"][key]
+    field = view.cameras["cam1"].fields[key]
     shown, scene, rev = field.value, view.model.scene, view.revision
     field.value = text
     assert view.model.scene is scene and view.revision == rev
@@ -183,8 +183,8 @@ def test_bad_field_text_is_refused_in_the_fields_units_and_reverted(tab, key, te
 
 def test_a_panoramic_field_names_its_camera(tab):
     app, fake, view = tab
-    view.btn_add_pano.value = True
-    f = view._cam_fields["pano1"]
+    view.controls.add_buttons["hyperbolic"].value = True
+    f = view.cameras["pano1"].fields
     f["b"].value = "0"
     assert view.notes[-1] == ("Value refused", "pano1: b must be between 0.001 m and 100 m, got 0 m")
     assert f["b"].value == "1"
@@ -196,16 +196,16 @@ def test_a_panoramic_field_names_its_camera(tab):
 def test_a_limit_across_fields_is_reported_in_the_fields_terms(tab):
     """Each field in range, but focal length / pixel size = 10 m / 0.1 um is 1e8 px, over the scene's limit."""
     app, fake, view = tab
-    f = view._cam_fields["cam1"]
+    f = view.cameras["cam1"].fields
     f["focal"].value = "10000"
     f["pixel"].value = "0.1, 0.1"
     assert view.notes[-1] == ("Value refused", "cam1: focal length in pixels (focal length / pixel size) must be "
                                                "between 1 px and 1000000 px, got 100000000 px")
     assert f["pixel"].value == "10, 10" and view.model.scene.camera("cam1").pixels_per_metre == (1e5, 1e5)
-    view.btn_add_pano.value = True
-    view._cam_fields["pano1"]["b"].value = "0.01"  # a = 3: b / a = 0.0033
+    view.controls.add_buttons["hyperbolic"].value = True
+    view.cameras["pano1"].fields["b"].value = "0.01"  # a = 3: b / a = 0.0033
     assert view.notes[-1] == ("Value refused", "pano1: b / a must be between 0.01 and 100, got 0.00333333")
-    assert view._cam_fields["pano1"]["b"].value == "1"
+    assert view.cameras["pano1"].fields["b"].value == "1"
 
 
 def test_a_value_the_model_refuses_at_commit_reverts_the_field(tab, monkeypatch):
@@ -221,7 +221,7 @@ def test_a_value_the_model_refuses_at_commit_reverts_the_field(tab, monkeypatch)
         return real(scene)
 
     monkeypatch.setattr(model_module, "compute_derived", undrawable_at_9mm)
-    field = view._cam_fields["cam1"]["focal"]
+    field = view.cameras["cam1"].fields["focal"]
     field.value = "9"
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
     assert field.value == "8"
@@ -234,7 +234,7 @@ def test_a_value_the_model_refuses_at_commit_reverts_the_field(tab, monkeypatch)
 def test_numbers_left_as_shown_keep_their_full_precision(tab):
     app, fake, view = tab
     before = view.model.scene.camera("cam1").ypr_deg
-    field = view._cam_fields["cam1"]["ypr"]
+    field = view.cameras["cam1"].fields["ypr"]
     yaw, pitch, _ = field.value.split(", ")
     assert float(yaw) != before[0]  # the field shows six digits of 20.556045...
     field.value = f"{yaw}, {pitch}, 5"
@@ -249,7 +249,7 @@ def test_typing_partial_text_commits_only_the_final_value():
     server, app, fakes, views = start_headless(default_scene(), field_delay=1.0)
     try:
         view = record_notes(views[0])
-        field = view._cam_fields["cam1"]["focal"]
+        field = view.cameras["cam1"].fields["focal"]
         for text in ("0", "0.", "0.5"):  # keystrokes of "0.5": "0" alone would be refused
             field.value = text
             time.sleep(0.02)
@@ -271,28 +271,28 @@ def test_typing_partial_text_commits_only_the_final_value():
 
 def test_points_count_is_enforced_by_the_server(tab):
     app, fake, view = tab
-    view.n_points.value = str(limits.MAX_POINTS + 1)
+    view.controls.n_points.value = str(limits.MAX_POINTS + 1)
     assert view.notes[-1][1] == f"how many points must be between 0 and {limits.MAX_POINTS}, got {limits.MAX_POINTS + 1}"
-    assert view.n_points.value == "8"
-    view.n_points.value = "2.5"
-    assert "whole number" in view.notes[-1][1] and view.n_points.value == "8"
-    fire(view.n_points, view, "100000")  # straight into the handle, as if no field check had run
-    view.btn_random.value = True
+    assert view.controls.n_points.value == "8"
+    view.controls.n_points.value = "2.5"
+    assert "whole number" in view.notes[-1][1] and view.controls.n_points.value == "8"
+    fire(view.controls.n_points, view, "100000")  # straight into the handle, as if no field check had run
+    view.controls.btn_random.value = True
     assert len(view.model.scene.points) == 8 and "100000" in view.notes[-1][1]
 
 
 def test_a_forged_gui_message_over_the_websocket_is_refused(tab):
     app, fake, view = tab
-    fake.send("GuiUpdateMessage", uuid=view.n_points._impl.uuid, updates={"value": 100000})
+    fake.send("GuiUpdateMessage", uuid=view.controls.n_points._impl.uuid, updates={"value": 100000})
     wait_for(lambda: view.notes, "the refusal of 100000 points")
     assert view.notes[-1] == ("Value refused", f"how many points must be between 0 and {limits.MAX_POINTS}, got 100000")
-    wait_for(lambda: view.n_points.value == "8", "the field to show 8 points again")
+    wait_for(lambda: view.controls.n_points.value == "8", "the field to show 8 points again")
     points = view.model.scene.points
-    fake.send("GuiUpdateMessage", uuid=view.btn_random._impl.uuid, updates={"value": True})
+    fake.send("GuiUpdateMessage", uuid=view.controls.btn_random._impl.uuid, updates={"value": True})
     wait_for(lambda: view.model.scene.points != points, "the click on 'Randomise points' to run")
     assert len(view.model.scene.points) == 8  # the count the server kept, not the forged one
-    fake.send("GuiUpdateMessage", uuid=view.surface_kind._impl.uuid, updates={"value": "mesh: /etc/passwd"})
-    fake.send("GuiUpdateMessage", uuid=view.btn_surface._impl.uuid, updates={"value": True})
+    fake.send("GuiUpdateMessage", uuid=view.controls.surface_kind._impl.uuid, updates={"value": "mesh: /etc/passwd"})
+    fake.send("GuiUpdateMessage", uuid=view.controls.btn_surface._impl.uuid, updates={"value": True})
     wait_for(lambda: len(view.notes) >= 2, "the refusal of the forged surface")
     assert view.notes[-1] == ("Value refused", "surface: no surface 'mesh: /etc/passwd'")
     assert view.model.scene.surfaces == ()
@@ -317,7 +317,7 @@ def test_forged_gizmo_messages_are_refused_and_the_gizmo_goes_back(tab):
     wait_for(lambda: len(view.notes) == 4, "the refusal of the forged point gizmo pose")
     assert "point 1" in view.notes[-1][1] and view.model.scene.points[0] == default_scene().points[0]
     # the tab still works
-    view._cam_fields["cam1"]["focal"].value = "12"
+    view.cameras["cam1"].fields["focal"].value = "12"
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.012)
 
 
@@ -331,11 +331,11 @@ def test_forged_gizmo_messages_are_refused_and_the_gizmo_goes_back(tab):
 )
 def test_forged_drop_down_values_are_refused(tab, handle, value, message):
     app, fake, view = tab
-    h = getattr(view, handle)
+    h = getattr(view.controls, handle)
     shown = h.value
     fire(h, view, value)
     if handle == "builtin":
-        view.btn_open.value = True
+        view.controls.btn_open.value = True
     assert view.notes[-1][0] == "Value refused" and view.notes[-1][1].startswith(message)
     assert view.model.scene is not None and len(view.model.scene.cameras) == 2
     if handle != "builtin":
@@ -348,9 +348,9 @@ def test_the_surface_drop_down_lists_the_package_meshes_by_name(tab):
     app, fake, view = tab
     names = mesh_names()
     assert names  # the package ships at least one mesh
-    assert set(view.surface_kind.options) == {"plane", "sphere"} | {f"mesh: {m}" for m in names}
-    view.surface_kind.value = f"mesh: {names[0]}"
-    view.btn_surface.value = True
+    assert set(view.controls.surface_kind.options) == {"plane", "sphere"} | {f"mesh: {m}" for m in names}
+    view.controls.surface_kind.value = f"mesh: {names[0]}"
+    view.controls.btn_surface.value = True
     (surface,) = view.model.scene.surfaces
     assert surface.kind == "mesh" and surface.path == names[0]
 
@@ -358,10 +358,10 @@ def test_the_surface_drop_down_lists_the_package_meshes_by_name(tab):
 def test_an_exception_in_any_callback_reaches_the_tab(tab, monkeypatch):
     app, fake, view = tab
     monkeypatch.setattr(view.model, "add_point", lambda xyz: (_ for _ in ()).throw(RuntimeError("/secret/path")))
-    view.btn_add_point.value = True
+    view.controls.btn_add_point.value = True
     title, body = view.notes[-1]
     assert title == "Something went wrong" and "RuntimeError" in body and "/secret" not in body
-    view._cam_fields["cam1"]["focal"].value = "12"  # still working
+    view.cameras["cam1"].fields["focal"].value = "12"  # still working
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.012)
 
 
@@ -390,7 +390,7 @@ def test_every_callback_of_the_viewer_is_registered_safely():
 def upload(view, name: str, content) -> None:
     from viser import UploadedFile
 
-    fire(view.btn_load, view, UploadedFile(name, content))
+    fire(view.controls.btn_load, view, UploadedFile(name, content))
 
 
 def test_an_oversized_upload_is_refused_before_parsing(tab, monkeypatch):
@@ -437,7 +437,7 @@ def test_an_upload_with_a_hostile_name_is_named_as_text(tab):
 
 def test_a_forged_upload_value_that_is_no_file_is_refused(tab):
     app, fake, view = tab
-    fire(view.btn_load, view, "not a file")
+    fire(view.controls.btn_load, view, "not a file")
     assert view.notes[-1] == ("Could not load the scene", "the upload: the upload holds no file")
 
 
@@ -447,7 +447,7 @@ def test_save_downloads_what_load_reads_back(tab):
     view.client.send_file_download = lambda name, data, **kw: sent.append((name, data, kw))
     view.model.update_camera("cam1", focal_length=0.0125)
     view.model.highlight(["cam2"])
-    view.btn_save.value = True
+    view.controls.btn_save.value = True
     (name, data, kw), = sent
     assert name == "Two_pin-hole_cameras_looking_at_a_cube.json" or name.endswith(".json")
     assert "/" not in name and "\\" not in name
@@ -457,12 +457,12 @@ def test_save_downloads_what_load_reads_back(tab):
 
 def test_built_in_scenes_open_from_the_drop_down(tab):
     app, fake, view = tab
-    assert tuple(view.builtin.options) == tuple(SCENES)
-    view.builtin.value = "panoramic"
-    view.btn_open.value = True
+    assert tuple(view.controls.builtin.options) == tuple(SCENES)
+    view.controls.builtin.value = "panoramic"
+    view.controls.btn_open.value = True
     assert view.model.scene == SCENES["panoramic"]()
     assert {c.kind for c in view.model.scene.cameras} == {"panoramic"}
-    view.btn_undo.value = True
+    view.controls.btn_undo.value = True
     assert view.model.scene.camera_names == ("cam1", "cam2")
 
 
@@ -474,7 +474,7 @@ def test_titles_and_names_from_files_are_shown_as_text():
     server, app, fakes, views = start_headless(scene)
     try:
         view = views[0]
-        html = view.title.content
+        html = view.controls.title.content
         assert "<script>" not in html and "&lt;script&gt;alert(1)&lt;/script&gt;" in html
         # shown in HTML, never through markdown: the asterisks and the link stay literal characters
         assert "**bold** [x](javascript:alert(1))" in html
@@ -509,7 +509,7 @@ def test_a_tab_whose_scene_cannot_be_built_falls_back_to_the_default_scene(monke
                           "The scene could not be drawn: broken: the scene cannot be drawn")]
         assert view.model.scene == default_scene()
         assert set(view.svgs) == {"cam1", "cam2"}
-        view._cam_fields["cam1"]["focal"].value = "12"
+        view.cameras["cam1"].fields["focal"].value = "12"
         assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.012)
     finally:
         fakes[0].close()
@@ -526,13 +526,13 @@ def test_a_servo_demo_that_cannot_open_leaves_a_working_workbench(tab, monkeypat
 
     monkeypatch.setattr(servo_demo.ServoDemo, "__init__", broken)
     client = view.client
-    view.btn_servo_pinhole.value = True
+    view.controls.servo_buttons["pinhole"].value = True
     assert not app.demos and view.closed
     new = app.views[client.client_id]
     assert new is not view and new.model is view.model  # the tab's own scene is back
     title, body = view.notes[-1]
     assert title == "Could not open the demo" and "RuntimeError" in body and "/server" not in body
-    new._cam_fields["cam1"]["focal"].value = "12"
+    new.cameras["cam1"].fields["focal"].value = "12"
     assert new.model.scene.camera("cam1").focal_length == pytest.approx(0.012)
 
 
@@ -550,9 +550,9 @@ def test_a_render_failure_shows_the_message_and_the_tab_stays_usable(tab, monkey
         return real(*a, **k)
 
     monkeypatch.setattr(app_module, "image_plane_svg", failing_once)
-    view._cam_fields["cam1"]["focal"].value = "12"
+    view.cameras["cam1"].fields["focal"].value = "12"
     assert view.notes[-1][0] == "Something went wrong"
-    view._cam_fields["cam1"]["focal"].value = "13"
+    view.cameras["cam1"].fields["focal"].value = "13"
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.013)
     assert "epipolar-line" in view.svgs["cam1"]
 
@@ -562,7 +562,7 @@ def test_a_render_failure_shows_the_message_and_the_tab_stays_usable(tab, monkey
 
 def test_bad_and_good_edits_from_many_threads_end_in_a_valid_state(tab):
     app, fake, view = tab
-    field = view._cam_fields["cam1"]["focal"]
+    field = view.cameras["cam1"].fields["focal"]
     texts = ["nan", "12", "abc", "-1", "14", "1e400", "9"] * 4
 
     def edit(text):
@@ -575,5 +575,5 @@ def test_bad_and_good_edits_from_many_threads_end_in_a_valid_state(tab):
         joined(t, "an edit's thread")
     f = view.model.scene.camera("cam1").focal_length
     assert f * 1e3 in (pytest.approx(12.0), pytest.approx(14.0), pytest.approx(9.0))
-    view._resync()
+    view.resync()
     assert float(field.value) == pytest.approx(f * 1e3)

@@ -97,7 +97,7 @@ def aim_ypr(scene, name: str, u: float, v: float) -> tuple[float, float, float]:
 
 
 def type_ypr(panel: LessonPanel, camera: str, ypr: tuple[float, float, float]) -> None:
-    panel.view._cam_fields[camera]["ypr"].value = ", ".join(f"{a:.6f}" for a in ypr)
+    panel.view.cameras[camera].fields["ypr"].value = ", ".join(f"{a:.6f}" for a in ypr)
 
 
 def svg_kinds(svg: str, kind: str) -> int:
@@ -264,9 +264,9 @@ def test_a_set_range_limit_refuses_the_field_and_is_enforced_when_a_task_is_chec
         assert "focal length 2 to 50 mm" in panel.ranges.content  # in the field's unit, as the learner types it
         assert range_refusal(panel.run) is None
         before = panel.view.model.scene.camera("cam1").focal_length
-        panel.view._cam_fields["cam1"]["focal"].value = "60"  # mm: above the step's 50 mm
+        panel.view.cameras["cam1"].fields["focal"].value = "60"  # mm: above the step's 50 mm
         assert panel.view.model.scene.camera("cam1").focal_length == before  # refused, not committed
-        assert panel.view._cam_fields["cam1"]["focal"].value == format_number(before * 1e3)  # the field reverts
+        assert panel.view.cameras["cam1"].fields["focal"].value == format_number(before * 1e3)  # the field reverts
         # The model holds the range for every route: a raw edit (a script, a client message) is refused too.
         with pytest.raises(SceneError, match=r"cam1's focal length must stay between 2 mm and 50 mm \(it is 60 mm\)"):
             panel.view.model.update_camera("cam1", focal_length=0.06)
@@ -291,7 +291,7 @@ def test_a_locked_camera_gizmo_is_put_back_with_a_message(store):
         before = view.model.scene.camera("cam2")
         target = type("T", (), {"wxyz": (1.0, 0.0, 0.0, 0.0), "position": (9.0, 9.0, 9.0), "update_timestamp": 1e12})
         with pytest.raises(SceneError, match="cam2 is locked"):
-            view._camera_gizmo_event("cam2", type("E", (), {"target": target, "phase": "end"})())
+            view.drag.camera_event("cam2", type("E", (), {"target": target, "phase": "end"})())
         assert view.model.scene.camera("cam2") is before
 
 
@@ -311,9 +311,9 @@ def test_undo_stops_at_the_steps_start_and_says_so(store):
         told = []
         view.client.add_notification = lambda title, body, **_: told.append((title, body))
         start = view.model.scene
-        assert not view.btn_undo.disabled  # enabled at the barrier, so that it can say why it does nothing
-        view.btn_undo.value = True
-        view.btn_undo.value = True
+        assert not view.controls.btn_undo.disabled  # enabled at the barrier, so that it can say why it does nothing
+        view.controls.btn_undo.value = True
+        view.controls.btn_undo.value = True
         assert view.model.scene is start and start.locked == {"cam1"} and start.camera("cam1").focal_length == 0.03
         assert told and all(t == "Nothing to undo" and "Undo stops at the start of this step" in b for t, b in told)
         for row in panel.rows:  # no work done: both tasks still fail
@@ -328,13 +328,13 @@ def test_typing_a_locked_cameras_position_is_refused_and_the_field_reverts(store
         view = panel.view
         told = []
         view.client.add_notification = lambda title, body, **_: told.append(body)
-        shown = view._cam_fields["cam1"]["position"].value
+        shown = view.cameras["cam1"].fields["position"].value
         before = view.model.scene.camera("cam1")
-        view._cam_fields["cam1"]["position"].value = "0, -20, 1.5"
+        view.cameras["cam1"].fields["position"].value = "0, -20, 1.5"
         assert view.model.scene.camera("cam1") is before
-        assert view._cam_fields["cam1"]["position"].value == shown
+        assert view.cameras["cam1"].fields["position"].value == shown
         assert told[-1] == "cam1: the camera is locked in this step; its position and orientation cannot change"
-        view._cam_fields["cam1"]["focal"].value = "8"  # the intrinsics are the step's instrument
+        view.cameras["cam1"].fields["focal"].value = "8"  # the intrinsics are the step's instrument
         assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
         assert all(answer(panel, row.task_id).result.passed for row in panel.rows)
 
@@ -487,7 +487,7 @@ def test_a_servo_demo_opened_from_a_lesson_comes_back_to_the_lesson(store):
         (panel,) = app.course.wait_for_tab(LessonPanel, timeout=PATIENCE)
         panel.go_to(1)
         client = panel.view.client
-        panel.view.btn_servo_pinhole.value = True
+        panel.view.controls.servo_buttons["pinhole"].value = True
         app.wait_for_demo(timeout=PATIENCE)
         app.close_demo(client)
         (again,) = app.course.wait_for_tab(LessonPanel, timeout=PATIENCE)

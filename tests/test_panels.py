@@ -374,14 +374,14 @@ def test_presentation_mode_toggle(four_camera_tab):
     fake.send("GuiUpdateMessage", uuid=view.present_checkbox._impl.uuid, updates={"value": True})
     assert wait_until(lambda: all(_svg_root(s).get("data-style") == "present" for s in view.svgs.values()))
     assert view.present and view.grid.control_px == CONTROL_PX["present"] and view.grid != normal_grid
-    assert "--mantine-scale" in view._gui_style.content
+    assert "--mantine-scale" in view.dock.gui_style.content
     # The 3D view's labels grow too: every camera name and point number.
     labels = view.scene3d._labels
     assert len(labels) >= 4 + 8 and all(h.font_screen_scale == pytest.approx(size * PRESENT_LABEL_SCALE)
                                         for h, size in labels.values())
     fake.send("GuiUpdateMessage", uuid=view.present_checkbox._impl.uuid, updates={"value": False})
     assert wait_until(lambda: all(_svg_root(s).get("data-style") == "normal" for s in view.svgs.values()))
-    assert view.grid == normal_grid and view._gui_style.content == ""
+    assert view.grid == normal_grid and view.dock.gui_style.content == ""
     assert all(h.font_screen_scale == pytest.approx(size) for h, size in labels.values())
 
 
@@ -448,7 +448,7 @@ def test_fit_panels_to_the_window_uses_the_canvas_and_the_docks(four_camera_tab)
     fake.send("ViewerCameraMessage", wxyz=[1.0, 0.0, 0.0, 0.0], position=[0.0, -10.0, 3.0], fov=1.0, near=0.01,
               far=1000.0, image_height=1000, image_width=1400, look_at=[0.0, 0.0, 0.0], up_direction=[0.0, 0.0, 1.0])
     assert wait_until(lambda: view.client.camera.image_width == 1400)
-    fake.send("GuiUpdateMessage", uuid=view.btn_relayout._impl.uuid, updates={"value": True})
+    fake.send("GuiUpdateMessage", uuid=view.dock.btn_relayout._impl.uuid, updates={"value": True})
     assert wait_until(lambda: view.grid.window == WindowSize(1400 + docked, 1000))
     assert view.grid == plan_grid([(c.name, c.width, c.height) for c in view.model.scene.cameras],
                                   WindowSize(1400 + docked, 1000))

@@ -263,7 +263,7 @@ def test_app_opens_demo_and_goes_back():
     server, app, fakes, views = start_headless()
     try:
         client = views[0].client
-        views[0].btn_servo_panoramic.value = None  # click "Visual servoing > Panoramic ..."
+        views[0].controls.servo_buttons["panoramic"].value = None  # click "Visual servoing > Panoramic ..."
         demo = app.demos[client.client_id]
         assert demo.kind == "panoramic" and not app.views
         assert views[0].closed

@@ -109,14 +109,14 @@ def test_a_fitted_panel_holds_its_axes_during_a_drag_and_fits_exactly_at_its_end
     server, _app, fakes, views = start_headless(scene)
     try:
         view = views[0]
-        view._view_action("cam2", "fit")  # the panel's "fit" button
+        view.dock.view_action("cam2", "fit")  # the panel's "fit" button
         gizmo = view.scene3d._cams["cam1"]["gizmo"]
         start = np.array(gizmo.position, float)
 
         def drag(dx, phase, dy=0.0):
             gizmo._impl.position = start + np.array([dx, dy, 0.0])
             gizmo._impl_aux.last_updated += 1.0
-            view._camera_gizmo_event("cam1", types.SimpleNamespace(target=gizmo, phase=phase, client=None,
+            view.drag.camera_event("cam1", types.SimpleNamespace(target=gizmo, phase=phase, client=None,
                                                                    client_id=None))
 
         first = _shown_view(view, "cam2")  # the exact fit before the drag

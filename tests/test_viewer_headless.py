@@ -67,7 +67,7 @@ def test_editing_focal_length_changes_model_and_lines(tabs):
     view = view_of(tabs)
     before1, before2 = line_coords(view.svgs["cam1"]), line_coords(view.svgs["cam2"])
     before_rev = view.revision
-    view._cam_fields["cam1"]["focal"].value = "12"
+    view.cameras["cam1"].fields["focal"].value = "12"
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.012)
     assert view.revision == before_rev + 1  # one change -> one update
     # Image 1 is magnified, so its epipolar lines move; in image 2, l2 = F m1 = K2^-T E x1 does not
@@ -79,7 +79,7 @@ def test_editing_focal_length_changes_model_and_lines(tabs):
 def test_moving_a_camera_changes_the_other_image_lines(tabs):
     view = view_of(tabs)
     before = line_coords(view.svgs["cam2"])
-    view._cam_fields["cam1"]["position"].value = "-4, -8, 1.5"
+    view.cameras["cam1"].fields["position"].value = "-4, -8, 1.5"
     assert view.model.scene.camera("cam1").position == (-4.0, -8.0, 1.5)
     after = line_coords(view.svgs["cam2"])
     assert before.shape == after.shape and not np.allclose(before, after, atol=0.5)
@@ -91,7 +91,7 @@ def test_moving_a_camera_changes_the_other_image_lines(tabs):
 @pytest.mark.parametrize("bad", ["-5", "0", "nan"])
 def test_invalid_focal_length_is_refused_and_reverted(tabs, bad):
     view = view_of(tabs)
-    field = view._cam_fields["cam1"]["focal"]
+    field = view.cameras["cam1"].fields["focal"]
     good = field.value
     assert good == "8"
     rev = view.revision
@@ -104,9 +104,9 @@ def test_invalid_focal_length_is_refused_and_reverted(tabs, bad):
 
 def test_invalid_mirror_parameter_is_refused(tabs):
     view = view_of(tabs)
-    view.btn_add_pano.value = True
+    view.controls.add_buttons["hyperbolic"].value = True
     name = [c.name for c in view.model.scene.cameras if c.kind == "panoramic"][0]
-    field = view._cam_fields[name]["a"]
+    field = view.cameras[name].fields["a"]
     field.value = "-1"
     assert view.model.scene.camera(name).a == 3.0
     assert field.value == "3"
@@ -124,12 +124,12 @@ def test_camera_gizmo_drag_updates_model_and_fields(tabs):
     view = view_of(tabs)
     gizmo = view.scene3d._cams["cam2"]["gizmo"]
     wxyz = np.array(gizmo.wxyz)
-    view._camera_gizmo_event("cam2", fake_drag(gizmo, (2.0, -7.0, 2.0), wxyz))
+    view.drag.camera_event("cam2", fake_drag(gizmo, (2.0, -7.0, 2.0), wxyz))
     spec = view.model.scene.camera("cam2")
     assert spec.position == pytest.approx((2.0, -7.0, 2.0))
-    assert view._cam_fields["cam2"]["position"].value == "2, -7, 2"
+    assert view.cameras["cam2"].fields["position"].value == "2, -7, 2"
     # the yaw/pitch/roll field shows the same orientation as before
-    shown = [float(x) for x in view._cam_fields["cam2"]["ypr"].value.split(",")]
+    shown = [float(x) for x in view.cameras["cam2"].fields["ypr"].value.split(",")]
     assert shown == pytest.approx(default_scene().camera("cam2").ypr_deg, abs=1e-4)
 
 
@@ -138,20 +138,20 @@ def test_late_gizmo_event_does_not_overwrite_a_newer_one(tabs):
     gizmo = view.scene3d._cams["cam1"]["gizmo"]
     wxyz = np.array(gizmo.wxyz)
     now = time.time()
-    view._camera_gizmo_event("cam1", fake_drag(gizmo, (-2.0, -8.0, 1.5), wxyz, stamp=now))
+    view.drag.camera_event("cam1", fake_drag(gizmo, (-2.0, -8.0, 1.5), wxyz, stamp=now))
     old = types.SimpleNamespace(target=types.SimpleNamespace(position=np.array([9.0, 9.0, 9.0]), wxyz=wxyz,
                                                              update_timestamp=now - 1.0), phase="update")
-    view._camera_gizmo_event("cam1", old)
+    view.drag.camera_event("cam1", old)
     assert view.model.scene.camera("cam1").position == pytest.approx((-2.0, -8.0, 1.5))
 
 
 def test_point_gizmo_moves_and_selects_the_point(tabs):
     view = view_of(tabs)
     g = view.scene3d._point_gizmos[2]
-    view._point_gizmo_event(2, fake_drag(g, g.position, (1, 0, 0, 0), phase="start"))
+    view.drag.point_event(2, fake_drag(g, g.position, (1, 0, 0, 0), phase="start"))
     assert view.model.scene.selected_point == 2
-    assert view.point_dropdown.value == "point 3"
-    view._point_gizmo_event(2, fake_drag(g, (0.5, 0.5, 0.5), (1, 0, 0, 0)))
+    assert view.controls.point_dropdown.value == "point 3"
+    view.drag.point_event(2, fake_drag(g, (0.5, 0.5, 0.5), (1, 0, 0, 0)))
     assert view.model.scene.points[2] == pytest.approx((0.5, 0.5, 0.5))
     rings = [el for el in ET.fromstring(view.svgs["cam1"]).iter() if el.get("data-selected") == "true"]
     assert len(rings) == 1
@@ -160,42 +160,42 @@ def test_point_gizmo_moves_and_selects_the_point(tabs):
 
 def test_buttons_add_and_remove_cameras_and_panels(tabs):
     view = view_of(tabs)
-    view.btn_add_pinhole.value = True
+    view.controls.add_buttons["pinhole"].value = True
     names = view.model.scene.camera_names
-    assert len(names) == 3 and set(view._html) == set(names)
-    assert len(view.pair_dropdown.options) == 3
-    view.pair_dropdown.value = f"cam1 & {names[2]}"
+    assert len(names) == 3 and set(view.dock.html) == set(names)
+    assert len(view.controls.pair_dropdown.options) == 3
+    view.controls.pair_dropdown.value = f"cam1 & {names[2]}"
     assert view.model.scene.drawn_pair == ("cam1", names[2])
     assert len(kinds(view.svgs["cam2"], "epipolar-line")) == 0  # not in the drawn pair
     assert len(kinds(view.svgs[names[2]], "epipole")) == 1
-    view.btn_undo.value = True
+    view.controls.btn_undo.value = True
     assert view.model.scene.drawn_pair == ("cam1", "cam2")
-    view.btn_undo.value = True
-    assert len(view.model.scene.cameras) == 2 and set(view._html) == {"cam1", "cam2"}
+    view.controls.btn_undo.value = True
+    assert len(view.model.scene.cameras) == 2 and set(view.dock.html) == {"cam1", "cam2"}
 
 
 def test_points_buttons_and_toggles(tabs):
     view = view_of(tabs)
-    view.n_points.value = "40"
-    view.btn_random.value = True
+    view.controls.n_points.value = "40"
+    view.controls.btn_random.value = True
     assert len(view.model.scene.points) == 40
     assert len(view.scene3d._point_gizmos) == 0  # many points: only the selected one gets a gizmo
-    view.point_dropdown.value = "point 5"
+    view.controls.point_dropdown.value = "point 5"
     assert view.model.scene.selected_point == 4 and list(view.scene3d._point_gizmos) == [4]
-    view.btn_remove_point.value = True
+    view.controls.btn_remove_point.value = True
     assert len(view.model.scene.points) == 39 and view.model.scene.selected_point is None
-    view.toggles["show_rays"].value = False
+    view.controls.toggles["show_rays"].value = False
     assert view.model.scene.options.show_rays is False
     assert not any(r.visible for r in view.scene3d._rays.values())
-    view.btn_surface.value = True
+    view.controls.btn_surface.value = True
     assert len(view.model.scene.surfaces) == 1 and view.scene3d.surfaces.visible
-    view.btn_reset.value = True
+    view.controls.btn_reset.value = True
     assert len(view.model.scene.points) == 8
 
 
 def test_centres_coinciding_shows_the_message(tabs):
     view = view_of(tabs)
-    view._cam_fields["cam2"]["position"].value = "-3, -8, 1.5"  # cam1's centre
+    view.cameras["cam2"].fields["position"].value = "-3, -8, 1.5"  # cam1's centre
     for name in ("cam1", "cam2"):
         msgs = kinds(view.svgs[name], "message")
         assert msgs and "centres coincide" in msgs[0].text
@@ -206,26 +206,26 @@ def test_save_downloads_and_load_uploads(tabs):
     view = view_of(tabs)
     sent = []
     view.client.send_file_download = lambda name, data, **kw: sent.append((name, data))
-    view._cam_fields["cam1"]["focal"].value = "10"
-    view.btn_save.value = True
+    view.cameras["cam1"].fields["focal"].value = "10"
+    view.controls.btn_save.value = True
     (name, data), = sent
     assert name.endswith(".json") and "/" not in name
     assert scene_from_bytes(data, "download").camera("cam1").focal_length == pytest.approx(0.010)
-    view.btn_reset.value = True
+    view.controls.btn_reset.value = True
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
     upload(view, "mine.json", data)
     assert view.model.scene.camera("cam1").focal_length == pytest.approx(0.010)
-    assert view._cam_fields["cam1"]["focal"].value == "10"
+    assert view.cameras["cam1"].fields["focal"].value == "10"
 
 
 def upload(view, name: str, content: bytes) -> None:
     """What viser does when an upload completes: store the file as the button's value, call its callbacks."""
     from viser import UploadedFile
 
-    impl = view.btn_load._impl
+    impl = view.controls.btn_load._impl
     impl.value = UploadedFile(name, content)
     for cb in impl.update_cb:
-        cb(types.SimpleNamespace(target=view.btn_load, client=view.client, client_id=None))
+        cb(types.SimpleNamespace(target=view.controls.btn_load, client=view.client, client_id=None))
 
 
 def test_malformed_upload_notifies_and_keeps_the_scene(tabs):
@@ -245,7 +245,7 @@ def test_two_tabs_have_separate_scenes(tabs):
     app, (a, b) = tabs
     assert a.model is not b.model
     b_svg = b.svgs["cam2"]
-    a._cam_fields["cam1"]["position"].value = "-5, -8, 1.5"
+    a.cameras["cam1"].fields["position"].value = "-5, -8, 1.5"
     assert a.model.scene.camera("cam1").position == (-5.0, -8.0, 1.5)
     assert b.model.scene.camera("cam1").position == (-3.0, -8.0, 1.5)
     assert b.svgs["cam2"] == b_svg
@@ -261,7 +261,7 @@ def test_disconnect_drops_the_view():
         # a late gizmo event after the tab left changes nothing
         gizmo = view.scene3d._cams["cam1"]["gizmo"]
         scene = view.model.scene
-        view._camera_gizmo_event("cam1", types.SimpleNamespace(target=gizmo, phase="update"))
+        view.drag.camera_event("cam1", types.SimpleNamespace(target=gizmo, phase="update"))
         assert view.model.scene is scene
         assert not view.model._listeners
     finally:
@@ -270,10 +270,10 @@ def test_disconnect_drops_the_view():
 
 def test_concurrent_events_end_in_the_latest_state(tabs):
     view = view_of(tabs)
-    field = view._cam_fields["cam1"]["position"]
+    field = view.cameras["cam1"].fields["position"]
     # Events arriving from several threads (viser's thread pool): the final render shows the final model state.
     def edit(k):
-        view._user_event(lambda: view._apply_field("cam1", "position", f"{-3.0 + 0.01 * k:g}, -8, 1.5"))
+        view.user_event(lambda: view.cameras["cam1"].apply_field("position", f"{-3.0 + 0.01 * k:g}, -8, 1.5"))
 
     threads = [threading.Thread(target=edit, args=(k,)) for k in range(20)]
     for t in threads:
@@ -327,20 +327,20 @@ def test_highlight_and_lock_from_a_lesson(tabs):
 
 def test_panoramic_and_mixed_pairs(tabs):
     view = view_of(tabs)
-    view.btn_add_pano.value = True
+    view.controls.add_buttons["hyperbolic"].value = True
     pano = [c.name for c in view.model.scene.cameras if c.kind == "panoramic"][0]
     assert pano in view.svgs and len(kinds(view.svgs[pano], "rim")) == 1
     view.model.add_camera("panoramic")
     panos = [c.name for c in view.model.scene.cameras if c.kind == "panoramic"]
-    view.pair_dropdown.value = f"{panos[0]} & {panos[1]}"
+    view.controls.pair_dropdown.value = f"{panos[0]} & {panos[1]}"
     assert view.model.scene.drawn_pair == tuple(panos)
-    assert len(view._html) == 4
+    assert len(view.dock.html) == 4
     for name in panos:
         assert kinds(view.svgs[name], "epipolar-conic")
         assert len(kinds(view.svgs[name], "epipole")) >= 1
     assert 'data-relation="essential"' in view.readout and "No F between pixels" in view.readout
     # a mixed pin-hole / panoramic pair must draw without errors, and says which relation holds
-    view.pair_dropdown.value = f"cam1 & {panos[0]}"
+    view.controls.pair_dropdown.value = f"cam1 & {panos[0]}"
     assert view.model.scene.drawn_pair == ("cam1", panos[0])
     assert "d2&#7488; E d1 = 0" in view.readout and "rank" not in view.readout
     assert not kinds(view.svgs["cam1"], "message") or "cannot draw" not in kinds(view.svgs["cam1"], "message")[0].text

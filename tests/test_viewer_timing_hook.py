@@ -26,7 +26,7 @@ def view():
 def test_each_applied_update_reports_its_parts_once(view):
     seen: list[UpdateTiming] = []
     view.on_update_timed = seen.append
-    view._user_event(lambda: view.model.add_point((0.5, 0.5, 1.0)))
+    view.user_event(lambda: view.model.add_point((0.5, 0.5, 1.0)))
     assert [t.revision for t in seen] == [view.revision]
     (timing,) = seen
     assert set(timing.cpu) == {"derived", "svg", "fields", "scene3d", "flush", "render", "event"}

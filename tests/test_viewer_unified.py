@@ -50,7 +50,7 @@ def test_the_xi_slider_morphs_the_conics_and_the_horizon(view):
     (h,) = kinds(svg, "horizon")
     np.testing.assert_allclose(np.hypot(*(polyline(h) - (320.0, 240.0)).T), 375.0, rtol=1e-4)
     before = conic_points(svg)
-    slider = view._cam_fields["uni"]["xi"]
+    slider = view.cameras["uni"].fields["xi"]
     assert (slider.min, slider.max) == (0.0, 1.0) and slider.value == pytest.approx(0.8)
     undo_depth = len(view.model._undo)
     for xi in (0.85, 0.9):  # one slide: the image follows each step
@@ -64,14 +64,14 @@ def test_the_xi_slider_morphs_the_conics_and_the_horizon(view):
     view.model.undo()
     assert view.model.scene.camera("uni").xi == pytest.approx(0.8)
     # The folder's fields come from the model's parameters, with their units.
-    assert set(view._cam_fields["uni"]) == {"position", "ypr", "xi", "focal_px", "pp", "size"}
-    assert view._cam_fields["uni"]["focal_px"].label == "focal length (px)"
+    assert set(view.cameras["uni"].fields) == {"position", "ypr", "xi", "focal_px", "pp", "size"}
+    assert view.cameras["uni"].fields["focal_px"].label == "focal length (px)"
 
 
 def test_a_raw_client_cannot_push_xi_out_of_range(view):
     for bad in (1.5, -0.1, float("nan"), "0.5", True):
         with pytest.raises(FieldError, match="uni: xi"):
-            view._apply_slider("uni", "xi", bad)
+            view.cameras["uni"].apply_slider("xi", bad)
     assert view.model.scene.camera("uni").xi == 0.8
 
 
@@ -92,7 +92,7 @@ def test_the_sphere_its_centre_and_the_selected_points_great_circle_in_3d(view):
     p = np.asarray(nodes["on_sphere"].position, float)
     np.testing.assert_allclose(p, cam.centre + SPHERE_RADIUS * (X - cam.centre) / np.linalg.norm(X - cam.centre),
                                atol=1e-9)
-    view._cam_fields["uni"]["xi"].value = 0.3
+    view.cameras["uni"].fields["xi"].value = 0.3
     np.testing.assert_allclose(nodes["centre"].position, (0.0, 0.0, -0.3 * SPHERE_RADIUS), atol=1e-9)
 
 
@@ -122,10 +122,10 @@ def test_switching_a_mirror_rebuilds_its_fields_and_keeps_its_panel_populated():
     try:
         view = views[0]
         name = view.model.scene.cameras[0].name
-        assert {"a", "b"} <= set(view._cam_fields[name])
-        view._cam_fields[name]["mirror"].value = "parabolic"
+        assert {"a", "b"} <= set(view.cameras[name].fields)
+        view.cameras[name].fields["mirror"].value = "parabolic"
         assert view.model.scene.camera(name).mirror == "parabolic"
-        assert "h" in view._cam_fields[name] and "b" not in view._cam_fields[name]
+        assert "h" in view.cameras[name].fields and "b" not in view.cameras[name].fields
         assert len(kinds(view.svgs[name], "point")) >= 5
     finally:
         for f in fakes:

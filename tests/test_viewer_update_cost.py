@@ -49,7 +49,7 @@ def test_a_drag_keeps_the_panels_it_does_not_change(four_cameras):
     assert _rev(view.svgs["cam1"]) == _rev(view.svgs["cam2"]) == rev
     for name in others:
         assert view.svgs[name] is kept[name]
-        assert view._html[name].content is kept[name]
+        assert view.dock.html[name].content is kept[name]
         assert _rev(kept[name]) < rev
 
 
@@ -63,7 +63,7 @@ def test_a_kept_panel_is_what_a_fresh_drawing_gives(four_cameras):
         grid = view.grid
         fresh = image_plane_svg(plane, selected_point=scene.selected_point, highlighted=set(),
                                 show_labels=scene.options.show_labels, revision=_rev(kept),
-                                view=view._panel_view(spec.name, plane).resolve(plane), style=view._style,
+                                view=view.dock.panel_view(spec.name, plane).resolve(plane), style=view.dock.style,
                                 panel_px=grid.column_px, max_height=f"{grid.svg_max_height_px(spec.name):.0f}px")
         assert fresh == kept
 

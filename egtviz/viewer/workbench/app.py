@@ -58,13 +58,15 @@ from .lesson_policy import ALLOW_ALL, LessonPolicy
 from .panel_dock import PRESENT_LABEL_SCALE, PanelDock, plot_key
 from ..render.panels import DEFAULT_WINDOW, PanelGrid, WindowSize, framed_camera, plan_grid
 from .readout import PairReadout, pair_html
+from .scene3d import Scene3D
 from ..render.svg import NORMAL, PRESENT, empty_svg
 from ..render.svg import warm_up as svg_warm_up
+from .tab_context import TabContext
 from .workbench_controls import WorkbenchControls
 from ..server.viser_adapter import assign_text
 
 if TYPE_CHECKING:
-    from ...scene.derived import Derived, ImagePlane
+    from ...scene.derived import Derived
 
 __all__ = ["EgtvizApp", "ClientView", "PRESENT_LABEL_SCALE", "UpdateTiming", "pair_html"]
 
@@ -100,6 +102,7 @@ class ClientView:
     do the rest: :attr:`controls` (the control panel and scene actions), :attr:`cameras` (one
     :class:`~egtviz.viewer.workbench.camera_settings.CameraSettings` per camera folder), :attr:`drag` (gizmo input),
     :attr:`dock` (the panels) and :attr:`pair_readout` (the F/E read-out). A lesson view sets :attr:`policy`.
+    The parts get :attr:`context` (a :class:`~egtviz.viewer.workbench.tab_context.TabContext`), never the view.
 
     Every callback is attached through :func:`egtviz.viewer.workbench.fields.on_event`:
     whatever it raises reaches this tab as a notification, and the fields and
@@ -122,8 +125,6 @@ class ClientView:
     def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None,
                  field_delay: float = FIELD_DELAY, present: bool = False,
                  window: tuple[WindowSize, float] | None = None) -> None:
-        from .scene3d import Scene3D
-
         self.client = client
         self.model = model
         #: ``open_demo(kind, **run_fields)`` replaces this tab by a servo demo (the app passes it); None: no demos.
@@ -143,21 +144,27 @@ class ClientView:
         #: Called with this view under the lock after each drawn update (its :attr:`svgs` and read-out are then
         #: the ones sent): a classroom sends the very same panels to every follower.
         self.on_rendered: Callable[[ClientView], None] | None = None
-        self._t_event: float | None = None
-        self._c_event: float | None = None
+        #: Wall and thread-CPU seconds at the start of the user event the next update answers (None: no event).
+        self._event_start: tuple[float, float] | None = None
         self.svgs: dict[str, str] = {}
         #: What a lesson allows in this tab (its panel filter and ranges); the workbench allows everything.
         self.policy: LessonPolicy = ALLOW_ALL
         #: Each camera's settings folder, by camera name.
         self.cameras: dict[str, CameraSettings] = {}
         self._camera_sig: tuple = ()
-        self.drag = DragInput(self)
-        self.dock = PanelDock(self, present=present, window=window)
-        self.controls = WorkbenchControls(self)
+        #: What the parts get of this tab (they never see the view itself).
+        self.context = TabContext(
+            client=client, model=model, lock=self.lock, report=self.report, on=self._on,
+            user_event=self.user_event, text_event=self.text_event, event_started=self.event_started,
+            is_closed=lambda: self.closed, redraw_now=self.redraw_now, policy=lambda: self.policy,
+        )
+        self.drag = DragInput(self.context)
+        self.controls = WorkbenchControls(self.context, open_demo=open_demo)
         with self.lock, client.atomic():
             self.scene3d = Scene3D(client.scene, self.drag.camera_event, self.drag.point_event, report=self.report)
+            self.dock = PanelDock(self.context, self.scene3d, present=present, window=window)
             self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if self.present else 1.0)
-            self.controls.build()
+            self.controls.build(present=self.present)
             self.pair_readout = PairReadout(self.controls.readout_md)
             self.dock.build_controls()
             self._render(self.model.scene, None)
@@ -165,15 +172,7 @@ class ClientView:
         self._on(client.camera.on_update, self._on_canvas)
         self._unsubscribe = model.subscribe(self._on_change)
 
-    # -- what the parts and the lesson views reach through the tab ----------------------------------------
-
-    def __getattr__(self, name: str) -> Any:
-        # The control panel's and the panel dock's handles (``btn_undo``, ``btn_relayout``, ...) answer as the tab's.
-        if not name.startswith("_"):
-            for part in (self.__dict__.get("controls"), self.__dict__.get("dock")):
-                if part is not None and name in part.__dict__:
-                    return part.__dict__[name]
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+    # -- what the lesson views and the classroom read of the tab ------------------------------------------
 
     @property
     def present(self) -> bool:
@@ -219,44 +218,6 @@ class ClientView:
         """The lesson policy's panel filter (None: the panels draw the model's geometry)."""
         return self.policy.panel_filter
 
-    @property
-    def _cam_fields(self) -> dict[str, dict[str, Any]]:
-        return {name: settings.fields for name, settings in self.cameras.items()}
-
-    @property
-    def _html(self) -> dict[str, Any]:
-        return self.dock.html
-
-    @property
-    def _style(self) -> Any:
-        return self.dock.style
-
-    @property
-    def _gui_style(self) -> Any:
-        return self.dock.gui_style
-
-    def _panel_view(self, name: str, plane: ImagePlane) -> Any:
-        return self.dock.panel_view(name, plane)
-
-    def _view_action(self, name: str, action: Any) -> None:
-        self.dock.view_action(name, action)
-
-    def _camera_gizmo_event(self, name: str, event: Any) -> None:
-        self.drag.camera_event(name, event)
-
-    def _point_gizmo_event(self, index: int, event: Any) -> None:
-        self.drag.point_event(index, event)
-
-    def _apply_field(self, name: str, key: str, text: Any) -> None:
-        settings = self.cameras.get(name)
-        if settings is not None:
-            settings.apply_field(key, text)
-
-    def _apply_slider(self, name: str, key: str, value: Any) -> None:
-        settings = self.cameras.get(name)
-        if settings is not None:
-            settings.apply_slider(key, value)
-
     # -- user events ----------------------------------------------------------------
 
     def _on(self, register: Any, callback: Any) -> None:
@@ -265,9 +226,9 @@ class ClientView:
 
     def event_started(self, t0: float, c0: float) -> None:
         """Mark the start of a user event (wall ``t0``, thread CPU ``c0``); its update's timing counts from it."""
-        self._t_event, self._c_event = t0, c0
+        self._event_start = (t0, c0)
 
-    def _user_event(self, action: Any) -> None:
+    def user_event(self, action: Any) -> None:
         """Run a user's action under the lock (ignored while fields are written back or after the tab left).
 
         Errors propagate to :meth:`report` through the callback wrapper.
@@ -279,7 +240,7 @@ class ClientView:
             self.event_started(t0, c0)
             action()
 
-    def _text_event(self, key: Any, apply: Any, text: Any = None) -> None:
+    def text_event(self, key: Any, apply: Any, text: Any = None) -> None:
         """A text field changed: judge its text once the user stopped typing (latest text wins)."""
         with self.lock:
             if self.closed or self._syncing:
@@ -287,7 +248,7 @@ class ClientView:
 
         def judge() -> None:
             try:
-                self._user_event(lambda: apply(text))
+                self.user_event(lambda: apply(text))
             except Exception as exc:  # noqa: BLE001 - from a timer thread: no callback wrapper above us
                 self.report(exc)
 
@@ -299,20 +260,21 @@ class ClientView:
             if self.closed:
                 return
             notify_error(self.client, exc)
-            self._resync()
+            self.resync()
 
-    def _resync(self) -> None:
+    def resync(self) -> None:
         """Rewrite every field and put every gizmo back to the model's scene (after a refusal or a failure).
 
         The panels are left alone: the scene they show has not changed.
         """
-        scene = self.model.scene
-        try:
-            with self.client.atomic():
-                self._sync_fields(scene, force=True)
-                self.scene3d.draw(scene, self.model.derived, force=True)
-        except Exception:  # noqa: BLE001 - a half-built tab: draw it all again, or show why not
-            self._render(scene, None, force_fields=True)
+        with self.lock:
+            scene = self.model.scene
+            try:
+                with self.client.atomic():
+                    self._sync_fields(scene, force=True)
+                    self.scene3d.draw(scene, self.model.derived, force=True)
+            except Exception:  # noqa: BLE001 - a half-built tab: draw it all again, or show why not
+                self._render(scene, None, force_fields=True)
 
     def _on_canvas(self, camera: Any) -> None:
         with self.lock:
@@ -397,16 +359,16 @@ class ClientView:
         """Keep the update's timing and hand it to :attr:`on_update_timed`."""
         self.last_update_wall = time.time()
         names = ("derived", "svg", "fields", "scene3d", "flush")
-        t_event, c_event = self._t_event, self._c_event
-        self.breakdown = {"model": wall[0] - t_event if t_event is not None else 0.0}
+        start = self._event_start
+        self.breakdown = {"model": wall[0] - start[0] if start is not None else 0.0}
         self.breakdown.update({k: wall[i + 1] - wall[i] for i, k in enumerate(names)})
-        if t_event is not None:
-            self.timings.append(wall[-1] - t_event)
-            self._t_event = self._c_event = None
+        if start is not None:
+            self.timings.append(wall[-1] - start[0])
+            self._event_start = None
         if self.on_update_timed is not None:
             parts = {k: cpu[i + 1] - cpu[i] for i, k in enumerate(names)}
             parts["render"] = cpu[-1] - cpu[0]
-            parts["event"] = cpu[-1] - c_event if c_event is not None else 0.0
+            parts["event"] = cpu[-1] - start[1] if start is not None else 0.0
             self.on_update_timed(UpdateTiming(self.revision, dict(self.breakdown), parts))
 
     def _filtered(self, scene: Scene, derived: Derived) -> tuple[Any, frozenset[int]]:
@@ -445,7 +407,8 @@ class ClientView:
             self.dock.buttons.clear()
             for spec in scene.cameras:
                 # The first two cameras (the drawn pair, usually) start open: their fields are what a lesson edits.
-                settings = CameraSettings(self, spec, self.controls.cameras_folder, expand=len(self.cameras) < 2)
+                settings = CameraSettings(self.context, spec, self.controls.cameras_folder,
+                                          expand=len(self.cameras) < 2)
                 self.cameras[spec.name] = settings
                 self.dock.build_buttons(spec.name, settings.folder, settings.fields)
             self._camera_sig = sig
@@ -541,7 +504,8 @@ class EgtvizApp:
     def _frame_view(self, scene: Scene) -> None:
         """Start the browser's view camera on every camera and point, in the canvas a common window leaves free.
 
-        Each tab then frames its own view for its window (:meth:`ClientView._frame_camera`).
+        Each tab then frames its own view for its window
+        (:meth:`~egtviz.viewer.workbench.panel_dock.PanelDock.frame_camera`).
         """
         extent = scene_extent(scene, compute_derived(scene))
         grid = plan_grid([(c.name, float(c.width), float(c.height)) for c in scene.cameras], DEFAULT_WINDOW,

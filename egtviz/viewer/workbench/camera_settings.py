@@ -20,7 +20,7 @@ from .models import SHORT_LABELS
 from .gui_text import plain, set_value
 
 if TYPE_CHECKING:
-    from .app import ClientView
+    from .tab_context import TabContext
 
 __all__ = ["FIELD_RULES", "CameraSettings", "field_rules", "spec_values"]
 
@@ -96,16 +96,16 @@ class CameraSettings:
     """One camera's folder: its fields by key (:attr:`fields`), what they do, and their write-back.
 
     Args:
-        view: the tab (its GUI, model, lock-taking event runners and lesson policy are used).
+        tab: the tab's services (its GUI, model, event wrappers and lesson policy are used).
         spec: the camera's spec when the folder is built (its name and model kind stay for the folder's life).
         parent: the folder the camera's folder goes in.
         expand: whether the folder starts open.
     """
 
-    def __init__(self, view: ClientView, spec: Any, parent: Any, *, expand: bool) -> None:
-        self.view = view
+    def __init__(self, tab: TabContext, spec: Any, parent: Any, *, expand: bool) -> None:
+        self.tab = tab
         self.name = spec.name
-        gui = view.client.gui
+        gui = tab.client.gui
         with parent:
             self.folder = gui.add_folder(f"{spec.name} ({SHORT_LABELS[spec.model_kind]})", expand_by_default=expand)
         #: The folder's GUI fields by key (``position``, ``ypr``, a model choice, a model parameter).
@@ -115,7 +115,7 @@ class CameraSettings:
 
     def _build(self, spec: Any) -> dict[str, Any]:
         """The pose fields, the model choices and one field per model parameter (or pair), units in the labels."""
-        gui = self.view.client.gui
+        gui = self.tab.client.gui
         values = spec_values(spec)
         fields = _model_fields(spec.model_kind)
         f: dict[str, Any] = {}
@@ -135,29 +135,29 @@ class CameraSettings:
                 else:
                     f[key] = gui.add_text(field.title, format_numbers(values[key]), hint=field.hint or None)
             remove = gui.add_button(f"Remove {spec.name}", color="red")
-        view, name = self.view, self.name
-        view._on(remove.on_click, lambda _: view._user_event(lambda: view.model.remove_camera(name)))
+        tab, name = self.tab, self.name
+        tab.on(remove.on_click, lambda _: tab.user_event(lambda: tab.model.remove_camera(name)))
         return f
 
     def _attach(self, spec: Any) -> None:
-        view = self.view
+        tab = self.tab
         choices = model_choices(type(spec))
         fields = _model_fields(spec.model_kind)
         for key, handle in self.fields.items():
             if key in choices:
-                view._on(handle.on_update,
-                         lambda e, k=key: view._user_event(lambda: self.set_choice(k, e.target.value)))
+                tab.on(handle.on_update,
+                       lambda e, k=key: tab.user_event(lambda: self.set_choice(k, e.target.value)))
             elif key in fields and fields[key].slider:
                 # A slider acts at once (the image morphs as it moves); one slide is one undo step.
-                view._on(handle.on_update,
-                         lambda e, k=key: view._user_event(lambda: self.apply_slider(k, e.target.value)))
+                tab.on(handle.on_update,
+                       lambda e, k=key: tab.user_event(lambda: self.apply_slider(k, e.target.value)))
             else:
-                view._on(handle.on_update, lambda e, k=key: view._text_event(
+                tab.on(handle.on_update, lambda e, k=key: tab.text_event(
                     (self.name, k), lambda text, k=k: self.apply_field(k, text), e.target.value))
 
     def _spec(self) -> Any:
         """The camera's current spec, or None once it was removed (the user may still be typing)."""
-        scene = self.view.model.scene
+        scene = self.tab.model.scene
         return scene.camera(self.name) if self.name in scene.camera_names else None
 
     def apply_field(self, key: str, text: Any) -> None:
@@ -191,11 +191,11 @@ class CameraSettings:
         name = spec.name
         if all(getattr(spec, k) == v for k, v in fields.items()):
             return
-        refusal = self.view.policy.refusal(name, fields)
+        refusal = self.tab.policy().refusal(name, fields)
         if refusal is not None:
             raise FieldError(refusal)
         try:
-            self.view.model.update_camera(name, merge_key=merge_key, **fields)
+            self.tab.model.update_camera(name, merge_key=merge_key, **fields)
         except OutOfRangeError as exc:  # a limit across fields (e.g. focal length in pixels): say it in UI terms
             raise _restated(exc, name, spec.model_kind) from exc
         except SceneError as exc:
@@ -212,7 +212,7 @@ class CameraSettings:
         if value not in options:  # a raw client can send any string
             raise FieldError(f"{self.name}: {key} must be one of {', '.join(options)}, got {plain(repr(value), 40)}")
         if getattr(spec, key) != value:
-            self.view.model.update_camera(self.name, **{key: value})
+            self.tab.model.update_camera(self.name, **{key: value})
 
     def sync(self, spec: Any, *, force: bool) -> None:
         """Write ``spec``'s values into the fields (``force=False``: skipped when ``spec`` is the one last written)."""

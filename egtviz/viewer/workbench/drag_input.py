@@ -18,7 +18,7 @@ from ...geometry.poses import Pose, matrix_from_quat_wxyz
 from ...scene import SceneError
 
 if TYPE_CHECKING:
-    from .app import ClientView
+    from .tab_context import TabContext
 
 __all__ = ["DragInput"]
 
@@ -44,11 +44,11 @@ class DragInput:
     """The tab's camera and point gizmo events.
 
     Args:
-        view: the tab (its lock, model, policy and render are used).
+        tab: the tab's services (its lock, model and render are used).
     """
 
-    def __init__(self, view: ClientView) -> None:
-        self.view = view
+    def __init__(self, tab: TabContext) -> None:
+        self.tab = tab
         #: The camera being dragged while its update is drawn (its 3D nodes take the fast path).
         self.moving: str | None = None
         #: Whether the update being drawn is a step of a gizmo drag (fitted panels then keep a steady view).
@@ -66,16 +66,16 @@ class DragInput:
 
     def camera_event(self, name: str, event: Any) -> None:
         """A camera gizmo moved (``phase``: start, update or end of a drag)."""
-        view = self.view
+        tab = self.tab
         t0, c0 = time.perf_counter(), time.thread_time()
-        with view.lock:
-            if view.closed or not self._fresh(name, event.target):
+        with tab.lock:
+            if tab.is_closed() or not self._fresh(name, event.target):
                 return
             phase = getattr(event, "phase", "update")
             if phase == "start":
                 self._seq[name] = self._seq.get(name, 0) + 1  # one drag = one undo step
                 return
-            view.event_started(t0, c0)
+            tab.event_started(t0, c0)
             self.moving = name if phase == "update" else None
             self.step = phase == "update"
             try:
@@ -85,7 +85,7 @@ class DragInput:
                 self.step = False
 
     def _move_camera(self, name: str, target: Any, phase: str) -> None:
-        model = self.view.model
+        model = self.tab.model
         if name not in model.scene.camera_names:
             return
         if name in model.scene.locked:  # a lesson's lock: the drag is undone when it ends
@@ -100,18 +100,18 @@ class DragInput:
         moved = model.set_camera_pose(name, tuple(_position(target, name)), R, drag_id=self._seq.get(name),
                                       unmoved=_unmoved)
         if not moved and phase == "end":  # put the gizmo (perhaps past a range's stop) and the fields on the camera
-            self.view.redraw_now()
+            self.tab.redraw_now()
 
     def point_event(self, index: int, event: Any) -> None:
         """A point gizmo moved; its drag's start selects the point."""
-        view = self.view
+        tab = self.tab
         t0, c0 = time.perf_counter(), time.thread_time()
-        with view.lock:
+        with tab.lock:
             key = f"point:{index}"
-            if view.closed or not self._fresh(key, event.target):
+            if tab.is_closed() or not self._fresh(key, event.target):
                 return
-            view.event_started(t0, c0)
-            model = view.model
+            tab.event_started(t0, c0)
+            model = tab.model
             scene = model.scene
             phase = getattr(event, "phase", "update")
             if phase == "start":

@@ -33,7 +33,8 @@ from ..render.svg import NORMAL, PRESENT, empty_svg, image_plane_svg
 
 if TYPE_CHECKING:
     from ...scene.derived import ImagePlane
-    from .app import ClientView
+    from .scene3d import Scene3D
+    from .tab_context import TabContext
 
 __all__ = ["DOWNLOAD_FORMATS", "PLOT_KEY", "PanelDock", "VIEW_BUTTONS", "plot_key"]
 
@@ -60,14 +61,17 @@ class PanelDock:
     """The tab's panels: where they are, what each shows, and the "Panels" folder.
 
     Args:
-        view: the tab (its client, model, event runner, 3D scene and render are used).
+        tab: the tab's services (its client, model, event wrappers, lesson policy and render are used).
+        scene3d: the tab's 3D view (its labels follow presentation mode; its glyphs, the scene's size).
         present: start in presentation mode.
         window: the tab's window and device pixel ratio if known (a tab back from a servo demo), else None.
     """
 
-    def __init__(self, view: ClientView, *, present: bool, window: tuple[WindowSize, float] | None) -> None:
-        self.view = view
-        self.client = view.client
+    def __init__(self, tab: TabContext, scene3d: Scene3D, *, present: bool,
+                 window: tuple[WindowSize, float] | None) -> None:
+        self.tab = tab
+        self.scene3d = scene3d
+        self.client = tab.client
         #: Presentation mode (larger type and lines in the panels and the GUI).
         self.present = bool(present)
         # A tab coming back from a servo demo reports the demo's narrowed canvas: the app passes the window
@@ -91,7 +95,7 @@ class PanelDock:
         #: Each camera's panel buttons (button groups by label: ``panel view``, ``panel pan``, ``download panel``).
         self.buttons: dict[str, dict[str, Any]] = {}
         #: The panels' PNG downloads: rendered in a worker process, one waiting per tab, refused above the limits.
-        self.png = PngDownloads(view.client)
+        self.png = PngDownloads(tab.client)
 
     @property
     def style(self) -> Any:
@@ -102,22 +106,22 @@ class PanelDock:
 
     def build_controls(self) -> None:
         """The "Panels" folder (presentation mode, re-layout) and the style that scales the GUI's type."""
-        view, gui = self.view, self.client.gui
+        tab, gui = self.tab, self.client.gui
         # At the top level: a style inside a closed folder would not be in the page.
         self.gui_style = gui.add_html(PRESENT_GUI_CSS if self.present else "")
         with gui.add_folder("Panels", expand_by_default=False):
             self.present_checkbox = gui.add_checkbox(
                 "presentation mode", self.present,
                 hint="Large type, thick lines, high contrast: for a projector.")
-            view._on(self.present_checkbox.on_update,
-                     lambda e: view._user_event(lambda: self.set_present(e.target.value)))
+            tab.on(self.present_checkbox.on_update,
+                   lambda e: tab.user_event(lambda: self.set_present(e.target.value)))
             self.btn_relayout = gui.add_button(
                 "Fit panels to the window", hint="Lay the panels out again for this window's present size.")
-            view._on(self.btn_relayout.on_click, lambda _: view._user_event(self.relayout))
+            tab.on(self.btn_relayout.on_click, lambda _: tab.user_event(self.relayout))
 
     def build_buttons(self, name: str, folder: Any, fields: dict[str, Any]) -> None:
         """Zoom, pan, fit and download buttons for camera ``name``'s panel, in the camera's ``folder``."""
-        view, gui = self.view, self.client.gui
+        tab, gui = self.tab, self.client.gui
         groups: dict[str, Any] = {}
         # After the camera's last field, before its Remove button (viser's default orders are whole numbers).
         last = max((float(h.order) for h in fields.values()), default=None)
@@ -125,30 +129,30 @@ class PanelDock:
         with folder:
             for k, (label, actions) in enumerate(VIEW_BUTTONS.items()):
                 groups[label] = gui.add_button_group(label, tuple(actions), order=order(k))
-                view._on(groups[label].on_click, lambda e, a=actions: view._user_event(
+                tab.on(groups[label].on_click, lambda e, a=actions: tab.user_event(
                     lambda: self.view_action(name, a.get(e.target.value, e.target.value))))
             groups["download panel"] = gui.add_button_group("download panel", DOWNLOAD_FORMATS,
                                                             order=order(len(VIEW_BUTTONS)))
-            view._on(groups["download panel"].on_click,
-                     lambda e: view._user_event(lambda: self.download(name, e.target.value)))
+            tab.on(groups["download panel"].on_click,
+                   lambda e: tab.user_event(lambda: self.download(name, e.target.value)))
         self.buttons[name] = groups
 
     def view_action(self, name: str, action: Any) -> None:
         """Apply a view button (one of :data:`~egtviz.viewer.render.panels.VIEW_ACTIONS`) to panel ``name`` and redraw it."""
         if action not in VIEW_ACTIONS:  # a raw client can send any string
             raise FieldError(f"{name}: no view button {plain(repr(action), 40)}")
-        plane = self.view.model.derived.image_planes.get(name)
+        plane = self.tab.model.derived.image_planes.get(name)
         if plane is None:
             return  # the camera was removed meanwhile
         view = self.panel_view(name, plane).after(action, plane)
         self._views[name] = ((int(plane.width), int(plane.height)), view)
-        self.view.redraw_now()
+        self.tab.redraw_now()
 
     def download(self, name: str, fmt: Any) -> None:
         """Send panel ``name`` as it is shown (its view, the tab's style) as an SVG or PNG file."""
         if fmt not in DOWNLOAD_FORMATS:
             raise FieldError(f"{name}: no download format {plain(repr(fmt), 40)}")
-        model = self.view.model
+        model = self.tab.model
         scene = model.scene
         plane = model.derived.image_planes.get(name)
         if plane is None:
@@ -169,8 +173,8 @@ class PanelDock:
             return
         self.present = value
         self.gui_style.content = PRESENT_GUI_CSS if value else ""
-        self.view.scene3d.set_label_scale(PRESENT_LABEL_SCALE if value else 1.0)
-        self.view.redraw_now()
+        self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if value else 1.0)
+        self.tab.redraw_now()
 
     # -- the grid ----------------------------------------------------------------------------------------
 
@@ -275,7 +279,7 @@ class PanelDock:
             return
         docked = grid.control_px + grid.right_px + DIVIDER_PX * (len(grid.columns) + 1)
         self.window = WindowSize(w / self.pixel_ratio + docked, h / self.pixel_ratio)
-        self.view.redraw_now()
+        self.tab.redraw_now()
 
     def frame_camera(self) -> None:
         """Start this tab's 3D view on the whole scene, inside the canvas the docked panels leave free."""
@@ -283,8 +287,8 @@ class PanelDock:
         if grid is None:
             return
         # What the scene holds (mirrors and their CCDs too) and its size: the glyphs are drawn at that size.
-        extent = scene_extent(self.view.model.scene, self.view.model.derived)
-        self.view.scene3d.set_glyph(extent.glyph)
+        extent = scene_extent(self.tab.model.scene, self.tab.model.derived)
+        self.scene3d.set_glyph(extent.glyph)
         aspect = max(grid.canvas_px, 120.0) / grid.window.height
         framed = framed_camera(extent.points, aspect, pad=extent.glyph, min_radius=3.0 * extent.glyph)
         cam = self.client.camera
@@ -301,7 +305,7 @@ class PanelDock:
         """What panel ``name`` shows; a new panel, or a new image size, starts from :func:`initial_view`."""
         size = (int(plane.width), int(plane.height))
         kept = self._views.get(name)
-        step_view = self.view.policy.step_view(name)
+        step_view = self.tab.policy().step_view(name)
         if step_view is None:
             self._step_views.pop(name, None)  # the next step that sets a view applies it again
         elif self._step_views.get(name) != step_view:
@@ -333,7 +337,7 @@ class PanelDock:
         view = self.panel_view(name, plane).resolve(plane, kept=kept)
         self._shown_views[name] = view
         inputs = (scene.selected_point, frozenset(highlighted), scene.options.show_labels,
-                  self.view.policy.shown().labels, view, self.style, panel_px, max_height, ringed)
+                  self.tab.policy().shown().labels, view, self.style, panel_px, max_height, ringed)
         drawn = self._drawn.get(name)
         if drawn is not None and drawn[0] is plane and drawn[1] == inputs:
             return drawn[2]
@@ -355,7 +359,7 @@ class PanelDock:
 
     def _labels(self, scene: Scene) -> bool | str:
         """The panels' ``show_labels``: the scene's option, narrowed by the lesson step's ``labels``."""
-        labels = self.view.policy.shown().labels
+        labels = self.tab.policy().shown().labels
         if not scene.options.show_labels or labels == "none":
             return False
         return "marked" if labels == "selected" else True

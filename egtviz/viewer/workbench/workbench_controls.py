@@ -11,9 +11,7 @@ import itertools
 from html import escape
 from typing import TYPE_CHECKING, Any, Literal
 
-from ...geometry import PinholeCamera
 from ...geometry.camera_model import CAMERA_MODELS
-from ...geometry.catadioptric import HYPERBOLIC
 from ...scene import (
     SCENES,
     Scene,
@@ -30,15 +28,26 @@ from .gui_text import plain, set_value
 from ..render.panels import CONTROL_PX
 
 if TYPE_CHECKING:
-    from .app import ClientView
+    from .tab_context import TabContext
 
-__all__ = ["POINTS_RULE", "SURFACE_KINDS", "WorkbenchControls"]
+__all__ = ["POINTS_RULE", "SERVO_DEMOS", "SURFACE_KINDS", "WorkbenchControls"]
 
 #: The "how many points" field: what the page offers is what the server accepts.
 POINTS_RULE = (NumberRule("how many points", "", 0, limits.MAX_POINTS, integer=True),)
 SURFACE_KINDS: tuple[Literal["plane", "sphere"], ...] = ("plane", "sphere")
+#: The servo demos' buttons: demo kind -> label.
+SERVO_DEMOS = {"pinhole": "Pin-hole camera on a Puma 560", "panoramic": "Panoramic camera on a mobile robot"}
 _TOGGLES = (("show_rays", "projection rays"), ("show_planes", "epipolar plane"), ("show_frames", "camera frames"),
             ("show_labels", "labels"), ("show_surfaces", "surfaces"))
+
+
+def _pair_choices(scene: Scene) -> dict[str, tuple[str, str]]:
+    """The "drawn pair" drop-down's options: every pair of the scene's cameras, and the drawn pair whatever it is."""
+    pairs = {f"{a} & {b}": (a, b) for a, b in itertools.combinations(scene.camera_names, 2)}
+    drawn = scene.drawn_pair
+    if drawn is not None and f"{drawn[0]} & {drawn[1]}" not in pairs:
+        pairs[f"{drawn[0]} & {drawn[1]}"] = drawn
+    return pairs
 
 
 def _file_name(title: str) -> str:
@@ -51,31 +60,31 @@ class WorkbenchControls:
     """The tab's control panel (left dock) apart from the camera folders' own fields.
 
     Args:
-        view: the tab (its client, model, event runners and demo opener are used).
+        tab: the tab's services (its client, model and event wrappers are used).
+        open_demo: ``open_demo(kind)`` replaces the tab by a visual-servoing demo; None: no such folder.
     """
 
-    def __init__(self, view: ClientView) -> None:
-        self.view = view
-        self._pair_options: dict[str, tuple[str, str]] = {}
-        self._point_options_n = -1
+    def __init__(self, tab: TabContext, *, open_demo: Any = None) -> None:
+        self.tab = tab
+        self.open_demo = open_demo
         self._synced_rest: tuple | None = None
         self._surface_options: dict[str, tuple[Literal["plane", "sphere", "mesh"], str]] = {}
         self._n_points_text = "8"
 
     def _button(self, label: str, action: Any, **kwargs: Any) -> Any:
         """A button whose click runs ``action`` as a user event."""
-        view = self.view
-        button = view.client.gui.add_button(label, **kwargs)
-        view._on(button.on_click, lambda _: view._user_event(action))
+        tab = self.tab
+        button = tab.client.gui.add_button(label, **kwargs)
+        tab.on(button.on_click, lambda _: tab.user_event(action))
         return button
 
-    def build(self) -> None:
-        """Build the control panel, top to bottom."""
-        view, gui = self.view, self.view.client.gui
+    def build(self, *, present: bool) -> None:
+        """Build the control panel, top to bottom (``present``: sized for presentation mode)."""
+        tab, gui = self.tab, self.tab.client.gui
         gui.configure_theme(dark_mode=False, show_logo=False)
         try:
             gui.main_panel.dock_left()
-            gui.main_panel.set_width(CONTROL_PX["present" if view.present else "normal"])
+            gui.main_panel.set_width(CONTROL_PX["present" if present else "normal"])
         except Exception:  # noqa: BLE001 - placement is cosmetic
             pass
         # HTML, not markdown: the title comes from a file and is escaped as text.
@@ -83,7 +92,7 @@ class WorkbenchControls:
         with gui.add_folder("Epipolar geometry", expand_by_default=True):
             self.pair_dropdown = gui.add_dropdown("drawn pair", ["-"],
                                                   hint="Which two cameras' epipolar geometry is drawn.")
-            view._on(self.pair_dropdown.on_update, lambda _: view._user_event(self._set_pair))
+            tab.on(self.pair_dropdown.on_update, lambda _: tab.user_event(self._set_pair))
             self.readout_md = gui.add_html("")
         with gui.add_folder("Points", expand_by_default=True):
             self._build_points()
@@ -92,36 +101,35 @@ class WorkbenchControls:
             self.add_buttons = {}
             for kind, info in CAMERA_MODELS.items():
                 self.add_buttons[kind] = self._button(f"Add {info.label[0].lower()}{info.label[1:]}",
-                                                      lambda k=kind: view.model.add_camera(k))
-            self.btn_add_pinhole = self.add_buttons[PinholeCamera.kind]
-            self.btn_add_pano = self.add_buttons[HYPERBOLIC.kind]
+                                                      lambda k=kind: tab.model.add_camera(k))
             self.cameras_folder = gui.add_folder("Camera settings", expand_by_default=True)
         with gui.add_folder("Show", expand_by_default=False):
             self.toggles = {}
             for opt, label in _TOGGLES:
-                cb = gui.add_checkbox(label, getattr(view.model.scene.options, opt))
-                view._on(cb.on_update, lambda e, opt=opt: view._user_event(lambda: self._toggle(opt, e.target.value)))
+                cb = gui.add_checkbox(label, getattr(tab.model.scene.options, opt))
+                tab.on(cb.on_update, lambda e, opt=opt: tab.user_event(lambda: self._toggle(opt, e.target.value)))
                 self.toggles[opt] = cb
-        if view.open_demo is not None:
+        #: The visual-servoing demos' buttons by demo kind (``pinhole``, ``panoramic``); empty: no demos here.
+        self.servo_buttons: dict[str, Any] = {}
+        if self.open_demo is not None:
             with gui.add_folder("Visual servoing", expand_by_default=False):
-                self.btn_servo_pinhole = gui.add_button("Pin-hole camera on a Puma 560")
-                view._on(self.btn_servo_pinhole.on_click, lambda _: view.open_demo("pinhole"))
-                self.btn_servo_panoramic = gui.add_button("Panoramic camera on a mobile robot")
-                view._on(self.btn_servo_panoramic.on_click, lambda _: view.open_demo("panoramic"))
+                for kind, label in SERVO_DEMOS.items():
+                    button = self.servo_buttons[kind] = gui.add_button(label)
+                    tab.on(button.on_click, lambda _, k=kind: self.open_demo(k))
         with gui.add_folder("Scene", expand_by_default=False):
             self._build_scene_actions()
 
     def _build_points(self) -> None:
-        view, gui = self.view, self.view.client.gui
+        tab, gui = self.tab, self.tab.client.gui
         self.point_dropdown = gui.add_dropdown("selected point", ["none"],
                                                hint="The selected point's epipolar plane is drawn in 3D.")
-        view._on(self.point_dropdown.on_update, lambda _: view._user_event(self._select))
+        tab.on(self.point_dropdown.on_update, lambda _: tab.user_event(self._select))
         self.n_points = gui.add_text("how many (randomise)", self._n_points_text,
                                      hint=f"A whole number from 0 to {limits.MAX_POINTS}.")
-        view._on(self.n_points.on_update,
-                 lambda e: view._text_event("n_points", self._check_n_points, e.target.value))
+        tab.on(self.n_points.on_update,
+               lambda e: tab.text_event("n_points", self._check_n_points, e.target.value))
         self.btn_random = self._button("Randomise points", self._randomise)
-        self.btn_add_point = self._button("Add point", lambda: view.model.add_point((0.0, 0.0, 1.0)))
+        self.btn_add_point = self._button("Add point", lambda: tab.model.add_point((0.0, 0.0, 1.0)))
         self.btn_remove_point = self._button("Remove selected (or last) point", self._remove_point)
         self._surface_options = {k: (k, "") for k in SURFACE_KINDS}
         self._surface_options.update({f"mesh: {m}": ("mesh", m) for m in mesh_names()})
@@ -129,9 +137,9 @@ class WorkbenchControls:
         self.btn_surface = self._button("Add surface", self._add_surface)
 
     def _build_scene_actions(self) -> None:
-        view, gui = self.view, self.view.client.gui
+        tab, gui = self.tab, self.tab.client.gui
         self.btn_undo = self._button("Undo", self._undo)
-        self.btn_reset = self._button("Reset", view.model.reset)
+        self.btn_reset = self._button("Reset", tab.model.reset)
         self.builtin = gui.add_dropdown("built-in scene", tuple(SCENES), initial_value=next(iter(SCENES)),
                                         hint="A ready-made scene; Open replaces this tab's scene (undoable).")
         self.btn_open = self._button("Open built-in scene", self._open_builtin)
@@ -139,11 +147,11 @@ class WorkbenchControls:
         self.btn_load = gui.add_upload_button(
             "Load (upload)", mime_type="application/json",
             hint=f"Open a scene file from this computer (at most {limits.MAX_SCENE_FILE_BYTES // 1000} kB).")
-        view._on(self.btn_load.on_upload, lambda _: view._user_event(self._load))
+        tab.on(self.btn_load.on_upload, lambda _: tab.user_event(self._load))
 
     def title_html(self) -> str:
         """The scene's title and a figure's messages (what its drawing calls could not draw), escaped."""
-        scene = self.view.model.scene
+        scene = self.tab.model.scene
         title = escape(plain(scene.title or "egtviz", limits.MAX_TITLE_LENGTH))
         notes = "".join(f'<br><span data-egtviz="figure-message" style="color:#a00">{escape(plain(m, 200))}</span>'
                         for m in scene.annotations.messages)
@@ -155,9 +163,9 @@ class WorkbenchControls:
 
     def _undo(self) -> None:
         """Undo one change; at an undo barrier (a lesson step's start) say why nothing happened."""
-        model = self.view.model
+        model = self.tab.model
         if not model.undo() and model.undo_barrier_note is not None:
-            self.view.client.add_notification("Nothing to undo", model.undo_barrier_note, color="yellow",
+            self.tab.client.add_notification("Nothing to undo", model.undo_barrier_note, color="yellow",
                                               auto_close_seconds=8.0)
 
     def _check_n_points(self, text: Any) -> None:
@@ -166,41 +174,42 @@ class WorkbenchControls:
 
     def _set_pair(self) -> None:
         value = self.pair_dropdown.value
-        pair = self._pair_options.get(value)
+        # The options as last written: the model's scene, since every change is written back under the lock.
+        pair = _pair_choices(self.tab.model.scene).get(value)
         if pair is None:
             raise FieldError(f"drawn pair: no pair {plain(repr(value), 40)}")
-        if pair != self.view.model.scene.drawn_pair:
-            self.view.model.set_pair(*pair)
+        if pair != self.tab.model.scene.drawn_pair:
+            self.tab.model.set_pair(*pair)
 
     def _select(self) -> None:
         v = self.point_dropdown.value
-        n = len(self.view.model.scene.points)
+        n = len(self.tab.model.scene.points)
         options = {"none": None} | {f"point {i + 1}": i for i in range(n)}
         if v not in options:
             raise FieldError(f"selected point: no {plain(repr(v), 40)} (have {n} points)")
         idx = options[v]
-        if idx != self.view.model.scene.selected_point:
-            self.view.model.select_point(idx)
+        if idx != self.tab.model.scene.selected_point:
+            self.tab.model.select_point(idx)
 
     def _toggle(self, opt: str, value: Any) -> None:
         if not isinstance(value, bool):
             raise FieldError(f"{opt}: expected true or false, got {plain(repr(value), 40)}")
-        if getattr(self.view.model.scene.options, opt) != value:
-            self.view.model.set_option(opt, value)
+        if getattr(self.tab.model.scene.options, opt) != value:
+            self.tab.model.set_option(opt, value)
 
     def _centre(self) -> tuple[float, float, float]:
-        X = self.view.model.scene.points_array()
+        X = self.tab.model.scene.points_array()
         return tuple(X.mean(axis=0)) if len(X) else (0.0, 0.0, 1.0)
 
     def _randomise(self) -> None:
         (n,) = parse_numbers(self.n_points.value, POINTS_RULE)
-        self.view.model.randomize_points(int(n), center=self._centre(), extent=2.0)
+        self.tab.model.randomize_points(int(n), center=self._centre(), extent=2.0)
 
     def _remove_point(self) -> None:
-        scene = self.view.model.scene
+        scene = self.tab.model.scene
         if not scene.points:
             raise SceneError("no points to remove")
-        self.view.model.remove_point(scene.selected_point if scene.selected_point is not None
+        self.tab.model.remove_point(scene.selected_point if scene.selected_point is not None
                                      else len(scene.points) - 1)
 
     def _add_surface(self) -> None:
@@ -211,23 +220,23 @@ class WorkbenchControls:
         centre = self._centre()
         if kind == "mesh":
             # A mesh of the package's own, standing on the ground under the points.
-            self.view.model.add_surface(
+            self.tab.model.add_surface(
                 SurfaceSpec(kind="mesh", center=(centre[0], centre[1], 0.0), size=2.0, samples=300, path=mesh)
             )
             return
         size = 1.0 if kind == "sphere" else 3.0
-        self.view.model.add_surface(SurfaceSpec(kind=kind, center=centre, size=size, samples=200))
+        self.tab.model.add_surface(SurfaceSpec(kind=kind, center=centre, size=size, samples=200))
 
     def _open_builtin(self) -> None:
         name = self.builtin.value
         if name not in SCENES:  # a raw client can send any string
             raise FieldError(f"built-in scene: no scene {plain(repr(name), 40)}; "
                              f"the built-in scenes are {', '.join(SCENES)}")
-        self.view.model.load_scene(SCENES[name]())
+        self.tab.model.load_scene(SCENES[name]())
 
     def _save(self) -> None:
-        scene = self.view.model.scene
-        self.view.client.send_file_download(_file_name(scene.title or "scene"), scene_to_bytes(scene),
+        scene = self.tab.model.scene
+        self.tab.client.send_file_download(_file_name(scene.title or "scene"), scene_to_bytes(scene),
                                             save_immediately=True)
 
     def _load(self) -> None:
@@ -239,7 +248,7 @@ class WorkbenchControls:
         if len(content) > limits.MAX_SCENE_FILE_BYTES:  # before parsing: a big file is refused unread
             raise SceneFileError(f"{name}: the file has {len(content)} bytes; a scene file has at most "
                                  f"{limits.MAX_SCENE_FILE_BYTES} bytes")
-        self.view.model.load_scene(scene_from_bytes(content, source=name))
+        self.tab.model.load_scene(scene_from_bytes(content, source=name))
 
     # -- write-back --------------------------------------------------------------------------------------
 
@@ -248,27 +257,20 @@ class WorkbenchControls:
 
         ``force=False`` (a render): skipped when nothing they show changed (a drag moves one camera's pose only).
         """
-        model = self.view.model
+        model = self.tab.model
         title = self.title_html()
         rest_key = (scene.camera_names, scene.drawn_pair, len(scene.points), scene.selected_point, scene.options,
                     model.can_undo, model.undo_barrier_note, title)
         if not force and rest_key == self._synced_rest:
             return
         self._synced_rest = rest_key
-        pairs = {f"{a} & {b}": (a, b) for a, b in itertools.combinations(scene.camera_names, 2)}
         drawn = scene.drawn_pair
-        if drawn is not None and f"{drawn[0]} & {drawn[1]}" not in pairs:
-            pairs[f"{drawn[0]} & {drawn[1]}"] = drawn
-        self._pair_options = pairs
-        options = tuple(pairs) or ("-",)
+        options = tuple(_pair_choices(scene)) or ("-",)
         if tuple(self.pair_dropdown.options) != options:
             self.pair_dropdown.options = options
         set_value(self.pair_dropdown, f"{drawn[0]} & {drawn[1]}" if drawn else "-")
-        if self._point_options_n != len(scene.points):
-            popts = ("none",) + tuple(f"point {i + 1}" for i in range(len(scene.points)))
-            if tuple(self.point_dropdown.options) != popts:
-                self.point_dropdown.options = popts
-            self._point_options_n = len(scene.points)
+        if len(self.point_dropdown.options) != len(scene.points) + 1:  # "none", then one per point
+            self.point_dropdown.options = ("none",) + tuple(f"point {i + 1}" for i in range(len(scene.points)))
         sel = scene.selected_point
         set_value(self.point_dropdown, "none" if sel is None else f"point {sel + 1}")
         for opt, cb in self.toggles.items():
