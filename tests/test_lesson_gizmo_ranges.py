@@ -19,7 +19,7 @@ from egtviz.lessons import LessonRun, parse_lesson
 from egtviz.viewer.server.headless import start_headless
 from egtviz.viewer.course.lesson_view import LessonPanel, pose_within_ranges, range_refusal
 
-from _waiting import wait_until  # noqa: E402
+from _waiting import PATIENCE, PATIENCE_MS, wait_for, wait_until  # noqa: E402
 
 # cam1 of the default scene is at (-3, -8, 1.5) with yaw 20.6, pitch -3.3, roll 0 (degrees).
 LESSON = """
@@ -221,35 +221,53 @@ def test_in_the_browser_a_dragged_camera_stops_at_the_range_and_its_gizmo_is_put
     import viser
 
     from egtviz.viewer.workbench.app import EgtvizApp
-    from egtviz.viewer.server.browser import chromium, close_notifications, open_viewer
+    from egtviz.viewer.server.browser import open_viewer, shared_chromium
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    page = None
     try:
         app = EgtvizApp(server)
-        with chromium() as browser:
-            page = open_viewer(browser, f"http://127.0.0.1:{server.get_port()}")
-            close_notifications(page)
-            (view,) = app.wait_for_view()
-            LessonPanel(view, LessonRun(parse_lesson(LESSON, source="ranges.toml", name="ranges"), model=view.model))
-            camera = view.client.camera
-            camera.position, camera.look_at = (-1.0, -14.0, 4.0), (0.0, -8.0, 1.5)  # close to cam1, so its arrow is large on screen
-            assert wait_until(lambda: np.allclose(camera.look_at, (0.0, -8.0, 1.5)))
-            time.sleep(0.5)  # the page draws the new view
-            box = page.evaluate("(() => { const r = [...document.querySelectorAll('canvas')].pop()"
-                                ".getBoundingClientRect(); return {x: r.x, y: r.y, width: r.width, height: r.height} })()")
-            gizmo = view.scene3d._cams["cam1"]["gizmo"]
-            R = matrix_from_quat_wxyz(gizmo.wxyz)
-            axis = R[:, 0]  # cam1's x axis (image right): mostly world +x, a little -y (yaw 20.6 degrees)
-            assert axis[0] > 0.9 and axis[1] < 0
-            # 8 m along it would reach x = 4.5 and y = -10.8: the range -8..2 stops cam1 at x = 2, y = -8.
-            _drag_arrow(page, camera, box, np.array(gizmo.position), axis, 8.0, gizmo.scale)
-            assert wait_until(lambda: view.model.scene.camera("cam1").position[0] == 2.0)
-            edge = np.array(view.model.scene.camera("cam1").position)
-            assert edge == pytest.approx((2.0, -8.0, 1.5), abs=1e-9)
-            # The page's gizmo was put at the edge: its arrow is grabbed there and drags cam1 back 1 m.
-            _drag_arrow(page, camera, box, edge, axis, -1.0, gizmo.scale)
-            assert wait_until(lambda: view.model.scene.camera("cam1").position[0] < 1.5)
-            back = np.array(view.model.scene.camera("cam1").position)
-            assert back == pytest.approx(edge - axis, abs=0.05)
+        # The test process's Chromium (the browser tests' too: playwright runs one instance per thread at a time),
+        # without the software-WebGL notification over the 3D view's corner.
+        browser = shared_chromium(timeout_ms=PATIENCE_MS, quiet=True)
+        page = open_viewer(browser, f"http://127.0.0.1:{server.get_port()}")
+        (view,) = app.wait_for_view(timeout=PATIENCE)
+        LessonPanel(view, LessonRun(parse_lesson(LESSON, source="ranges.toml", name="ranges"), model=view.model))
+        camera = view.client.camera
+        # The page reports its view camera once it has moved it: then the arrow's place on screen is known.
+        reported = []
+        camera.on_update(lambda cam: reported.append((np.array(cam.position), np.array(cam.look_at))))
+
+        def look(position, look_at) -> None:
+            """Move the page's view camera and wait until the page reports it there: every message the server sent
+            the page before (a gizmo put somewhere, say) has then been handled too (one connection, in order)."""
+            reported.clear()
+            camera.position, camera.look_at = position, look_at
+            wait_for(lambda: any(np.allclose(p, position, atol=1e-3) and np.allclose(a, look_at, atol=1e-3)
+                                 for p, a in list(reported)), f"the page to report its view camera at {position}")
+
+        look((-1.0, -14.0, 4.0), (0.0, -8.0, 1.5))  # close to cam1, so its arrow is large on screen
+        box = page.evaluate("(() => { const r = [...document.querySelectorAll('canvas')].pop()"
+                            ".getBoundingClientRect(); return {x: r.x, y: r.y, width: r.width, height: r.height} })()")
+        gizmo = view.scene3d._cams["cam1"]["gizmo"]
+        R = matrix_from_quat_wxyz(gizmo.wxyz)
+        axis = R[:, 0]  # cam1's x axis (image right): mostly world +x, a little -y (yaw 20.6 degrees)
+        assert axis[0] > 0.9 and axis[1] < 0
+        # 8 m along it would reach x = 4.5 and y = -10.8: the range -8..2 stops cam1 at x = 2, y = -8.
+        _drag_arrow(page, camera, box, np.array(gizmo.position), axis, 8.0, gizmo.scale)
+        assert wait_until(lambda: view.model.scene.camera("cam1").position[0] == 2.0), "cam1 never stopped at x = 2"
+        edge = np.array(view.model.scene.camera("cam1").position)
+        assert edge == pytest.approx((2.0, -8.0, 1.5), abs=1e-9)
+        # The server puts the gizmo at the edge when the drag ends; the page has it there once it has handled a
+        # later message (a view camera a hair higher).
+        wait_for(lambda: np.allclose(gizmo.position, edge, atol=1e-9), "the server to put cam1's gizmo at the edge")
+        look((-1.0, -14.0, 4.001), (0.0, -8.0, 1.501))
+        # The page's gizmo was put at the edge: its arrow is grabbed there and drags cam1 back 1 m.
+        _drag_arrow(page, camera, box, edge, axis, -1.0, gizmo.scale)
+        assert wait_until(lambda: view.model.scene.camera("cam1").position[0] < 1.5), "cam1 was not dragged back"
+        back = np.array(view.model.scene.camera("cam1").position)
+        assert back == pytest.approx(edge - axis, abs=0.05)
     finally:
+        if page is not None:
+            page.close()
         server.stop()

@@ -6,18 +6,20 @@ They skip only when /usr/bin/chromium is missing on a developer machine; with
 
 from __future__ import annotations
 
-import time
+import re
 
 import numpy as np
 import pytest
 
+from _layout import settled_panels
+from _waiting import wait_for
 from egtviz.scene import compute_derived, default_scene, panoramic_scene
 from egtviz.viewer.server.browser import (
     COUNT_JS,
     LINES_JS,
-    chromium,
     folder_field,
     open_viewer,
+    wait_for_js,
 )
 
 pytestmark = pytest.mark.browser
@@ -32,12 +34,6 @@ def _serve(scene):
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, scene)
     return server, app, f"http://127.0.0.1:{server.get_port()}"
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with chromium() as b:
-        yield b
 
 
 @pytest.fixture(scope="module")
@@ -60,9 +56,11 @@ def _disjoint(a, b) -> bool:
 
 def test_default_scene_panels(browser, pinhole_server):
     app, url = pinhole_server
+    before_ids = set(app.views)
     page = open_viewer(browser, url)
     try:
-        counts = page.evaluate(COUNT_JS)
+        view = _the_view(app, before_ids)
+        counts = settled_panels(page, lambda: view, 2, lambda pg: pg.evaluate(COUNT_JS))
         assert set(counts) == {"cam1", "cam2"}
         derived = compute_derived(default_scene())
         for name, c in counts.items():
@@ -98,14 +96,27 @@ def test_panoramic_scene_panels(browser, panoramic_server):
         page.close()
 
 
-def _wait_rev_change(page, camera, rev, timeout=15.0):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        now = page.evaluate(COUNT_JS)[camera]["rev"]
-        if now != rev:
-            return now
-        time.sleep(0.05)
-    raise AssertionError(f"panel {camera} did not update (data-rev stayed {rev})")
+#: The revision of a panel as the page shows it.
+REV_JS = """(camera) => document.querySelector(`svg[data-egtviz="image-plane"][data-camera="${camera}"]`)?.dataset.rev"""
+
+
+def _server_rev(view, camera) -> str:
+    """The revision of the panel the server last drew for ``view``'s tab (under its lock: not mid-redraw)."""
+    with view.lock:
+        return re.search(r'data-rev="([^"]*)"', view.svgs[camera]).group(1)
+
+
+def _the_view(app, before: set[int]):
+    """The server's view of the tab that connected after ``before`` (a set of client ids)."""
+    new: list[int] = []
+    wait_for(lambda: new.extend(set(app.views) - before) or new, "the page's tab to connect")
+    return app.views[new[0]]
+
+
+def _wait_caught_up(page, view, camera) -> None:
+    """Wait until ``page`` shows the panel the server last drew for its tab."""
+    wait_for(lambda: page.evaluate(REV_JS, camera) == _server_rev(view, camera),
+             f"{camera}'s panel in the page at the server's last revision")
 
 
 def _edit_focal(page, value: str) -> None:
@@ -117,13 +128,16 @@ def _edit_focal(page, value: str) -> None:
 
 def test_editing_a_field_moves_the_epipolar_lines(browser, pinhole_server):
     app, url = pinhole_server
+    before_ids = set(app.views)
     page = open_viewer(browser, url)
     try:
+        view = _the_view(app, before_ids)
         before = np.array(page.evaluate(LINES_JS, "cam1"))
-        rev = page.evaluate(COUNT_JS)["cam1"]["rev"]
         _edit_focal(page, "12")
-        _wait_rev_change(page, "cam1", rev)
-        time.sleep(0.3)  # typing may send a few updates; let them settle
+        # Typing may send a few updates: the last one (12 mm) judged, and the page showing what followed it.
+        wait_for(lambda: abs(view.model.scene.camera("cam1").focal_length - 0.012) < 1e-12,
+                 "the server to take cam1's focal length 12 mm")
+        _wait_caught_up(page, view, "cam1")
         after = np.array(page.evaluate(LINES_JS, "cam1"))
         assert before.shape == after.shape == (8, 4)
         assert not np.allclose(before, after, atol=0.5)
@@ -138,7 +152,7 @@ def test_invalid_value_is_refused_in_the_browser(browser, pinhole_server):
     page = open_viewer(browser, url)
     try:
         _edit_focal(page, "-3")
-        page.get_by_text("Value refused").first.wait_for(timeout=10_000)
+        page.get_by_text("Value refused").first.wait_for()
         assert all(v.model.scene.camera("cam1").focal_length > 0 for v in app.views.values())
     finally:
         page.close()
@@ -154,9 +168,8 @@ def test_text_a_number_field_cannot_read_is_refused_and_reverted(browser, pinhol
         field.click()
         field.press("Control+a")
         field.press_sequentially(text, delay=30)
-        page.get_by_text("Value refused").first.wait_for(timeout=10_000)
-        page.wait_for_function(
-            "(el) => el.value === '8'", arg=field.element_handle(), timeout=10_000)
+        page.get_by_text("Value refused").first.wait_for()
+        wait_for_js(page, "(el) => el.value === '8'", "the field to show 8 again", arg=field.element_handle())
         assert page.get_by_text("cam1: focal length").count() >= 1
         assert all(v.model.scene.camera("cam1").focal_length == pytest.approx(0.008) for v in app.views.values())
     finally:
@@ -165,15 +178,22 @@ def test_text_a_number_field_cannot_read_is_refused_and_reverted(browser, pinhol
 
 def test_second_tab_edits_do_not_reach_the_first(browser, pinhole_server):
     app, url = pinhole_server
+    before_ids = set(app.views)
     first = open_viewer(browser, url)
+    view_first = _the_view(app, before_ids)
     second = open_viewer(browser, url)
+    view_second = _the_view(app, before_ids | {view_first.client.client_id})
     try:
         lines_first = first.evaluate(LINES_JS, "cam1")
         rev_first = first.evaluate(COUNT_JS)["cam1"]["rev"]
-        rev_second = second.evaluate(COUNT_JS)["cam1"]["rev"]
         _edit_focal(second, "15")
-        _wait_rev_change(second, "cam1", rev_second)
-        time.sleep(0.5)
+        wait_for(lambda: abs(view_second.model.scene.camera("cam1").focal_length - 0.015) < 1e-12,
+                 "the server to take the second tab's focal length 15 mm")
+        _wait_caught_up(second, view_second, "cam1")
+        # The second tab's edit was handled (the server drew it, its page shows it): the first tab's model, the
+        # panel the server drew for it and the panel its page shows are as they were.
+        assert view_first.model.scene.camera("cam1").focal_length == pytest.approx(0.008)
+        assert _server_rev(view_first, "cam1") == rev_first
         assert first.evaluate(COUNT_JS)["cam1"]["rev"] == rev_first
         assert first.evaluate(LINES_JS, "cam1") == lines_first
         assert np.array(second.evaluate(LINES_JS, "cam1")).shape == (8, 4)
@@ -182,9 +202,14 @@ def test_second_tab_edits_do_not_reach_the_first(browser, pinhole_server):
         second.close()
 
 
-def test_screenshot_script_writes_a_png(browser, tmp_path):
+def test_screenshot_script_writes_a_png(browser, tmp_path, monkeypatch):
+    import types
+
+    from egtviz.viewer.server import screenshot
     from egtviz.viewer.server.screenshot import take_screenshot
 
+    # The script sleeps 6 s for the 3D view to draw and fade in: its picture's looks, which nothing here judges.
+    monkeypatch.setattr(screenshot, "time", types.SimpleNamespace(sleep=lambda seconds: None))
     out = take_screenshot(tmp_path / "shot.png", browser=browser)
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000

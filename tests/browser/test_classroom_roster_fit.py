@@ -7,7 +7,6 @@ import pytest
 
 from egtviz.lessons import ProgressStore
 from egtviz.viewer.classroom import ClassroomHost, instructor_url
-from egtviz.viewer.server.browser import chromium
 
 pytestmark = pytest.mark.browser
 
@@ -21,12 +20,6 @@ FIT_JS = """(e) => {
     || 1.3 * parseFloat(getComputedStyle(e.querySelector('th')).fontSize);
   return {scroll: e.scrollWidth, client: e.clientWidth, right: box.right, cells: Math.max(...cells), heads, line};
 }"""
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with chromium() as b:
-        yield b
 
 
 @pytest.mark.parametrize("width, height, present", [(1366, 768, False), (1920, 1080, False), (1920, 1080, True)])
@@ -49,10 +42,10 @@ def test_the_roster_fits_the_instructors_panel(browser, tmp_path, width, height,
             host.room.report_step(10_000 + k, LESSON, 2)
         page = context.new_page()
         page.goto(instructor_url(base, host.room.instructor_token))
-        page.wait_for_selector("text=follow me", timeout=60_000)
+        page.wait_for_selector("text=follow me")
         page.get_by_text("Students", exact=True).first.click()
         roster = page.locator(f'[data-egtviz="roster"][data-rows="{len(NAMES)}"]').first
-        roster.wait_for(state="visible", timeout=30_000)
+        roster.wait_for(state="visible")
         fit = roster.evaluate(FIT_JS)
         assert fit["scroll"] <= fit["client"], fit  # nothing to scroll sideways to
         assert fit["cells"] <= fit["right"] + 0.5, fit  # the tasks column is inside the panel

@@ -5,25 +5,18 @@ accepted; the two answers differ, and each learner's answer is refused in the ot
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 import pytest
 
+from _waiting import wait_for
 from egtviz.lessons import ProgressStore, load
-from egtviz.viewer.server.browser import PANEL_SELECTOR, chromium, close_notifications, folder_field
+from egtviz.viewer.server.browser import PANEL_SELECTOR, close_notifications, folder_field, wait_for_js
 
 pytestmark = pytest.mark.browser
 
 LESSON = "03-intrinsics"
 TITLE = "3. Intrinsics"
-TIMEOUT_MS = 60_000
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with chromium() as b:
-        yield b
 
 
 @pytest.fixture
@@ -38,15 +31,6 @@ def course(tmp_path):
     server.stop()
 
 
-def _wait(predicate, timeout=30.0) -> None:
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        if predicate():
-            return
-        time.sleep(0.05)
-    raise AssertionError("the server did not reach the expected state")
-
-
 def _labelled_input(page, label: str):
     return page.locator(f'xpath=//label[normalize-space(.)="{label}"]/following::input[1]').first
 
@@ -55,8 +39,9 @@ def _panel_of(app, learner: str):
     from egtviz.viewer.course.lesson_view import LessonPanel
 
     found = []
-    _wait(lambda: found.extend(t for t in app.course.tabs.values()
-                               if isinstance(t, LessonPanel) and t.run.learner == learner) or bool(found))
+    wait_for(lambda: found.extend(t for t in app.course.tabs.values()
+                                  if isinstance(t, LessonPanel) and t.run.learner == learner) or bool(found),
+             f"{learner}'s lesson tab")
     return found[0]
 
 
@@ -65,21 +50,22 @@ def _enter_as(browser, app, url: str, learner: str):
     context = browser.new_context(viewport={"width": 1366, "height": 900})
     page = context.new_page()
     page.goto(url)
-    page.get_by_role("button", name="Open the workbench").wait_for(timeout=TIMEOUT_MS)
+    page.get_by_role("button", name="Open the workbench").wait_for()
     close_notifications(page)
     name = _labelled_input(page, "your name")
     name.fill(learner)
     name.press("Enter")
-    _wait(lambda: any(getattr(t, "learner", "") == learner for t in app.course.tabs.values()))
+    wait_for(lambda: any(getattr(t, "learner", "") == learner for t in app.course.tabs.values()),
+             f"the server to take the name {learner}")
     page.get_by_role("button", name=TITLE).click()
-    page.wait_for_function(f"() => document.querySelectorAll('{PANEL_SELECTOR}').length >= 2", timeout=TIMEOUT_MS)
+    wait_for_js(page, f"() => document.querySelectorAll('{PANEL_SELECTOR}').length >= 2", "the lesson's panels")
     page.mouse.move(700, 800)
     panel = _panel_of(app, learner)
     last = len(panel.run.lesson.steps) - 1
     for step in range(1, last + 1):
         page.get_by_role("button", name="next", exact=True).click()
         head = f"[data-egtviz=\"lesson-head\"][data-step=\"{step}\"]"
-        page.wait_for_function(f"() => !!document.querySelector('{head}')", timeout=TIMEOUT_MS)
+        wait_for_js(page, f"() => !!document.querySelector('{head}')", f"step {step + 1}'s head")
     return context, page, panel
 
 
@@ -103,7 +89,8 @@ def _check(page, number: int, verdict: str) -> None:
     """Press "Check task n" and wait until one more verdict ``verdict`` is shown in the page."""
     before = page.evaluate(_VERDICTS, verdict)
     page.get_by_role("button", name=f"Check task {number}").click()
-    page.wait_for_function(f"([v, n]) => ({_VERDICTS})(v) > n", arg=[verdict, before], timeout=TIMEOUT_MS)
+    wait_for_js(page, f"([v, n]) => ({_VERDICTS})(v) > n", f"one more verdict {verdict!r} after checking task {number}",
+                arg=[verdict, before])
 
 
 def test_two_learners_read_their_own_camera_and_each_ones_computed_answer_is_accepted(browser, course):
@@ -126,7 +113,7 @@ def test_two_learners_read_their_own_camera_and_each_ones_computed_answer_is_acc
             field = _labelled_input(page, "answer 1 (px)")
             field.fill(typed[learner])
             field.press("Enter")
-            _wait(lambda: panel.row(task.id).answer.value == typed[learner])  # the server has the typed text
+            wait_for(lambda: panel.row(task.id).answer.value == typed[learner], "the server to have the typed answer")
             _check(page, 1, "Passed")
             assert panel.attempts[task.id].result.passed
             assert (len(lesson.steps) - 1, task.id) in app.course.progress.passed_tasks(learner, LESSON)

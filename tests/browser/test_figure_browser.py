@@ -14,8 +14,9 @@ import pytest
 
 import egtviz.egt_figure as ef
 from egtviz.egt_figure import _server
+from _layout import only_view, settled_panels
 from egtviz.scene import compute_derived
-from egtviz.viewer.server.browser import COUNT_JS, chromium, close_notifications, open_viewer
+from egtviz.viewer.server.browser import COUNT_JS, open_viewer
 
 pytestmark = pytest.mark.browser
 
@@ -38,33 +39,28 @@ def example_3_served(monkeypatch):
         ef.reset()
 
 
-def test_example_3_figure_in_the_browser(example_3_served, tmp_path):
+def test_example_3_figure_in_the_browser(browser, example_3_served):
     url, scene = example_3_served
     assert url is not None
     derived = compute_derived(scene)
-    with chromium() as browser:
-        page = open_viewer(browser, url, width=1366, height=768, n_panels=4)
-        try:
-            counts = page.evaluate(COUNT_JS)
-            assert set(counts) == {"cam1", "cam2", "Figure 1", "Figure 2"}
-            for name in ("Figure 1", "Figure 2"):
-                c = counts[name]
-                # Two points, a line through each, one epipole; K = I gives no image rectangle.
-                assert (c["point"], c["line"], c["epipole"], c["border"]) == (2, 2, 1, 0), (name, c)
-            for name in ("cam1", "cam2"):
-                c, plane = counts[name], derived.image_planes[name]
-                assert c["point"] == int(plane.in_image.sum())
-                assert c["line"] == 2 and c["epipole"] == len(plane.epipoles) == 1 and c["border"] == 1
-            # Every panel is on screen and none overlaps another.
-            rects = [c["rect"] for c in counts.values()]
-            for i, a in enumerate(rects):
-                assert a["width"] > 150 and a["bottom"] <= 768 + 1
-                for b in rects[i + 1:]:
-                    assert (a["right"] <= b["left"] + 1 or b["right"] <= a["left"] + 1
-                            or a["bottom"] <= b["top"] + 1 or b["bottom"] <= a["top"] + 1)
-            close_notifications(page)
-            shot = tmp_path / "example3.png"
-            page.screenshot(path=str(shot))
-            assert shot.stat().st_size > 10_000
-        finally:
-            page.close()
+    page = open_viewer(browser, url, width=1366, height=768, n_panels=4)
+    try:
+        counts = settled_panels(page, only_view(ef._running.app), 4, lambda pg: pg.evaluate(COUNT_JS))
+        assert set(counts) == {"cam1", "cam2", "Figure 1", "Figure 2"}
+        for name in ("Figure 1", "Figure 2"):
+            c = counts[name]
+            # Two points, a line through each, one epipole; K = I gives no image rectangle.
+            assert (c["point"], c["line"], c["epipole"], c["border"]) == (2, 2, 1, 0), (name, c)
+        for name in ("cam1", "cam2"):
+            c, plane = counts[name], derived.image_planes[name]
+            assert c["point"] == int(plane.in_image.sum())
+            assert c["line"] == 2 and c["epipole"] == len(plane.epipoles) == 1 and c["border"] == 1
+        # Every panel is on screen and none overlaps another.
+        rects = [c["rect"] for c in counts.values()]
+        for i, a in enumerate(rects):
+            assert a["width"] > 150 and a["bottom"] <= 768 + 1
+            for b in rects[i + 1:]:
+                assert (a["right"] <= b["left"] + 1 or b["right"] <= a["left"] + 1
+                        or a["bottom"] <= b["top"] + 1 or b["bottom"] <= a["top"] + 1)
+    finally:
+        page.close()

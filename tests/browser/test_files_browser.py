@@ -7,43 +7,38 @@ path on the server is named anywhere: the file goes through the browser.
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import pytest
 
+from _waiting import wait_for
 from egtviz.scene import default_scene, scene_from_bytes, scene_to_bytes
-from egtviz.viewer.server.browser import chromium, open_viewer
+from egtviz.viewer.server.browser import open_viewer
 
 pytestmark = pytest.mark.browser
 
 
 
 @pytest.fixture(scope="module")
-def served():
+def served(browser):
     import viser
 
     from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, default_scene())
-    with chromium() as browser:
-        yield app, browser, f"http://127.0.0.1:{server.get_port()}"
+    yield app, browser, f"http://127.0.0.1:{server.get_port()}"
     server.stop()
 
 
 def _open_scene_folder(page) -> None:
     page.get_by_text("Scene", exact=True).first.click()
-    page.get_by_text("Save (download)").first.wait_for(timeout=10_000)
+    page.get_by_text("Save (download)").first.wait_for()
 
 
 def _the_view(app, before: set[int]):
-    deadline = time.time() + 10
-    while time.time() < deadline:
-        new = set(app.views) - before
-        if new:
-            return app.views[new.pop()]
-        time.sleep(0.05)
-    raise AssertionError("the page's tab never connected")
+    new: list[int] = []
+    wait_for(lambda: new.extend(set(app.views) - before) or new, "the page's tab to connect")
+    return app.views[new[0]]
 
 
 def test_save_downloads_the_scene_file(served, tmp_path):
@@ -54,7 +49,7 @@ def test_save_downloads_the_scene_file(served, tmp_path):
         view = _the_view(app, before)
         view.model.update_camera("cam1", focal_length=0.0135)  # something to tell the file from the default
         _open_scene_folder(page)
-        with page.expect_download(timeout=20_000) as info:
+        with page.expect_download() as info:
             page.get_by_text("Save (download)").first.click()
         download = info.value
         assert download.suggested_filename.endswith(".json") and "/" not in download.suggested_filename
@@ -80,13 +75,11 @@ def test_load_uploads_a_scene_file_and_the_scene_changes(served, tmp_path):
         path.write_bytes(scene_to_bytes(wanted))
         _open_scene_folder(page)
         page.locator('input[type="file"]').first.set_input_files(str(path))
-        deadline = time.time() + 20
-        while view.model.scene.title != "Uploaded" and time.time() < deadline:
-            time.sleep(0.05)
+        wait_for(lambda: view.model.scene.title == "Uploaded", "the uploaded scene in the tab's model")
         assert view.model.scene == wanted
         # the page shows the new scene: its title and cam2's position field
-        page.get_by_text("Uploaded").first.wait_for(timeout=10_000)
-        assert view._cam_fields["cam2"]["position"].value == "4, -6, 2"
+        page.get_by_text("Uploaded").first.wait_for()
+        assert view.cameras["cam2"].fields["position"].value == "4, -6, 2"
     finally:
         page.close()
 
@@ -102,7 +95,7 @@ def test_a_bad_upload_shows_the_reason_in_the_page(served, tmp_path):
         path.write_text('{"cameras": [{"kind": "pinhole", "name": "c", "focal_length": "0.008"}]}')
         _open_scene_folder(page)
         page.locator('input[type="file"]').first.set_input_files(str(path))
-        page.get_by_text("Could not load the scene").first.wait_for(timeout=20_000)
+        page.get_by_text("Could not load the scene").first.wait_for()
         assert page.get_by_text("broken.json").count() >= 1
         assert view.model.scene is scene
     finally:

@@ -21,13 +21,13 @@ import urllib.request
 
 import pytest
 
-from egtviz.viewer.server.browser import CHROMIUM, CHROMIUM_ARGS, PANEL_SELECTOR, close_notifications
+from _waiting import PATIENCE, PATIENCE_MS, wait_for
+from egtviz.viewer.server.browser import PANEL_SELECTOR, close_notifications, shared_chromium, wait_for_js
 
 pytestmark = pytest.mark.browser
 pytest.importorskip("jupyter_server_proxy", reason="the hub extra (pip install -e '.[test]' installs it)")
 
 HUB_NAME = "hub.test"
-TIMEOUT_MS = 90_000
 
 
 def _free_port() -> int:
@@ -58,15 +58,17 @@ def jupyter(tmp_path_factory):
          f"--ServerApp.root_dir={root / 'notebooks'}"],
         stdout=log, stderr=subprocess.STDOUT, env=env)
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + PATIENCE
         while True:
             try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/status?token={token}", timeout=5):
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/status?token={token}", timeout=PATIENCE):
                     break
             except OSError:
                 if proc.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError("jupyter server did not start:\n" + (root / "jupyter.log").read_text()[-3000:])
-                time.sleep(0.3)
+                    raise RuntimeError(f"waited {PATIENCE:.0f} s for the jupyter server to answer on port {port} "
+                                       f"(exited: {proc.poll() is not None}):\n"
+                                       + (root / "jupyter.log").read_text()[-3000:])
+                time.sleep(0.1)
         yield f"http://{HUB_NAME}:{port}", token, root
     finally:
         proc.terminate()  # the proxy stops the egtviz it started when the server stops
@@ -80,15 +82,10 @@ def jupyter(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM,
-                              args=[*CHROMIUM_ARGS, f"--host-resolver-rules=MAP {HUB_NAME} 127.0.0.1"])
-        try:
-            yield b
-        finally:
-            b.close()
+    """The test process's Chromium launched with the hub's name mapped to loopback (closed after this module)."""
+    b = shared_chromium(timeout_ms=PATIENCE_MS, args=[f"--host-resolver-rules=MAP {HUB_NAME} 127.0.0.1"], quiet=True)
+    yield b
+    b.close()
 
 
 def test_the_launcher_lists_egtviz_with_its_icon(jupyter):
@@ -108,16 +105,17 @@ def test_the_named_route_shows_the_start_page_and_a_live_image_panel(jupyter, br
     page = browser.new_page(viewport={"width": 1366, "height": 768})
     refused = []
     page.on("websocket", lambda ws: ws.on("socketerror", lambda e: refused.append(e)))
-    page.goto(f"{base}/egtviz/?token={token}", timeout=TIMEOUT_MS)
-    page.get_by_role("button", name="Open the workbench").wait_for(timeout=TIMEOUT_MS)
+    page.goto(f"{base}/egtviz/?token={token}")
+    page.get_by_role("button", name="Open the workbench").wait_for()
     # The page at the launcher's path is the same page under index.html, inside the proxied prefix.
     assert page.url.split("?")[0] == f"{base}/egtviz/index.html"
     assert page.locator('[data-egtviz="start-page"]').count() >= 1
     close_notifications(page)
     page.get_by_role("button", name="Open the workbench").click()
-    page.wait_for_function(
-        f"() => [...document.querySelectorAll('{PANEL_SELECTOR}')].filter("
-        "s => s.querySelectorAll('[data-kind=\"point\"]').length > 0).length >= 2", timeout=TIMEOUT_MS)
+    wait_for_js(page,
+                f"() => [...document.querySelectorAll('{PANEL_SELECTOR}')].filter("
+                "s => s.querySelectorAll('[data-kind=\"point\"]').length > 0).length >= 2",
+                "two image-plane panels with points")
     points = page.evaluate(
         f"() => [...document.querySelectorAll('{PANEL_SELECTOR}')].map("
         "s => s.querySelectorAll('[data-kind=\"point\"] circle, circle[data-kind=\"point\"]').length)")
@@ -142,9 +140,9 @@ def test_the_figure_of_a_notebook_shows_through_the_generic_route(jupyter, brows
         inline = notebook_url(figure.url, {"JPY_PARENT_PID": str(server_pid)})
         assert inline == f"/proxy/{figure.server.get_port()}/"
         page = browser.new_page(viewport={"width": 1366, "height": 768})
-        page.goto(f"{base}{inline}?token={token}", timeout=TIMEOUT_MS)
-        page.wait_for_function(f"() => document.querySelectorAll('{PANEL_SELECTOR}').length >= 2",
-                               timeout=TIMEOUT_MS)
+        page.goto(f"{base}{inline}?token={token}")
+        wait_for_js(page, f"() => document.querySelectorAll('{PANEL_SELECTOR}').length >= 2",
+                    "the figure's two image-plane panels")
         page.close()
     finally:
         figure.stop()
@@ -153,7 +151,7 @@ def test_the_figure_of_a_notebook_shows_through_the_generic_route(jupyter, brows
 def _handshake(port: int, path: str, host: str, origin: str, cookie: str = "") -> tuple[int, str]:
     """A websocket handshake to the jupyter server on loopback, as a browser at ``origin`` asking for ``host``
     sends it: ``(HTTP status, then "open" or "closed")``: after a 101, whether the proxied socket stays open
-    (a first frame that is not a close, or silence for a few seconds) or is closed (egtviz refused the proxy)."""
+    (a first frame that is not a close, or silence for :data:`PATIENCE`) or is closed (egtviz refused the proxy)."""
     import base64
 
     import viser
@@ -163,7 +161,7 @@ def _handshake(port: int, path: str, host: str, origin: str, cookie: str = "") -
                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\nOrigin: {origin}\r\n"
                + (f"Cookie: {cookie}\r\n" if cookie else "")
                + f"Sec-WebSocket-Protocol: viser-v{viser.__version__}\r\n\r\n")
-    with socket.create_connection(("127.0.0.1", port), timeout=60) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=PATIENCE) as sock:
         sock.sendall(request.encode())
         reader = sock.makefile("rb")
         status = int(reader.readline().decode().split()[1])
@@ -171,7 +169,8 @@ def _handshake(port: int, path: str, host: str, origin: str, cookie: str = "") -
             pass
         if status != 101:
             return status, "closed"
-        sock.settimeout(5.0)
+        # The server speaks first on a socket it keeps (viser sends the tab's state), and closes one it refuses.
+        sock.settimeout(PATIENCE)
         try:
             first = reader.read(1)
         except TimeoutError:
@@ -193,7 +192,5 @@ def test_through_the_proxy_the_hubs_own_page_connects_and_a_foreign_one_does_not
     # A program holding the token passes Jupyter's origin check; egtviz's still refuses a foreign origin.
     assert _handshake(port, f"{page}?token={token}", host, f"http://{HUB_NAME}:{port}") == (101, "open")
     assert _handshake(port, f"{page}?token={token}", host, "http://evil.example") == (101, "closed")
-    deadline = time.monotonic() + 10
-    while "refused a websocket connection from origin 'http://evil.example'" not in (root / "jupyter.log").read_text():
-        assert time.monotonic() < deadline, "egtviz's guard did not report the refusal"
-        time.sleep(0.2)
+    wait_for(lambda: "refused a websocket connection from origin 'http://evil.example'" in
+             (root / "jupyter.log").read_text(), "egtviz's guard to report the refusal in the server's log")

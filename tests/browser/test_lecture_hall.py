@@ -19,12 +19,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _layout import only_view, settled_panels
+from _waiting import PATIENCE
 from egtviz.scene import SCENES, SceneModel, compute_derived, default_scene
 from egtviz.viewer.server.browser import (
-    chromium,
     close_notifications,
     folder_field,
     open_viewer,
+    wait_for_3d_view,
+    wait_for_js,
 )
 from egtviz.viewer.render.panels import MIN_PANEL_PX
 from egtviz.viewer.render.svg import NORMAL, PRESENT
@@ -75,12 +78,6 @@ def _serve(scene, *, present=False):
     return server, app, f"http://127.0.0.1:{server.get_port()}"
 
 
-@pytest.fixture(scope="module")
-def browser():
-    with chromium() as b:
-        yield b
-
-
 def _four_cameras():
     model = SceneModel(default_scene())
     model.add_camera("pinhole")
@@ -88,22 +85,10 @@ def _four_cameras():
     return model.scene
 
 
-def _settled_panels(page, app, n, timeout=30.0):
-    """The panels once every one is as wide as the tab's grid says (the widths are sent again after docking)."""
-    deadline = time.time() + timeout
-    last = None
-    while time.time() < deadline:
-        panels = page.evaluate(PANELS_JS)
-        views = list(app.views.values())
-        if len(panels) == n and views and views[0].grid is not None:
-            want = views[0].grid.column_px
-            rects = [p["rect"] for p in panels]
-            # Widths as planned, and the same boxes twice in a row (the dock may still be moving).
-            if all(abs(r["width"] - want) <= 1.0 for r in rects) and rects == last:
-                return panels, views[0]
-            last = rects
-        time.sleep(0.3)
-    raise AssertionError(f"panels did not settle: {[p['rect']['width'] for p in page.evaluate(PANELS_JS)]}")
+def _settled_panels(page, app, n):
+    """The panels once laid out as the tab's grid planned (:func:`_layout.settled_panels`), and the tab's view."""
+    view = only_view(app)
+    return settled_panels(page, view, n, lambda pg: pg.evaluate(PANELS_JS)), view()
 
 
 def _disjoint(a, b) -> bool:
@@ -113,7 +98,7 @@ def _disjoint(a, b) -> bool:
 def _screenshot(page, name):
     if os.environ.get("EGTVIZ_SCREENSHOTS"):
         close_notifications(page)
-        time.sleep(6.0)  # software WebGL: let the 3D view draw and fade in
+        wait_for_3d_view(page)  # software WebGL: the 3D view drawn and faded in
         page.screenshot(path=str(ASSETS / name))
 
 
@@ -175,8 +160,8 @@ def test_presentation_toggle_in_the_gui(browser):
         normal_label = page.evaluate("() => parseFloat(getComputedStyle(document.querySelector('label')).fontSize)")
         page.get_by_text("Panels", exact=True).first.click()
         page.get_by_text("presentation mode", exact=True).first.click()
-        page.wait_for_function("""() => [...document.querySelectorAll('svg[data-egtviz="image-plane"]')]
-            .every(s => s.dataset.style === 'present')""", timeout=20_000)
+        wait_for_js(page, """() => [...document.querySelectorAll('svg[data-egtviz="image-plane"]')]
+            .every(s => s.dataset.style === 'present')""", "every panel drawn in the presentation style")
         panels, _ = _settled_panels(page, app, 2)
         assert min(t["px"] for p in panels for t in p["texts"]) >= 16.0
         label = page.evaluate("() => parseFloat(getComputedStyle(document.querySelector('label')).fontSize)")
@@ -222,10 +207,11 @@ def test_zoom_button_and_downloads(browser, tmp_path):
         _settled_panels(page, app, 2)
         _open_camera_folder(page, "cam1 (pin-hole)")
         page.get_by_role("button", name="+", exact=True).first.click()
-        page.wait_for_function("""() => document.querySelector(
-            'svg[data-egtviz="image-plane"][data-camera="cam1"]').dataset.view === '64 48 512 384'""", timeout=20_000)
+        wait_for_js(page, """() => document.querySelector(
+            'svg[data-egtviz="image-plane"][data-camera="cam1"]').dataset.view === '64 48 512 384'""",
+            "cam1's panel zoomed to 64 48 512 384")
 
-        with page.expect_download(timeout=30_000) as info:
+        with page.expect_download() as info:
             page.get_by_role("button", name="SVG", exact=True).first.click()
         svg_path = tmp_path / info.value.suggested_filename
         info.value.save_as(svg_path)
@@ -234,7 +220,7 @@ def test_zoom_button_and_downloads(browser, tmp_path):
         assert root.get("data-camera") == "cam1" and root.get("data-view") == "64 48 512 384"
         assert len(root.findall(".//*[@data-kind='point']")) == 8
 
-        with page.expect_download(timeout=60_000) as info:
+        with page.expect_download() as info:
             page.get_by_role("button", name="PNG", exact=True).first.click()
         png_path = tmp_path / info.value.suggested_filename
         info.value.save_as(png_path)
@@ -252,8 +238,8 @@ def test_high_density_screen_gets_the_layout_of_its_css_size(browser):
     page = browser.new_page(viewport={"width": 1366, "height": 768}, device_scale_factor=2)
     try:
         page.goto(url)
-        page.wait_for_function(
-            "() => document.querySelectorAll('svg[data-egtviz=\"image-plane\"]').length >= 4", timeout=60_000)
+        wait_for_js(page, "() => document.querySelectorAll('svg[data-egtviz=\"image-plane\"]').length >= 4",
+                    "4 image-plane panels")
         panels, view = _settled_panels(page, app, 4)
         assert view.grid.window.width == 1366 and view.grid.window.height == 768
         assert all(p["rect"]["width"] >= MIN_PANEL_PX for p in panels)
@@ -307,13 +293,14 @@ def _serve_app(*, present=False, **kw):
 def _open(browser, url, selector, width, height):
     page = browser.new_page(viewport={"width": width, "height": height})
     page.goto(url)
-    page.wait_for_function(f"() => document.querySelector('{selector}') !== null", timeout=90_000)
+    wait_for_js(page, f"() => document.querySelector('{selector}') !== null", selector)
     close_notifications(page)
     return page
 
 
-def _smallest(page, *, settle=1.0):
-    time.sleep(settle)
+def _smallest(page):
+    """The smallest text a user sees on the page, and every such text, measured once the page's fonts are in."""
+    page.evaluate("() => document.fonts.ready.then(() => true)")
     texts = page.evaluate(PAGE_TEXTS_JS)
     assert len(texts) >= 10
     return min(texts, key=lambda t: t["px"]), texts
@@ -357,9 +344,12 @@ def test_servo_demo_image_panel_is_readable(browser, present, width, height):
     server, app, url = _serve_app(present=present, demo="pinhole")
     page = _open(browser, url, 'svg[data-egtviz="servo-image"]', width, height)
     try:
-        demo = app.wait_for_demo()[0]
-        assert demo.wait(90)
+        demo = app.wait_for_demo(timeout=PATIENCE)[0]
+        assert demo.wait(PATIENCE), "the demo's run did not finish"
         demo.pause()
+        demo.seek(0)  # a frame the page is known to show: the run's first
+        wait_for_js(page, "() => document.querySelector('svg[data-egtviz=\"servo-image\"]')?.dataset.frame === '0'",
+                    "the servo image at frame 0")
         small, texts = _smallest(page)
         image = [t for t in texts if t["svg"] == "servo-image"]
         assert image
@@ -382,7 +372,7 @@ def test_workbench_in_presentation_mode_reads_and_no_panel_scrolls(browser, widt
     try:
         close_notifications(page)
         _settled_panels(page, app, 2)
-        time.sleep(1.0)
+        page.evaluate("() => document.fonts.ready.then(() => true)")
         assert all(p["over"] <= 1 for p in page.evaluate(PANEL_SCROLL_JS)), page.evaluate(PANEL_SCROLL_JS)
         # Every status line is on screen (none hidden under the cell's edge).
         texts = page.evaluate(PAGE_TEXTS_JS)

@@ -11,11 +11,9 @@ import pytest
 
 from egtviz.lessons.images import LessonImages
 from egtviz.lessons.markup import render_markdown
-from egtviz.viewer.server.browser import chromium
 
 pytestmark = pytest.mark.browser
 
-TIMEOUT_MS = 60_000
 HOSTILE = r"""MARKER-START [a link](http://links.example/page) and [data](data:text/html,<b>x</b>),
 bare http://bare.example/x and www.www.example and mail@mail.example, <http://angle.example>,
 <img src="http://raw.example/x.png">, a formula $\text{see www.formula.example}$ and $x^2$,
@@ -37,7 +35,7 @@ def _png() -> bytes:
             + chunk(b"IDAT", zlib.compress(b"\x00" + b"\xff\x00\x00" * 2)) + chunk(b"IEND", b""))
 
 
-def test_a_hostile_step_text_fetches_nothing_outside_and_shows_no_link(tmp_path):
+def test_a_hostile_step_text_fetches_nothing_outside_and_shows_no_link(browser, tmp_path):
     import viser
 
     (tmp_path / "rig.png").write_bytes(_png())
@@ -46,13 +44,13 @@ def test_a_hostile_step_text_fetches_nothing_outside_and_shows_no_link(tmp_path)
     try:
         server.gui.add_markdown(html)
         url = f"http://127.0.0.1:{server.get_port()}"
-        with chromium() as browser:
-            page = browser.new_page()
+        page = browser.new_page()
+        try:
             requests: list[str] = []
             page.on("request", lambda r: requests.append(r.url))
             page.goto(url)
-            page.get_by_text("MARKER-END").wait_for(timeout=TIMEOUT_MS)
-            page.wait_for_load_state("networkidle")
+            page.get_by_text("MARKER-END").wait_for()
+            page.wait_for_load_state("networkidle")  # whatever the text makes the page fetch, it has asked for it
             shown = page.evaluate("""() => {
                 let box = [...document.querySelectorAll('code')].find(c => c.textContent.includes('code.example'));
                 while (!box.innerText.includes('MARKER-END')) box = box.parentElement;  // the whole Markdown element
@@ -65,6 +63,8 @@ def test_a_hostile_step_text_fetches_nothing_outside_and_shows_no_link(tmp_path)
                     maths: box.querySelectorAll('math').length,
                 };
             }""")
+        finally:
+            page.close()
     finally:
         server.stop()
     outside = [r for r in requests if not r.startswith((url, f"blob:{url}", "data:"))]

@@ -12,30 +12,38 @@ import time
 
 import pytest
 
+from _waiting import PATIENCE, wait_for
 from egtviz.scene import default_scene, limits
-from egtviz.viewer.server.browser import PANEL_SELECTOR, chromium, folder_field
+from egtviz.viewer.server.browser import PANEL_SELECTOR, folder_field, wait_for_js
 from egtviz.viewer.render.svg import NORMAL
 
 pytestmark = pytest.mark.browser
 
 CAM1 = "cam1 (pin-hole)"
+
+
 @pytest.fixture(scope="module")
-def served():
+def served(browser):
     import viser
 
     from egtviz.viewer.workbench.app import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, default_scene(), field_delay=0.0)  # a field's text is judged at once
-    with chromium() as browser:
-        yield app, browser, f"http://127.0.0.1:{server.get_port()}"
+    yield app, browser, f"http://127.0.0.1:{server.get_port()}"
     server.stop()
 
 
 #: Notes when the page hands each GUI value to its websocket worker (viser sends from a web worker): the edit has
-#: left the page then, so what follows is the server's time and not the busy page's.
+#: left the page then, so what follows is the server's time and not the busy page's. Also notes whether the page
+#: has shown the PNG's progress notification (``window.egtvizSawProgress``), however briefly.
 SEND_SPY_JS = """
 window.egtvizSent = [];
+window.egtvizSawProgress = false;
+new MutationObserver((records) => {
+  for (const r of records) for (const n of r.addedNodes)
+    if (n.textContent && n.textContent.includes('Rendering PNG...')) window.egtvizSawProgress = true;
+}).observe(document, {childList: true, subtree: true});
 const postMessage = Worker.prototype.postMessage;
 Worker.prototype.postMessage = function (data, ...rest) {
   if (data && data.type === 'send' && data.message && data.message.type === 'GuiUpdateMessage') {
@@ -52,14 +60,10 @@ def _open_tab(app, browser, url):
     page = browser.new_page(viewport={"width": 1600, "height": 900})
     page.add_init_script(SEND_SPY_JS)
     page.goto(url)
-    page.wait_for_function(f"() => document.querySelectorAll('{PANEL_SELECTOR}').length >= 2", timeout=60_000)
-    deadline = time.time() + 10
-    while time.time() < deadline:
-        new = set(app.views) - before
-        if new:
-            return page, app.views[new.pop()]
-        time.sleep(0.05)
-    raise AssertionError("the page's tab never connected")
+    wait_for_js(page, f"() => document.querySelectorAll('{PANEL_SELECTOR}').length >= 2", "the two panels")
+    new: list[int] = []
+    wait_for(lambda: new.extend(set(app.views) - before) or new, "the page's tab to connect")
+    return page, app.views[new[0]]
 
 
 #: Types each of ``values`` into the field ``el``, the first after ``delay`` ms, each next one ``every`` ms after
@@ -89,18 +93,19 @@ def _answer_seconds(page, answers: dict[float, float], values: list[str]) -> dic
 
     The server has answered an edit when the tab's update for it is done: ``answers`` maps the focal length in mm
     to the wall time of that moment (a listener subscribed after the tab's own, so called after its update).
-    Waits until the last value is answered, or 10 s after it was typed. A value replaced by the next before the
-    page sent it, or before the server judged it (a text field's latest text wins), is left out.
+    Waits until the page has typed every value and the server has answered the last (never replaced: the latest
+    text wins). A value replaced by the next before the page sent it, or before the server judged it, is left out.
     """
-    deadline = time.time() + 120
-    while time.time() < deadline:
+    deadline = time.monotonic() + PATIENCE
+    typed: dict[str, float] = {}
+    while time.monotonic() < deadline:
         typed = page.evaluate("() => window.egtvizTyped")
-        if len(typed) == len(values) and (round(float(values[-1]), 6) in answers
-                                          or time.time() > typed[values[-1]] + 10):
+        if len(typed) == len(values) and round(float(values[-1]), 6) in answers:
             break
         page.wait_for_timeout(50)
     else:
-        raise AssertionError(f"the page did not type every value: {typed}")
+        raise AssertionError(f"waited {PATIENCE:.0f} s for the page to type {values} and the server to answer "
+                             f"the last: typed {sorted(typed)}, answered {sorted(answers)}")
     sent = page.evaluate("() => window.egtvizSent")
     out = {}
     for v in values:
@@ -115,17 +120,19 @@ def _png_button(page, folder: str):
                         f'"download panel"][1]/following::button[normalize-space(.)="PNG"][1]').first
 
 
-def _download(page, click) -> tuple[float, object]:
-    """Click, see the page show the progress, wait for its download; ``(wall time it arrived, playwright Download)``."""
+def _download(page, click, *, progress: bool = True) -> tuple[float, object]:
+    """Click, wait for its download, having seen the page show the progress (``progress``: a render of seconds;
+    a quick one's notification may come and go in one batch, never drawn); ``(wall time it arrived, playwright
+    Download)``."""
     got: list[tuple[float, object]] = []
     page.once("download", lambda d: got.append((time.time(), d)))
+    page.evaluate("() => { window.egtvizSawProgress = false; }")
     click()
-    if not got:
-        page.get_by_text("Rendering PNG...").first.wait_for(timeout=10_000)
-    deadline = time.time() + 120
-    while not got and time.time() < deadline:
+    deadline = time.monotonic() + PATIENCE
+    while not got and time.monotonic() < deadline:
         page.wait_for_timeout(20)
-    assert got, "the PNG never arrived"
+    assert got, f"waited {PATIENCE:.0f} s for the PNG's download"
+    assert not progress or page.evaluate("() => window.egtvizSawProgress"), "the page never showed 'Rendering PNG...'"
     return got[0]
 
 
@@ -138,12 +145,12 @@ def test_another_tab_edits_while_a_2000_point_png_renders(served, tmp_path):
         lambda scene, change: answers.setdefault(round(scene.camera("cam1").focal_length * 1e3, 6), time.time()))
     try:
         # A first, small PNG: the worker process is up, so the next render starts at the click.
-        _download(first, lambda: _png_button(first, CAM1).click())
+        _download(first, lambda: _png_button(first, CAM1).click(), progress=False)
         centre = tuple(view_first.model.scene.points_array().mean(axis=0))
         view_first.model.randomize_points(limits.MAX_POINTS, center=centre, extent=2.0)  # the first tab's own model
-        first.wait_for_function(
-            f"() => document.querySelector(`{PANEL_SELECTOR}[data-camera=\"cam1\"]`)"
-            f".querySelectorAll('[data-kind=\"epipolar-line\"]').length > 1000", timeout=60_000)
+        wait_for_js(first, f"() => document.querySelector(`{PANEL_SELECTOR}[data-camera=\"cam1\"]`)"
+                    f".querySelectorAll('[data-kind=\"epipolar-line\"]').length > 1000",
+                    "the first tab's cam1 panel with over 1000 epipolar lines")
         # The same kind of edit with no PNG being made: what this machine takes now (a loaded one: seconds).
         alone = [f"8.{k:02d}" for k in range(1, 13)]
         _type_focal_lengths(second, alone, delay_ms=0, every_ms=150)
@@ -172,7 +179,7 @@ def test_another_tab_edits_while_a_2000_point_png_renders(served, tmp_path):
         assert download.suggested_filename == "cam1-image-plane.png"
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and int.from_bytes(png[16:20], "big") == 2 * int(NORMAL.panel_px)
         # The progress notification is gone.
-        first.get_by_text("Rendering PNG...").first.wait_for(state="hidden", timeout=10_000)
+        first.get_by_text("Rendering PNG...").first.wait_for(state="hidden")
     finally:
         first.close()
         second.close()

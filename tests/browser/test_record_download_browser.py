@@ -8,16 +8,16 @@ import io
 
 import pytest
 
+from _waiting import PATIENCE, wait_for
 from egtviz.lessons import ProgressStore
-from egtviz.viewer.server.browser import chromium, close_notifications
+from egtviz.viewer.server.browser import close_notifications
 
 pytestmark = pytest.mark.browser
 
 LESSON6 = "06-pinhole-epipolar"
-TIMEOUT_MS = 60_000
 
 
-def test_download_my_record_gives_the_learners_rows_as_csv(tmp_path):
+def test_download_my_record_gives_the_learners_rows_as_csv(browser, tmp_path):
     import viser
 
     from egtviz.viewer.workbench.app import EgtvizApp
@@ -32,25 +32,23 @@ def test_download_my_record_gives_the_learners_rows_as_csv(tmp_path):
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         app = EgtvizApp(server, course=True, progress=store)
-        with chromium() as browser:
-            page = browser.new_page(viewport={"width": 1366, "height": 768}, accept_downloads=True)
+        page = browser.new_page(viewport={"width": 1366, "height": 768}, accept_downloads=True)
+        try:
             page.goto(f"http://127.0.0.1:{server.get_port()}")
             button = page.get_by_role("button", name="Download my record")
-            button.wait_for(timeout=TIMEOUT_MS)
+            button.wait_for()
             close_notifications(page)
             name = page.locator('xpath=//label[normalize-space(.)="your name"]/following::input[1]').first
             name.fill("Ada")
-            (start,) = app.course.wait_for_tab(StartPage, timeout=30)
-            for _ in range(300):  # the name is taken once the typing stops
-                if start.learner == "Ada":
-                    break
-                page.wait_for_timeout(50)
-            assert start.learner == "Ada"
-            with page.expect_download(timeout=TIMEOUT_MS) as info:
+            (start,) = app.course.wait_for_tab(StartPage, timeout=PATIENCE)
+            wait_for(lambda: start.learner == "Ada", "the name taken once the typing stops")
+            with page.expect_download() as info:
                 button.click()
             download = info.value
             saved = tmp_path / "got.csv"
             download.save_as(saved)
+        finally:
+            page.close()
         rows = list(csv.reader(io.StringIO(saved.read_text(encoding="utf-8"))))
         assert download.suggested_filename == "egtviz-record.csv"
         assert rows[0][:7] == ["learner", "lesson", "step", "task", "passed", "attempts", "hints used"]

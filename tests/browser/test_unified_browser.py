@@ -3,13 +3,14 @@ conics in its panel. Skipped only when Chromium is missing on a developer machin
 
 from __future__ import annotations
 
-import time
+import re
 
 import numpy as np
 import pytest
 
+from _waiting import PATIENCE, wait_for
 from egtviz.scene import Scene, UnifiedSpec, default_scene
-from egtviz.viewer.server.browser import COUNT_JS, chromium, open_viewer
+from egtviz.viewer.server.browser import COUNT_JS, open_viewer
 
 pytestmark = pytest.mark.browser
 
@@ -18,7 +19,7 @@ CONICS_JS = """(camera) => [...document.querySelectorAll(
   `svg[data-egtviz="image-plane"][data-camera="${camera}"] [data-kind="epipolar-conic"]`)].map(e => e.getAttribute('points'))"""
 
 
-def test_moving_the_xi_slider_moves_the_conics():
+def test_moving_the_xi_slider_moves_the_conics(browser):
     import viser
 
     from egtviz.viewer.workbench.app import EgtvizApp
@@ -28,29 +29,34 @@ def test_moving_the_xi_slider_moves_the_conics():
                   points=base.points)
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, scene)
+    page = None
     try:
-        with chromium() as browser:
-            page = open_viewer(browser, f"http://127.0.0.1:{server.get_port()}")
-            before = page.evaluate(CONICS_JS, "uni")
-            rev = page.evaluate(COUNT_JS)["uni"]["rev"]
-            assert len(before) == 8
-            slider = page.get_by_role("slider").first
-            if not slider.is_visible():  # the first two cameras' folders start open, others closed
-                page.get_by_text("uni (unified sphere)", exact=True).first.click()
-            slider.focus()
-            for _ in range(10):  # ten steps of 0.01: xi 0.8 -> 0.9
-                slider.press("ArrowRight")
-            deadline = time.time() + 15.0
-            while time.time() < deadline and page.evaluate(COUNT_JS)["uni"]["rev"] == rev:
-                time.sleep(0.05)
-            time.sleep(0.5)  # the last steps' updates
-            (view,) = app.views.values()
-            assert view.model.scene.camera("uni").xi == pytest.approx(0.9)
-            after = page.evaluate(CONICS_JS, "uni")
-            assert len(after) == 8 and after != before
-            first = np.array([[float(x) for x in p.split(",")] for p in before[0].split()])
-            moved = np.array([[float(x) for x in p.split(",")] for p in after[0].split()])
-            assert first.shape != moved.shape or np.abs(first - moved).max() > 1.0
-            page.close()
+        page = open_viewer(browser, f"http://127.0.0.1:{server.get_port()}")
+        (view,) = app.wait_for_view(timeout=PATIENCE)
+        before = page.evaluate(CONICS_JS, "uni")
+        assert len(before) == 8
+        slider = page.get_by_role("slider").first
+        if not slider.is_visible():  # the first two cameras' folders start open, others closed
+            page.get_by_text("uni (unified sphere)", exact=True).first.click()
+        slider.focus()
+        for _ in range(10):  # ten steps of 0.01: xi 0.8 -> 0.9
+            slider.press("ArrowRight")
+        # Every step answered (the last one, 0.9, is the model's), and the page showing the panel drawn after it.
+        wait_for(lambda: view.model.scene.camera("uni").xi == pytest.approx(0.9), "the server to take xi = 0.9")
+        wait_for(lambda: page.evaluate(COUNT_JS)["uni"]["rev"] == _server_rev(view, "uni"),
+                 "uni's panel in the page at the server's last revision")
+        after = page.evaluate(CONICS_JS, "uni")
+        assert len(after) == 8 and after != before
+        first = np.array([[float(x) for x in p.split(",")] for p in before[0].split()])
+        moved = np.array([[float(x) for x in p.split(",")] for p in after[0].split()])
+        assert first.shape != moved.shape or np.abs(first - moved).max() > 1.0
     finally:
+        if page is not None:
+            page.close()
         server.stop()
+
+
+def _server_rev(view, camera) -> str:
+    """The revision of the panel the server last drew for ``view``'s tab (under its lock: not mid-redraw)."""
+    with view.lock:
+        return re.search(r'data-rev="([^"]*)"', view.svgs[camera]).group(1)
