@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pytest
 
+from _graphs import circles
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "egtviz"
 MAX_LINES = 600
@@ -69,38 +71,7 @@ def _edges(name: str) -> set[str]:
 def _cycles(package: str) -> list[list[str]]:
     """The strongly connected components of more than one module among the modules of ``package`` (Tarjan)."""
     nodes = sorted(m for m in MODULES if m.startswith(package + "."))
-    graph = {m: sorted(e for e in _edges(m) if e in nodes) for m in nodes}
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    on_stack: set[str] = set()
-    found: list[list[str]] = []
-
-    def visit(v: str) -> None:
-        index[v] = low[v] = len(index)
-        stack.append(v)
-        on_stack.add(v)
-        for w in graph[v]:
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in on_stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            component = []
-            while True:
-                w = stack.pop()
-                on_stack.discard(w)
-                component.append(w)
-                if w == v:
-                    break
-            if len(component) > 1:
-                found.append(sorted(component))
-
-    for v in nodes:
-        if v not in index:
-            visit(v)
-    return found
+    return circles({m: sorted(e for e in _edges(m) if e in nodes) for m in nodes})
 
 
 def test_the_cycle_finder_sees_a_cycle_through_a_function_level_import(tmp_path, monkeypatch):

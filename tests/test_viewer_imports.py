@@ -15,6 +15,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+from _graphs import circles
+
 ROOT = Path(__file__).resolve().parents[1]
 VIEWER = ROOT / "egtviz" / "viewer"
 
@@ -65,32 +67,7 @@ def imported_modules(name: str, path: Path, modules: dict[str, Path]) -> set[str
 def import_cycles(package: Path) -> set[tuple[str, ...]]:
     """The circles of imports under ``package``: each strongly connected set of more than one module (Tarjan)."""
     modules = module_names(package)
-    graph = {m: sorted(imported_modules(m, p, modules)) for m, p in modules.items()}
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    found: set[tuple[str, ...]] = set()
-
-    def visit(v: str) -> None:
-        index[v] = low[v] = len(index)
-        stack.append(v)
-        for w in graph[v]:
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            component = [stack.pop()]
-            while component[-1] != v:
-                component.append(stack.pop())
-            if len(component) > 1:
-                found.add(tuple(sorted(component)))
-
-    for v in sorted(graph):
-        if v not in index:
-            visit(v)
-    return found
+    return {tuple(c) for c in circles({m: sorted(imported_modules(m, p, modules)) for m, p in modules.items()})}
 
 
 def test_the_cycle_finder_sees_type_checking_and_function_level_imports(tmp_path):
