@@ -4,6 +4,7 @@ that wants the server sets ``EGTVIZ_FIGURE=on``); the real-browser tests (marked
 developer machine without Chromium, and a failure in CI, where ``bash .ci/run`` installs it."""
 
 import os
+import sys
 
 import pytest
 from hypothesis import settings
@@ -27,3 +28,14 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         raise pytest.UsageError(f"CI: {why}; the browser tests must run")
     for item in browser_tests:
         item.add_marker(pytest.mark.skip(reason=why))
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _no_browser_left_running():
+    """A test file's shared Chromium ends with the file: playwright's sync API keeps an event loop in the thread
+    that started it, and the next file run by the same process (``pytest-xdist`` gives each process many) may
+    start an ``asyncio.run`` of its own there."""
+    yield
+    browser = sys.modules.get("egtviz.viewer.server.browser")
+    if browser is not None:
+        browser.close_shared_chromium()

@@ -70,7 +70,9 @@ def test_typing_a_name_renders_the_page_once_the_typing_stops(tmp_path, traced):
         for text in ("A", "Ad", "Ada"):
             page.name.value = text
         assert selects() == [] and page.learner == ""  # nothing yet: "A" and "Ad" are not learners
-        wait_for(lambda: page.learner == "Ada", "the start page to take the name once the typing stopped")
+        # The page takes the name, then renders it: wait for the render's query too, then count the renders.
+        wait_for(lambda: page.learner == "Ada" and selects(), "the start page to take and render the name once "
+                 "the typing stopped")
         assert len(selects()) == 1
 
 

@@ -1,5 +1,5 @@
-"""The real-browser tests' shared Chromium: one launch per test process (a session under ``pytest-xdist`` is one
-worker), whose pages and contexts wait :data:`_waiting.PATIENCE` by default for what they wait for, and never
+"""The real-browser tests' shared Chromium: one launch per test file (closed with the file, by the suite's
+``conftest.py``: playwright's event loop must not outlive it in a process that runs other files next), whose pages and contexts wait :data:`_waiting.PATIENCE` by default for what they wait for, and never
 show viser's software-WebGL notification (no GPU here: it would come seconds after each page loads, over the
 window's corner, and a test would wait for it to close it).
 
@@ -17,7 +17,7 @@ from _waiting import PATIENCE_MS
 from egtviz.viewer.server.browser import close_shared_chromium, shared_chromium
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser():
     """A launched headless Chromium (:class:`~egtviz.viewer.server.browser.PatientBrowser`)."""
     yield shared_chromium(timeout_ms=PATIENCE_MS, quiet=True)

@@ -325,7 +325,8 @@ def test_the_class_lock_holds_a_released_students_own_cameras_until_unlocked(bro
 def test_roster_histogram_and_pause_in_the_instructors_panel(browser, room):
     host = room.host
     host.room.set_mode(Mode.FOLLOW)
-    (c1, p1), (c2, p2) = _join(browser, room.host, room.base, "<b>Dee</b>"), _join(browser, room.host, room.base, "Eve <i>x</i>")
+    (c1, p1) = _join(browser, room.host, room.base, "<b>Dee</b>")
+    (c2, p2) = _join(browser, room.host, room.base, "Eve <i>x</i>")
     try:
         tabs = _wait(lambda: (t := host.student_tabs()) and len(t) >= 2 and t, what="two students")
         host.room.ask("Where is e1 (u, in px)?")

@@ -92,7 +92,7 @@ def test_the_launcher_lists_egtviz_with_its_icon(jupyter):
     base, token, _root = jupyter
     port = base.rsplit(":", 1)[1]
     with urllib.request.urlopen(f"http://127.0.0.1:{port}/server-proxy/servers-info?token={token}",
-                                timeout=30) as answer:
+                                timeout=PATIENCE) as answer:
         servers = json.load(answer)["server_processes"]
     (entry,) = [s for s in servers if s["name"] == "egtviz"]
     assert entry["launcher_entry"]["title"] == "egtviz"
@@ -184,7 +184,7 @@ def test_through_the_proxy_the_hubs_own_page_connects_and_a_foreign_one_does_not
     host = f"{HUB_NAME}:{port}"
     # A browser's session: the login cookie Jupyter sets on the first request with the token.
     login = urllib.request.Request(f"http://127.0.0.1:{port}/api/status?token={token}", headers={"Host": host})
-    with urllib.request.urlopen(login, timeout=30) as answer:
+    with urllib.request.urlopen(login, timeout=PATIENCE) as answer:
         cookie = "; ".join(c.split(";", 1)[0] for c in answer.headers.get_all("Set-Cookie"))
     page = "/egtviz/index.html"
     assert _handshake(port, page, host, f"http://{HUB_NAME}:{port}", cookie) == (101, "open")

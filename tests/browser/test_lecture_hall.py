@@ -12,7 +12,6 @@ text's computed font size (user units) times the SVG's screen scale.
 from __future__ import annotations
 
 import os
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 

@@ -86,8 +86,8 @@ def _check(page, number: int, verdict: str) -> None:
     shown = "(v) => [...document.querySelectorAll('strong')].filter(e => e.textContent.includes(v) && e.offsetParent !== null)"
     before = page.evaluate(f"(v) => ({shown})(v).length", verdict)
     page.get_by_role("button", name=f"Check task {number}").click()
-    wait_for_js(page, f"([v, n]) => ({shown})(v).length > n", f"one more verdict {verdict!r} after checking task {number}",
-                arg=[verdict, before])
+    wait_for_js(page, f"([v, n]) => ({shown})(v).length > n",
+                f"one more verdict {verdict!r} after checking task {number}", arg=[verdict, before])
 
 
 def _next(page, step: int) -> None:

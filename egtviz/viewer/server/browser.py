@@ -243,7 +243,8 @@ DRAWN_3D_JS = """(minColours) => {
   g.drawImage(c, 0, 0, small.width, small.height);
   const data = g.getImageData(0, 0, small.width, small.height).data;
   const colours = new Set();
-  for (let i = 0; i < data.length; i += 4) colours.add((data[i] >> 4) << 8 | (data[i + 1] >> 4) << 4 | data[i + 2] >> 4);
+  for (let i = 0; i < data.length; i += 4)
+    colours.add((data[i] >> 4) << 8 | (data[i + 1] >> 4) << 4 | data[i + 2] >> 4);
   const sig = Array.from(data).join(',');
   const same = window.__egtvizLastDraw === sig;
   window.__egtvizLastDraw = sig;
