@@ -21,7 +21,7 @@ from egtviz.viewer.classroom.host import ClassroomHost
 from egtviz.viewer.classroom.links import INSTRUCTOR_PREFIX
 from egtviz.viewer.server.guard import install_guards
 from egtviz.viewer.server.headless import FakeTab
-from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client
+from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client, value_sent_by_client
 from egtviz.viewer.workbench.app import EgtvizApp
 
 from _class_course import watch_opened
@@ -127,6 +127,27 @@ def test_an_instructor_who_disconnects_and_reconnects_keeps_the_class(served):
     wait_for(lambda: follower.frame.version > before, "the new instructor tab's drag to reach the follower")
     assert np.array_equal(follower.frame.scene.camera("cam2").position,
                           app.views[second].model.scene.camera("cam2").position)
+
+
+def test_a_click_whose_callback_waits_is_not_turned_around_by_a_refresh(served):
+    """The instructor ticks "lock students' cameras" while a roster change refreshes the panel on another thread:
+    viser has taken the box's new value and queued its callback; the refresh runs first. The click still locks."""
+    cid, _ = served.instructor()
+    host = served.host
+    panel = host.panels[cid]
+    for box, state in ((panel.lock, lambda: host.room.cameras_locked), (panel.show_names, host.room.names_shown)):
+        assert box.value is False and not state()
+        callbacks = value_sent_by_client(box, True)
+        panel.refresh()  # the class has not changed: the box keeps the click's value
+        assert box.value is True
+        for callback in callbacks:
+            callback(viser.GuiEvent(served.server.get_clients()[cid], cid, box))
+        wait_for(state, "the click to reach the class")
+        panel.refresh()
+        assert box.value is True
+    # A change of the class itself is still shown: unlocked from elsewhere, the box is cleared.
+    host.room.lock_cameras(False)
+    wait_for(lambda: panel.lock.value is False, "the panel to show the class unlocked")
 
 
 FLOOD = 3000

@@ -104,6 +104,13 @@ def test_the_installed_viser_has_the_server_and_gizmo_internals_the_benchmarks_u
     assert viser_adapter.missing_gizmo_internals(gizmo) == []
     viser_adapter.gizmo_moved_by_client(gizmo, np.array([1.0, 2.0, 3.0]))
     assert np.allclose(gizmo.position, (1.0, 2.0, 3.0))
+    box = server.gui.add_checkbox("box", False)
+    seen = []
+    box.on_update(lambda e: seen.append(e.target.value))
+    assert viser_adapter.missing_input_internals(box) == []
+    (callback,) = viser_adapter.value_sent_by_client(box, True)
+    assert box.value is True and seen == []  # the value taken, the callback not yet run
     # Objects without them are reported name by name (what a changed viser would look like).
     assert viser_adapter.missing_server_internals(object()) == list(viser_adapter.SERVER_PRIVATE_NAMES)
     assert viser_adapter.missing_gizmo_internals(object()) == list(viser_adapter.GIZMO_PRIVATE_NAMES)
+    assert viser_adapter.missing_input_internals(object()) == list(viser_adapter.INPUT_PRIVATE_NAMES)

@@ -168,10 +168,13 @@ def test_another_tab_edits_while_a_2000_point_png_renders(served, tmp_path):
               f"{max(overlapped, default=math.nan):.2f} s) while the first tab's PNG rendered ({len(overlapped)} "
               f"edits); the PNG arrived {arrived - clicked:.2f} s after the click")
         assert len(overlapped) >= 3, "too few edits were sent before the PNG came: the test did not overlap them"
-        # Answered within 0.5 s (a render in the server's process made them wait for the rest of the render:
-        # seconds); an odd slow one within 0.5 s of this machine's slowest answer with no PNG being made.
-        assert statistics.median(overlapped) < 0.5
-        assert max(overlapped) < 0.5 + max(alone_s)
+        # Answered as the same edits are with no PNG being made, give or take 0.5 s: a render in the server's
+        # process made each wait for the rest of the render (the median: half the render, seconds). An odd slow
+        # one (a busy machine) is still answered well before the render's end, where that render made the
+        # first ones wait.
+        render_s = arrived - clicked
+        assert statistics.median(overlapped) < 0.5 + statistics.median(alone_s)
+        assert max(overlapped) < max(alone_s) + 0.5 * render_s
         assert len(view_first.model.scene.points) == limits.MAX_POINTS
         path = tmp_path / download.suggested_filename
         download.save_as(path)

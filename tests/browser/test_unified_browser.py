@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from _waiting import PATIENCE, wait_for
+from _waiting import PATIENCE, wait_for, wait_until
 from egtviz.scene import Scene, UnifiedSpec, default_scene
 from egtviz.viewer.server.browser import COUNT_JS, open_viewer
 
@@ -35,14 +35,23 @@ def test_moving_the_xi_slider_moves_the_conics(browser):
         (view,) = app.wait_for_view(timeout=PATIENCE)
         before = page.evaluate(CONICS_JS, "uni")
         assert len(before) == 8
-        slider = page.get_by_role("slider").first
+        # The xi slider of uni's folder, once the folder is on the page (clicking its title before it is drawn
+        # open would close it).
+        folder = page.get_by_text("uni (unified sphere)", exact=True).first
+        folder.wait_for()
+        slider = page.locator('xpath=//*[normalize-space(text())="uni (unified sphere)"]'
+                              '/following::*[@role="slider"][1]').first
         if not slider.is_visible():  # the first two cameras' folders start open, others closed
-            page.get_by_text("uni (unified sphere)", exact=True).first.click()
+            folder.click()
+        slider.wait_for(state="visible")
         slider.focus()
         for _ in range(10):  # ten steps of 0.01: xi 0.8 -> 0.9
             slider.press("ArrowRight")
         # Every step answered (the last one, 0.9, is the model's), and the page showing the panel drawn after it.
-        wait_for(lambda: view.model.scene.camera("uni").xi == pytest.approx(0.9), "the server to take xi = 0.9")
+        if not wait_until(lambda: view.model.scene.camera("uni").xi == pytest.approx(0.9)):
+            raise AssertionError(f"waited {PATIENCE:.0f} s for the server to take xi = 0.9: it has "
+                                 f"{view.model.scene.camera('uni').xi}, the slider shows "
+                                 f"{slider.get_attribute('aria-valuenow')}")
         wait_for(lambda: page.evaluate(COUNT_JS)["uni"]["rev"] == _server_rev(view, "uni"),
                  "uni's panel in the page at the server's last revision")
         after = page.evaluate(CONICS_JS, "uni")

@@ -51,6 +51,7 @@ class InstructorPanel:
         self._students: dict[str, int] = {}
         # Per thread: a value written back by refresh() calls its callbacks at once, in the refreshing thread.
         self._syncing = threading.local()
+        self._shown: dict[int, bool] = {}  # id(checkbox) -> the class state last written to it
         gui = client.gui
         with client.atomic(), gui.add_folder("Classroom", order=-1000.0, expand_by_default=True):
             self.status = gui.add_html("")
@@ -171,16 +172,9 @@ class InstructorPanel:
             self.status.content = status_html(len(connected), sum(r.following for r in connected), mode.value,
                                               paused)
             self.pause.label = "Resume every screen" if paused is not None else "Pause every screen"
-            self._syncing.on = True
-            try:
-                if self.follow_me.value != (mode is Mode.FOLLOW):
-                    self.follow_me.value = mode is Mode.FOLLOW
-                if self.lock.value != self.room.cameras_locked:
-                    self.lock.value = self.room.cameras_locked
-                if self.show_names.value != self.room.names_shown():
-                    self.show_names.value = self.room.names_shown()
-            finally:
-                self._syncing.on = False
+            self._sync_checkbox(self.follow_me, mode is Mode.FOLLOW)
+            self._sync_checkbox(self.lock, self.room.cameras_locked)
+            self._sync_checkbox(self.show_names, self.room.names_shown())
             self.roster.content = roster_html(rows, {n: k for k, n in enumerate(self.host.lesson_names(), 1)})
             self._students = self.host.student_tabs()
             options = tuple(self._students) or (_NO_STUDENT,)
@@ -189,6 +183,22 @@ class InstructorPanel:
             self.histogram.content = self._histogram_html()
             allowed, paced = self.room.pacing()
             self.pacing.content = pacing_html(allowed, paced, lesson_steps(self.host.app.course))
+
+    def _sync_checkbox(self, box: Any, state: bool) -> None:
+        """Show the class's ``state`` in ``box`` when that state changed since it was last shown there.
+
+        Only a change of the class is written: a click whose callback has not run yet has already set the box's
+        value, and writing the unchanged class state back over it would turn the click around.
+        """
+        if self._shown.get(id(box)) == state:
+            return
+        self._shown[id(box)] = state
+        if box.value != state:
+            self._syncing.on = True
+            try:
+                box.value = state
+            finally:
+                self._syncing.on = False
 
     def _histogram_html(self) -> str:
         question = self.room.asked()

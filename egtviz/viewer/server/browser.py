@@ -264,9 +264,11 @@ def wait_for_3d_view(page: Any, *, min_colours: int = 8, timeout_ms: float | Non
 def folder_field(page: Any, folder: str, label: str) -> Any:
     """The text box of field ``label`` inside the GUI folder titled ``folder``, opening the folder if it is closed
     (the first two cameras' folders start open, the others closed)."""
+    title = page.get_by_text(folder).first
+    title.wait_for()  # drawn (open or closed) before its field is looked at: a click then never closes it
     field = page.locator(f'xpath=//*[normalize-space(text())="{folder}"]/following::label['
                          f'normalize-space(.)="{label}"][1]/following::input[1]').first
     if not field.is_visible():
-        page.get_by_text(folder).first.click()
+        title.click()
     field.wait_for(state="visible")
     return field

@@ -157,6 +157,8 @@ def assign(handle: Any, prop: str, value: Any) -> None:
 SERVER_PRIVATE_NAMES = ("_websock_server._background_event_loop", "_thread_executor")
 #: Private members of a transform-controls (gizmo) handle that a client's gizmo message sets.
 GIZMO_PRIVATE_NAMES = ("_impl.position", "_impl_aux.last_updated")
+#: Private members of a GUI input handle that a client's update message sets.
+INPUT_PRIVATE_NAMES = ("_impl.value", "_impl.update_cb")
 
 
 def _missing(obj: Any, dotted_names: tuple[str, ...]) -> list[str]:
@@ -181,6 +183,11 @@ def missing_gizmo_internals(gizmo: Any) -> list[str]:
     return _missing(gizmo, GIZMO_PRIVATE_NAMES)
 
 
+def missing_input_internals(handle: Any) -> list[str]:
+    """The names of :data:`INPUT_PRIVATE_NAMES` that ``handle`` (a GUI input) lacks; empty when all exist."""
+    return _missing(handle, INPUT_PRIVATE_NAMES)
+
+
 def event_loop(server: Any) -> Any:
     """The asyncio event loop on which ``server`` receives and sends websocket messages."""
     return server._websock_server._background_event_loop
@@ -196,3 +203,10 @@ def gizmo_moved_by_client(gizmo: Any, position: np.ndarray) -> None:
     """Put ``gizmo`` where a client's gizmo message would, before viser calls its callbacks (benchmarks, tests)."""
     gizmo._impl.position = np.asarray(position, float)
     gizmo._impl_aux.last_updated = time.time()
+
+
+def value_sent_by_client(handle: Any, value: Any) -> list[Callable[[Any], None]]:
+    """Give GUI input ``handle`` the value a client's update message carries, as viser does before it submits the
+    handle's callbacks to its pool; returns those callbacks (tests run them later, to order events across threads)."""
+    handle._impl.value = value
+    return list(handle._impl.update_cb)
