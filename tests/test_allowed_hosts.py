@@ -14,7 +14,7 @@ import sys
 import pytest
 import viser
 
-from egtviz.viewer.server.cli import start
+from egtviz.viewer.server.launch import start
 from egtviz.hosts import ALLOWED_HOSTS_ENV, allowed_host, allowed_hosts
 from egtviz.viewer.server.guard import GuardLimits
 

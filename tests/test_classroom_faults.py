@@ -4,6 +4,7 @@ student who floods answers delays no other student's answer (the server's per-ta
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import types
 
@@ -148,6 +149,31 @@ def test_a_click_whose_callback_waits_is_not_turned_around_by_a_refresh(served):
     # A change of the class itself is still shown: unlocked from elsewhere, the box is cleared.
     host.room.lock_cameras(False)
     wait_for(lambda: panel.lock.value is False, "the panel to show the class unlocked")
+
+
+def test_a_frame_sent_while_a_followers_tab_is_built_reaches_it(served, monkeypatch):
+    """The instructor's drag makes a frame while a joining student's follow view is being built: the sender shows
+    it to the followers it knows, not yet to this one; the new follower is shown it once registered."""
+    host = served.host
+    served.instructor()
+    wait_for(lambda: host.sender.latest is not None, "the instructor's first frame")
+    first = host.sender.latest
+    built = host_module.FollowView
+    posted = []
+
+    def built_while_the_room_moves(*args, **kwargs):
+        view = built(*args, **kwargs)
+        sent = host.sender.sent
+        newer = dataclasses.replace(host.sender.latest, number=host.sender.next_number())
+        host.sender.post(newer)
+        wait_for(lambda: host.sender.sent > sent, "the sender to send the newer frame to the followers it knows")
+        posted.append(newer)
+        return view
+
+    monkeypatch.setattr(host_module, "FollowView", built_while_the_room_moves)
+    cid, _ = served.student("Ada")
+    wait_for(lambda: cid in host.followers, "Ada to follow")
+    assert host.followers[cid].frame.number == posted[0].number > first.number
 
 
 FLOOD = 3000

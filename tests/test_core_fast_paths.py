@@ -204,7 +204,7 @@ def test_a_viewer_drag_update_checks_only_the_dragged_pose(monkeypatch):
     server, _app, fakes, views = start_headless(default_scene())
     try:
         view = views[0]
-        gizmo = view.scene3d._cams["cam1"]["gizmo"]
+        gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
         start = np.array(gizmo.position, float)
         view.drag.camera_event("cam1", _drag_event(gizmo, start + [0.002, 0.0, 0.0]))  # warm
         before = view.model.scene.camera("cam1").position

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from egtviz.cli import main
-from egtviz.viewer.server.cli import ServeAddressError, check_bind
+from egtviz.viewer.server.launch import ServeAddressError, check_bind
 
 from _waiting import PATIENCE
 

@@ -135,7 +135,7 @@ def test_the_workbench_adds_a_fisheye_and_draws_its_epipolar_curves_through_the_
         view = views[0]
         view.controls.add_buttons["fisheye"].value = True  # the workbench's "Add equidistant fisheye camera"
         (name,) = [c.name for c in view.model.scene.cameras if c.model_kind == "fisheye"]
-        assert view.scene3d._cams[name]["lens"].visible
+        assert view.scene3d.camera_nodes(name)["lens"].visible
         view.model.set_pair("cam1", name)
         ip = view.model.derived.image_planes[name]
         assert ip.lines is None and ip.rim is not None and ip.visible.any()

@@ -37,10 +37,10 @@ def _handles(s3: Scene3D) -> dict[str, object]:
     """Every node a drag or a point count can change, by a name that does not depend on the tab."""
     out: dict[str, object] = {"points": s3.points, "selected": s3.selected, "baseline": s3.baseline,
                               "epiplane": s3.epiplane, "surfaces": s3.surfaces}
-    for name, nodes in s3._cams.items():
+    for name, nodes in s3.every_camera_nodes().items():
         for key in ("gizmo", "axes", "label"):
             out[f"{name}/{key}"] = nodes[key]
-        for key, handle in nodes["drawing"].named_nodes().items():
+        for key, handle in nodes.drawing.named_nodes().items():
             out[f"{name}/{key}"] = handle
         out[f"{name}/rays"] = s3._rays[name]
     for i, label in enumerate(s3._point_labels):

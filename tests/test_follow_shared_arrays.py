@@ -64,8 +64,8 @@ _ARRAYS = {"points": "points", "colors": "colors", "vertices": "vertices", "face
 def _node_values(s3: Scene3D) -> dict[str, object]:
     """Every array and visibility of the camera-dependent nodes, by node name."""
     nodes: dict[str, object] = {"baseline": s3.baseline, "epiplane": s3.epiplane, "points": s3.points}
-    for name, cam in s3._cams.items():
-        for key, handle in cam["drawing"].named_nodes().items():
+    for name, cam in s3.every_camera_nodes().items():
+        for key, handle in cam.drawing.named_nodes().items():
             nodes[f"{name}/{key}"] = handle
         nodes[f"{name}/rays"] = s3._rays[name]
     out: dict[str, object] = {}
@@ -108,7 +108,7 @@ def test_the_image_on_the_frustum_is_the_fresh_one_after_a_drag(room):
         ok = np.flatnonzero(plane.visible)
         want = camera.image_to_world(plane.points[ok], IMAGE_PLANE_DEPTH).astype(np.float32)
         for view in followers:
-            node = view.scene3d._cams[name]["img_pts"]
+            node = view.scene3d.camera_nodes(name)["img_pts"]
             np.testing.assert_allclose(node.points, want, atol=2e-3)  # the cloud holds float16
 
 

@@ -300,7 +300,7 @@ def test_a_forged_gui_message_over_the_websocket_is_refused(tab):
 
 def test_forged_gizmo_messages_are_refused_and_the_gizmo_goes_back(tab):
     app, fake, view = tab
-    gizmo = view.scene3d._cams["cam1"]["gizmo"]
+    gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
     owner = view.client.scene._owner_id
     before = view.model.scene.camera("cam1")
     for wxyz, position in (((0.0, 0.0, 0.0, 0.0), (1.0, 2.0, 3.0)), ((1.0, 0.0, 0.0, 0.0), (math.nan, 0.0, 0.0)),

@@ -89,7 +89,7 @@ def lesson_tab():
 def drag(fake, view, name: str, poses: list[tuple[np.ndarray, np.ndarray]]) -> None:
     """Drag ``name``'s gizmo through ``poses`` (``(wxyz, position)``) as the browser does: a start, the updates
     50 ms apart (the page's throttle; viser runs each callback in its thread pool), an end."""
-    gizmo = view.scene3d._cams[name]["gizmo"]
+    gizmo = view.scene3d.camera_nodes(name)["gizmo"]
     owner = view.client.scene._owner_id
     fake.send("TransformControlsDragStartMessage", name=gizmo.name, owner=owner)
     for wxyz, position in poses:
@@ -112,7 +112,7 @@ def test_a_drag_past_a_position_range_stops_the_camera_at_its_edge_and_the_task_
     assert ("cam1", "position") in panel.run.ranges and cam1.position == (-3.0, -8.0, 1.5)
     # x past the range's high end (2), y past its low end (-8), z inside: stop at the edge, slide along it.
     drag(fake, view, "cam1", [(wxyz, np.array([0.0, -8.5, 1.5])), (wxyz, np.array([9.0, -11.0, 1.0]))])
-    gizmo = view.scene3d._cams["cam1"]["gizmo"]
+    gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
     # The gizmo, which the page leaves where the pointer was, is put at the applied pose when the drag ends.
     assert wait_until(lambda: np.allclose(gizmo.position, (2.0, -8.0, 1.0), atol=1e-9)), gizmo.position
     moved = view.model.scene.camera("cam1")
@@ -135,7 +135,7 @@ def test_a_turn_past_a_ypr_range_keeps_the_last_orientation_that_respected_it(le
     past, _ = spec_pose(dataclasses.replace(cam1, ypr_deg=(41.0, pitch, roll)))
     # The position still follows (within its range) while the turn past 30 degrees is held back.
     drag(fake, view, "cam1", [(inside, np.array([-3.0, -8.0, 1.5])), (past, np.array([-2.0, -8.0, 1.0]))])
-    gizmo = view.scene3d._cams["cam1"]["gizmo"]
+    gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
     assert wait_until(lambda: view.model.scene.camera("cam1").position == (-2.0, -8.0, 1.0))  # the last update
     # Then the end: the gizmo shows yaw 27 degrees again, not 41 (q and -q are the same rotation).
     assert wait_until(lambda: np.isclose(abs(np.dot(gizmo.wxyz, inside)), 1.0, atol=1e-9)), gizmo.wxyz
@@ -249,7 +249,7 @@ def test_in_the_browser_a_dragged_camera_stops_at_the_range_and_its_gizmo_is_put
         look((-1.0, -14.0, 4.0), (0.0, -8.0, 1.5))  # close to cam1, so its arrow is large on screen
         box = page.evaluate("(() => { const r = [...document.querySelectorAll('canvas')].pop()"
                             ".getBoundingClientRect(); return {x: r.x, y: r.y, width: r.width, height: r.height} })()")
-        gizmo = view.scene3d._cams["cam1"]["gizmo"]
+        gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
         R = matrix_from_quat_wxyz(gizmo.wxyz)
         axis = R[:, 0]  # cam1's x axis (image right): mostly world +x, a little -y (yaw 20.6 degrees)
         assert axis[0] > 0.9 and axis[1] < 0

@@ -429,7 +429,7 @@ def test_the_first_3d_view_frames_the_scene_in_the_free_canvas(four_camera_tab):
 
 def test_serve_present_option_reaches_the_app():
     from egtviz.cli import build_parser
-    from egtviz.viewer.server.cli import start
+    from egtviz.viewer.server.launch import start
 
     assert build_parser("serve").parse_args(["serve", "--present"]).present is True
     assert build_parser("serve").parse_args(["serve"]).present is False

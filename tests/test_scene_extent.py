@@ -85,7 +85,7 @@ def test_scene3d_draws_gizmos_axes_and_marks_at_the_glyph_size():
         extent = scene_extent(model.scene, model.derived)
         s3.set_glyph(extent.glyph)
         g = extent.glyph
-        for nodes in s3._cams.values():
+        for nodes in s3.every_camera_nodes().values():
             assert nodes["gizmo"].scale == pytest.approx(g)
             assert nodes["axes"].axes_length == pytest.approx(0.5 * g)
         assert s3._world.axes_length == pytest.approx(g)
@@ -93,7 +93,7 @@ def test_scene3d_draws_gizmos_axes_and_marks_at_the_glyph_size():
         # A camera added later is drawn at the same size.
         model.add_camera("panoramic")
         s3.draw(model.scene, model.derived)
-        assert all(n["gizmo"].scale == pytest.approx(g) for n in s3._cams.values())
+        assert all(n["gizmo"].scale == pytest.approx(g) for n in s3.every_camera_nodes().values())
     finally:
         server.stop()
 

@@ -12,7 +12,8 @@ import time
 
 import pytest
 
-from egtviz.viewer.server.cli import RESOLVE_TIMEOUT, ServeAddressError, _port, check_bind, reachable_urls
+from egtviz.viewer.server.cli import _port
+from egtviz.viewer.server.launch import RESOLVE_TIMEOUT, ServeAddressError, check_bind, reachable_urls
 
 from _subprocesses import Printed, run
 

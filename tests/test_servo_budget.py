@@ -122,10 +122,10 @@ def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another
         third = make_servo_demo(clients[2], "pinhole", steps=STEPS, autoplay=False, budget=budget)
         demos.append(third)
         assert third.wait(PATIENCE) and not third.running and third.result is None  # refused: nothing simulated
-        assert not third.btn_run.disabled
+        assert not third.form.btn_run.disabled
         assert notes[2] == [("Server busy", notes[2][0][1])]
         assert re.search(r"busy with 2 other servo runs .*Try again in a moment", notes[2][0][1])
-        assert "busy with 2 other servo runs" in third.status.content
+        assert "busy with 2 other servo runs" in third.form.status.content
         assert notes[0] == notes[1] == []  # the other tabs are not told anything
         assert budget.held() == 2 * (STEPS + 1)
         demos[0].close()  # a tab closes: its frames are free
@@ -194,8 +194,8 @@ def test_a_queued_run_says_so_and_runs_when_another_tab_closes(clients, notes):
     try:
         assert first.wait(PATIENCE) and first.result is not None
         second = make_servo_demo(clients[1], "pinhole", steps=STEPS, autoplay=False, budget=budget)
-        wait_for(lambda: "Queued" in second.status.content, "the second run to say it is queued")
-        assert "Queued: The server is busy with 1 other servo run" in second.status.content
+        wait_for(lambda: "Queued" in second.form.status.content, "the second run to say it is queued")
+        assert "Queued: The server is busy with 1 other servo run" in second.form.status.content
         assert second.running and second.result is None
         first.close()
         assert second.wait(PATIENCE) and second.result is not None and second.result.n_samples == STEPS + 1

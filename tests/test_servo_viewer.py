@@ -67,7 +67,7 @@ def test_pinhole_demo_steps_and_scrubs(client):
         assert k0["epipolar-line"] >= n - 1 and k0["epipole"] == 1
         assert "trail" not in k0  # one sample: no trail yet
         p0 = _point_xy(s0, 0)
-        demo.btn_step.value = None  # a "click": viser runs the button's callbacks on assignment
+        demo.clock.btn_step.value = None  # a "click": viser runs the button's callbacks on assignment
         assert demo.frame == 1
         demo.step(4)
         assert demo.frame == 5
@@ -79,15 +79,15 @@ def test_pinhole_demo_steps_and_scrubs(client):
         demo.step(-3)
         assert demo.frame == 12
         # The scrubber sets the frame (its callback runs synchronously).
-        demo.slider.value = float(r.time[40])
+        demo.clock.slider.value = float(r.time[40])
         assert demo.frame == 40 and 'data-frame="40"' in demo.svg
-        assert abs(demo.slider.value - r.time[40]) < 1e-9
+        assert abs(demo.clock.slider.value - r.time[40]) < 1e-9
         # Plots are revealed up to the current time.
-        assert len(demo.plot_controls.data[0]) == 41 and len(demo.plot_controls.data) == 7
-        assert len(demo.plot_errors.data[0]) == 41
-        assert "rotation error" in demo.readout.content
+        assert len(demo.display.plot_controls.data[0]) == 41 and len(demo.display.plot_controls.data) == 7
+        assert len(demo.display.plot_errors.data[0]) == 41
+        assert "rotation error" in demo.display.readout.content
         # Not converged in 60 steps: the status says why, no traceback.
-        assert not r.converged and "not converged" in demo.status.content
+        assert not r.converged and "not converged" in demo.form.status.content
     finally:
         demo.close()
     assert demo.closed
@@ -98,11 +98,11 @@ def test_pinhole_play_pause(client):
     try:
         assert demo.wait(PATIENCE)
         demo.play()
-        assert demo.playing and demo.btn_play.label == "Pause"
+        assert demo.playing and demo.clock.btn_play.label == "Pause"
         wait_for(lambda: demo.frame > 5, "the playback to move past frame 5")
         demo.pause()
         k = demo.frame
-        assert k > 5 and not demo.playing and demo.btn_play.label == "Play"
+        assert k > 5 and not demo.playing and demo.clock.btn_play.label == "Play"
         # Paused: the playback loop stops (its thread ends), and the frame is where the pause left it.
         wait_for(lambda: not demo._play_thread.is_alive(), "the playback thread to end after the pause")
         assert demo.frame == k
@@ -122,7 +122,7 @@ def test_panoramic_demo_biconics(client):
         k = _kinds(demo.svg)
         assert k["trail"] == n and k["epipolar-conic"] >= n
         assert "step 1: rotation" in demo.svg or "step 2: translation" in demo.svg
-        assert len(demo.plot_controls.data) == 4  # t, v_x, v_y, omega
+        assert len(demo.display.plot_controls.data) == 4  # t, v_x, v_y, omega
         demo.seek_time(1.0)
         assert demo.frame == 20
     finally:
@@ -212,7 +212,7 @@ def test_forged_drop_downs_and_slider_are_refused(client, notes):
         assert demo.fields["estimator"].value == "true" and demo.params()["f_algorithm"] is None
         _fire(demo.fields["speed"], client, "1000x")
         assert "speed" in notes[-1][1] and demo.fields["speed"].value == "1x"
-        _fire(demo.slider, client, "abc")
+        _fire(demo.clock.slider, client, "abc")
         assert notes[-1] == ("Value refused", "time: expected a number of seconds, got 'abc'")
         demo.step(3)  # still working
         assert demo.frame == 3
@@ -231,8 +231,8 @@ def test_a_failing_run_is_shown_not_raised(client, notes, monkeypatch):
     try:
         assert demo.run(wait=True, timeout=PATIENCE)
         assert demo.result is None
-        assert "beta" in demo.error and "Bad parameters" in demo.status.content
-        assert 'data-level="error"' in demo.status.content
+        assert "beta" in demo.error and "Bad parameters" in demo.form.status.content
+        assert 'data-level="error"' in demo.form.status.content
         assert 'data-kind="message"' in demo.svg and "beta" in demo.svg
         assert notes[-1][0] == "Servo run failed"
         # A good run afterwards clears the error.
@@ -286,7 +286,7 @@ def test_app_opens_demo_and_goes_back():
 
 
 def test_app_demo_mode_and_cli():
-    from egtviz.viewer.server.cli import start
+    from egtviz.viewer.server.launch import start
 
     server, app = start("127.0.0.1", 0, demo="pinhole")
     try:
@@ -324,7 +324,8 @@ def test_one_class_per_demo_and_the_factory(client):
         assert type(demo) is PanoramicServoDemo and isinstance(demo, ServoDemo)
         assert set(demo.fields) == {"seed", "noise_px", "steps", "speed"}
         assert demo.params() == {"seed": 0, "noise_px": 0.0, "steps": 20}
-        assert demo.run(wait=True, timeout=PATIENCE) and demo.error == "" and demo.panel is None  # no panel: plays all the same
+        # No panel: plays all the same.
+        assert demo.run(wait=True, timeout=PATIENCE) and demo.error == "" and demo.display.panel is None
         demo.step(5)
         assert demo.frame == 5 and 'data-frame="5"' in demo.svg
     finally:
@@ -372,13 +373,12 @@ def test_the_viewer_draws_the_frames_geometry(client):
         assert sorted(drawn) == [i for i in range(len(g.lines)) if np.all(np.isfinite(g.lines[i]))]
         for i, seg in drawn.items():
             assert np.abs(seg - g.lines[i]).max() < 0.01
-        assert np.allclose(demo.nodes["body"].position, frames.body_poses[17][:3, 3])
+        assert np.allclose(demo.nodes.body.position, frames.body_poses[17][:3, 3])
         joints = frames.links[17, :, :3, 3]  # the arm: link meshes, or the stick figure without rtb-data's meshes
-        shown = ([h.position for h in demo.nodes["links"]] if "links" in demo.nodes
-                 else demo.nodes["joints"].points)
+        shown = [h.position for h in demo.arm.links] if demo.arm.links else demo.arm.joints.points
         assert np.allclose(np.asarray(shown, float), joints, atol=1e-6)
         segs, _ = frames.ray_segments(17, demo.points)
-        assert np.allclose(demo.nodes["rays"].points, segs, atol=1e-6)
+        assert np.allclose(demo.nodes.rays.points, segs, atol=1e-6)
     finally:
         demo.close()
 
@@ -388,7 +388,7 @@ def test_the_two_axes_of_the_controls_plot_share_their_zero(client, kind):
     demo = make_servo_demo(client, kind, steps=40, autoplay=False)
     try:
         assert demo.wait(PATIENCE) and demo.error == ""
-        scales = demo.plot_controls.scales
+        scales = demo.display.plot_controls.scales
         (lv, hv), (lw, hw) = scales["v"]["range"], scales["w"]["range"]
         assert lv <= 0 <= hv and lw <= 0 <= hw and hv > lv and hw > lw
         assert -lv / (hv - lv) == pytest.approx(-lw / (hw - lw), abs=1e-12)  # zero at the same height

@@ -110,7 +110,7 @@ def test_a_fitted_panel_holds_its_axes_during_a_drag_and_fits_exactly_at_its_end
     try:
         view = views[0]
         view.dock.view_action("cam2", "fit")  # the panel's "fit" button
-        gizmo = view.scene3d._cams["cam1"]["gizmo"]
+        gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
         start = np.array(gizmo.position, float)
 
         def drag(dx, phase, dy=0.0):

@@ -84,7 +84,7 @@ def test_moving_a_camera_changes_the_other_image_lines(tabs):
     after = line_coords(view.svgs["cam2"])
     assert before.shape == after.shape and not np.allclose(before, after, atol=0.5)
     # the gizmo follows the field
-    gizmo = view.scene3d._cams["cam1"]["gizmo"]
+    gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
     assert np.allclose(gizmo.position, (-4.0, -8.0, 1.5))
 
 
@@ -122,7 +122,7 @@ def fake_drag(gizmo, position, wxyz, phase="update", stamp=None):
 
 def test_camera_gizmo_drag_updates_model_and_fields(tabs):
     view = view_of(tabs)
-    gizmo = view.scene3d._cams["cam2"]["gizmo"]
+    gizmo = view.scene3d.camera_nodes("cam2")["gizmo"]
     wxyz = np.array(gizmo.wxyz)
     view.drag.camera_event("cam2", fake_drag(gizmo, (2.0, -7.0, 2.0), wxyz))
     spec = view.model.scene.camera("cam2")
@@ -135,7 +135,7 @@ def test_camera_gizmo_drag_updates_model_and_fields(tabs):
 
 def test_late_gizmo_event_does_not_overwrite_a_newer_one(tabs):
     view = view_of(tabs)
-    gizmo = view.scene3d._cams["cam1"]["gizmo"]
+    gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
     wxyz = np.array(gizmo.wxyz)
     now = time.time()
     view.drag.camera_event("cam1", fake_drag(gizmo, (-2.0, -8.0, 1.5), wxyz, stamp=now))
@@ -259,7 +259,7 @@ def test_disconnect_drops_the_view():
         wait_for(lambda: not app.views, "the server to drop the closed tab's view")
         assert view.closed
         # a late gizmo event after the tab left changes nothing
-        gizmo = view.scene3d._cams["cam1"]["gizmo"]
+        gizmo = view.scene3d.camera_nodes("cam1")["gizmo"]
         scene = view.model.scene
         view.drag.camera_event("cam1", types.SimpleNamespace(target=gizmo, phase="update"))
         assert view.model.scene is scene
@@ -282,7 +282,7 @@ def test_concurrent_events_end_in_the_latest_state(tabs):
         joined(t, "an edit's thread")
     final = view.model.scene.camera("cam1").position
     assert [float(x) for x in field.value.split(",")] == pytest.approx(final)
-    assert np.allclose(view.scene3d._cams["cam1"]["gizmo"].position, final)
+    assert np.allclose(view.scene3d.camera_nodes("cam1")["gizmo"].position, final)
 
 
 def test_cli_serve_reports_the_real_port_and_bad_scene(tmp_path, capsys):
@@ -315,11 +315,11 @@ def test_cli_serve_reports_the_real_port_and_bad_scene(tmp_path, capsys):
 def test_highlight_and_lock_from_a_lesson(tabs):
     view = view_of(tabs)
     view.model.highlight(["cam1", "point:2"])
-    assert tuple(view.scene3d._cams["cam1"]["frustum"].color) == (230, 159, 0)
+    assert tuple(view.scene3d.camera_nodes("cam1")["frustum"].color) == (230, 159, 0)
     rings = [el for el in ET.fromstring(view.svgs["cam2"]).iter() if el.get("data-selected") == "false"]
     assert len(rings) == 1
     view.model.lock("cam1")
-    g = view.scene3d._cams["cam1"]["gizmo"]
+    g = view.scene3d.camera_nodes("cam1")["gizmo"]
     assert g.disable_axes and g.disable_rotations
     view.model.lock("point:1")
     assert view.scene3d._point_gizmos[1].disable_axes

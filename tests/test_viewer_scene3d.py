@@ -108,7 +108,7 @@ def test_the_dragged_gizmo_is_not_re_posed_and_points_follow_the_model(server):
     s3 = scene3d_on(server)
     model = SceneModel(default_scene())
     s3.draw(model.scene, compute_derived(model.scene))
-    gizmo = s3._cams["cam1"]["gizmo"]
+    gizmo = s3.camera_nodes("cam1")["gizmo"]
     before = np.array(gizmo.position)
     model.update_camera("cam1", position=(1.0, -7.0, 2.0))
     s3.draw(model.scene, compute_derived(model.scene), moving="cam1")
@@ -131,11 +131,11 @@ def test_the_dragged_gizmo_is_not_re_posed_and_points_follow_the_model(server):
     model.highlight(["cam1"])
     s3.draw(model.scene, compute_derived(model.scene))
     assert gizmo.disable_axes and gizmo.disable_rotations
-    assert tuple(s3._cams["cam1"]["frustum"].color) == (230, 159, 0)
+    assert tuple(s3.camera_nodes("cam1")["frustum"].color) == (230, 159, 0)
     model.lock("cam1", False)
     model.highlight([])
     s3.draw(model.scene, compute_derived(model.scene))
-    assert not gizmo.disable_axes and tuple(s3._cams["cam1"]["frustum"].color) != (230, 159, 0)
+    assert not gizmo.disable_axes and tuple(s3.camera_nodes("cam1")["frustum"].color) != (230, 159, 0)
 
 
 def test_image_plane_lines_in_3d_follow_the_ray_rule():
@@ -144,7 +144,7 @@ def test_image_plane_lines_in_3d_follow_the_ray_rule():
     server, app, fakes, views = start_headless(model.scene)
     try:
         view = views[0]
-        cams = view.scene3d._cams
+        cams = view.scene3d.every_camera_nodes()
         assert not any(c["img_lines"].visible for c in cams.values())  # 40 points, none selected
         view.model.select_point(9)
         derived = compute_derived(view.model.scene)
@@ -178,11 +178,11 @@ def test_the_mirror_is_a_reflective_mesh_above_its_ccd_sent_once_per_shape(serve
     s3 = scene3d_on(server)
     s3.draw(model.scene, model.derived)
     name = model.scene.cameras[0].name
-    drawing = s3._cams[name]["drawing"]
+    drawing = s3.camera_nodes(name).drawing
     mirror_node = drawing.mirror
     cam = model.derived.cameras[name]
     # A glTF mesh under the camera's gizmo (the mirror frame), with a metallic, smooth material.
-    assert mirror_node.name == f"{s3._cams[name]['gizmo'].name}/mirror"
+    assert mirror_node.name == f"{s3.camera_nodes(name)['gizmo'].name}/mirror"
     mesh = trimesh.load(io.BytesIO(mirror_node.glb_data), file_type="glb", force="mesh")
     V = np.asarray(mesh.vertices)
     material = mesh.visual.material

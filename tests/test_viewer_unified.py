@@ -76,7 +76,7 @@ def test_a_raw_client_cannot_push_xi_out_of_range(view):
 
 
 def test_the_sphere_its_centre_and_the_selected_points_great_circle_in_3d(view):
-    nodes = view.scene3d._cams["uni"]
+    nodes = view.scene3d.camera_nodes("uni")
     assert nodes["sphere"].visible and nodes["sphere"].opacity < 1
     np.testing.assert_allclose(nodes["centre"].position, (0.0, 0.0, -0.8 * SPHERE_RADIUS), atol=1e-9)
     assert not nodes["circle"].visible

@@ -2,7 +2,7 @@
 
 Method (also in ``docs/benchmarks.md``):
 
-* **Server.** The real ``egtviz serve`` server (:func:`egtviz.viewer.server.cli.start`: viser, the guards of
+* **Server.** The real ``egtviz serve`` server (:func:`egtviz.viewer.server.launch.start`: viser, the guards of
   :mod:`egtviz.viewer.server.guard`, the app) on a free loopback port, in this process.
 * **Tabs.** K raw websocket clients (:mod:`egtviz.bench.ws_client`) in one separate process, so that
   their work is not counted as the server's. Each joins like a browser in a 1366 x 768 window (its first
@@ -322,7 +322,7 @@ class _Server:
 
     def __init__(self, scene: str | None) -> None:
         from ..scene import model as scene_model
-        from ..viewer.server.cli import start
+        from ..viewer.server.launch import start
 
         self.clock = _StageClock()
         self._model_module = scene_model

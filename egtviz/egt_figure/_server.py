@@ -164,7 +164,7 @@ class FigureServer:
         """Start the viewer on :func:`figure_port` ``(port)`` or the next free one; ``viewer``: an already started
         ``(server, app)`` pair instead (tests)."""
         if viewer is None:
-            from ..viewer.server.cli import start
+            from ..viewer.server.launch import start
             from ..jupyter_proxy import hub_host_names
 
             port = figure_port(port)

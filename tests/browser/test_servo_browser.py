@@ -19,7 +19,7 @@ SVG = 'svg[data-egtviz="servo-image"]'
 
 @pytest.mark.parametrize("kind, curve", [("pinhole", "epipolar-line"), ("panoramic", "epipolar-conic")])
 def test_demo_plays_in_the_browser(browser, kind, curve):
-    from egtviz.viewer.server.cli import start
+    from egtviz.viewer.server.launch import start
 
     server, app = start("127.0.0.1", 0, demo=kind)
     page = browser.new_page(viewport={"width": 1366, "height": 768})

@@ -5,11 +5,17 @@ model (:mod:`.scene_lock`), and the student's tab is told why."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING
 
+import viser
+
+from ...classroom import Classroom
 from ..workbench.fields import notify_error
 from .follow_view import FollowView
 from .scene_lock import LOCKED_TITLE, SceneLocks
+
+if TYPE_CHECKING:
+    from ..workbench.app import ClientView
 
 __all__ = ["CameraLock"]
 
@@ -19,7 +25,7 @@ _LOCKED_BODY = "You can look around, but no camera of your scene can move until 
 _UNLOCKED_TITLE = "The instructor has unlocked the cameras"
 
 
-def _tell(client: Any, locked: bool) -> None:
+def _tell(client: viser.ClientHandle, locked: bool) -> None:
     """Say in ``client``'s tab that the class locked (or unlocked) the cameras; a tab gone is left alone."""
     try:
         if locked:
@@ -40,8 +46,8 @@ class CameraLock:
             shows their own scene or a lesson's.
     """
 
-    def __init__(self, room: Any, followers: Callable[[], dict[int, FollowView]],
-                 released: Callable[[], tuple[dict[int, str], dict[int, Any]]] = lambda: ({}, {})) -> None:
+    def __init__(self, room: Classroom, followers: Callable[[], dict[int, FollowView]],
+                 released: Callable[[], tuple[dict[int, str], dict[int, ClientView]]] = lambda: ({}, {})) -> None:
         self.room = room
         self._followers = followers
         self._released = released
@@ -50,7 +56,7 @@ class CameraLock:
         #: The instructor's view camera: ``(position, look_at, up)``; None until their tab reports one.
         self.pose: tuple | None = None
 
-    def instructor_moved(self, camera: Any) -> None:
+    def instructor_moved(self, camera: viser.CameraHandle) -> None:
         """The instructor's tab reported its view camera."""
         try:
             pose = (tuple(camera.position), tuple(camera.look_at), tuple(camera.up_direction))
@@ -78,7 +84,7 @@ class CameraLock:
                 notify_error(view.client, exc)
             _tell(view.client, locked)
 
-    def released(self, view: Any, shown: bool) -> None:
+    def released(self, view: ClientView | None, shown: bool) -> None:
         """A released student's tab shows ``view`` (``shown``: just now; None: no view): its scene is locked while
         the class locks cameras, and a tab just shown is told so."""
         if view is None:

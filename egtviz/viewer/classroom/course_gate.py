@@ -19,10 +19,16 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import TYPE_CHECKING
 
-from ...classroom import Classroom, PacingChanged
+from ...classroom import Classroom, Event, PacingChanged
+from ..course.lesson_view import LessonPanel
 from ..course.start_page import StartPage
+
+if TYPE_CHECKING:
+    from ...lessons import LessonRun
+    from ...scene import SceneModel
+    from ..course.start_page import Course
 
 __all__ = ["NOT_OPEN", "PACED_TITLE", "CourseGate"]
 
@@ -43,8 +49,8 @@ class CourseGate:
         own_model: the scene model of a student's own scene, by name (None: a new workbench for everyone).
     """
 
-    def __init__(self, room: Classroom, course: Any = None, *,
-                 own_model: Callable[[str], Any] | None = None) -> None:
+    def __init__(self, room: Classroom, course: Course | None = None, *,
+                 own_model: Callable[[str], SceneModel] | None = None) -> None:
         self.room = room
         self.course = course
         self._own_model = own_model
@@ -82,7 +88,7 @@ class CourseGate:
             step -= 1
         return step
 
-    def paced_run(self, tab: int, run: Any) -> Callable[[str, int], bool] | None:
+    def paced_run(self, tab: int, run: LessonRun) -> Callable[[str, int], bool] | None:
         """A lesson run (:class:`~egtviz.lessons.LessonRun`) opened in the tab, before it is drawn: a student who
         was further on resumes at the last step open. Returns what the lesson panel's "next" asks (None: the tab is
         not paced)."""
@@ -94,12 +100,12 @@ class CourseGate:
             run.go_to(last)
         return self.room.may_open
 
-    def workbench_model(self, tab: int) -> Any:
+    def workbench_model(self, tab: int) -> SceneModel | None:
         """The scene model the workbench opened in the tab shows: a student's own; None: a new one."""
         name = self.room.name_of(tab) if self._paced(tab) else None
         return self._own_model(name) if name is not None and self._own_model is not None else None
 
-    def _on_event(self, event: Any) -> None:
+    def _on_event(self, event: Event) -> None:
         if not isinstance(event, PacingChanged) or self.course is None:
             return
         try:
@@ -109,27 +115,30 @@ class CourseGate:
 
     def _follow_pacing(self) -> None:
         """Each student's tab as the new pacing says: start pages shown again, a lesson past it moved back."""
-        for tab, page in list(self.course.tabs.items()):
+        course = self.course
+        if course is None:
+            return
+        for tab, page in list(course.tabs.items()):
             if not self._paced(tab):
                 continue
             try:
                 if isinstance(page, StartPage):
                     page.show_pacing()
-                elif getattr(page, "run", None) is not None:
-                    self._hold_back(page)
+                elif isinstance(page, LessonPanel) and page.run is not None:
+                    self._hold_back(course, page)
             except Exception:  # noqa: BLE001 - a tab that left meanwhile; the other tabs still follow
                 logging.getLogger(__name__).debug("tab %s not paced", tab, exc_info=True)
 
-    def _hold_back(self, panel: Any) -> None:
+    def _hold_back(self, course: Course, panel: LessonPanel) -> None:
         """A student's lesson panel past the pacing goes back to the last open step, or to the start page if their
         lesson is closed, with a note in the tab."""
         lesson = panel.run.lesson
         client = panel.view.client
         if not self.room.may_open(lesson.name, 0):
             with panel.view.lock:
-                if panel.view.closed or self.course.tabs.get(client.client_id) is not panel:
+                if panel.view.closed or course.tabs.get(client.client_id) is not panel:
                     return
-            self.course.show_start(client)
+            course.show_start(client)
             said = f"{lesson.title} is closed for now: you are back on the course's page."
         else:
             last = self.last_open(lesson.name, panel.run.step_index)

@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
-from typing import Any
 
-from ...scene import Scene, SceneError
+import viser
+
+from ...scene import Derived, Scene, SceneError
 from ...scene.extent import scene_extent
 from ..render.palette import PRESENT_GUI_CSS
-from ..render.panels import DEFAULT_WINDOW, dock_plan, framed_camera, plan_grid, window_from_canvas
+from ..render.panels import DEFAULT_WINDOW, WindowSize, dock_plan, framed_camera, plan_grid, window_from_canvas
 from ..render.svg import NORMAL, PRESENT
 from ..workbench.fields import notify_error
 
@@ -47,7 +48,7 @@ class RoomFrame:
     number: int
     version: int
     scene: Scene
-    derived: Any
+    derived: Derived
     panels: tuple[tuple[str, str, str], ...]
     readout: str
     present: bool
@@ -65,22 +66,22 @@ class FollowView:
             from the canvas it reports now, before this view docks its controls).
     """
 
-    def __init__(self, client: Any, frame: RoomFrame | None, *, present: bool = False,
-                 window: Any = None) -> None:
+    def __init__(self, client: viser.ClientHandle, frame: RoomFrame | None, *, present: bool = False,
+                 window: tuple[WindowSize, float] | None = None) -> None:
         from ..workbench.scene3d import Scene3D
 
         self.client = client
         self.lock = threading.RLock()
         self.closed = False
         self.frame: RoomFrame | None = None
-        self._html: dict[str, Any] = {}
+        self._html: dict[str, viser.GuiHtmlHandle] = {}
         self._shown: dict[str, str] = {}
-        self._panels: list[Any] = []
+        self._panels: list[viser.PanelHandle] = []
         self._layout_key: tuple | None = None
         self.present = False
         # Measured once, before the controls dock and narrow the canvas (as the workbench's panel dock does).
         #: The tab's window (CSS pixels) and its device pixels per CSS pixel.
-        measured: tuple[Any, float] = window if window is not None else self._canvas_window()
+        measured: tuple[WindowSize, float] = window if window is not None else self._canvas_window()
         self.window, self.pixel_ratio = measured
         with self.lock, client.atomic():
             try:  # docked on the left, as in the workbench: the scene in the middle, the panels on the right
@@ -98,11 +99,11 @@ class FollowView:
 
     # -- a follower may look, not touch ---------------------------------------------------------------
 
-    def camera_event(self, name: str, event: Any) -> None:
+    def camera_event(self, name: str, event: object) -> None:
         """A camera's gizmo moved in the browser: refused (:meth:`report` puts it back)."""
         raise SceneError(FOLLOW_REFUSAL)
 
-    def point_event(self, index: int, event: Any) -> None:
+    def point_event(self, index: int, event: object) -> None:
         """A point's gizmo moved in the browser: refused."""
         raise SceneError(FOLLOW_REFUSAL)
 
@@ -155,7 +156,7 @@ class FollowView:
         self.style.content = PRESENT_GUI_CSS if present else ""
         self.scene3d.set_label_scale(PRESENT_LABEL_SCALE if present else 1.0)
 
-    def _canvas_window(self) -> tuple[Any, float]:
+    def _canvas_window(self) -> tuple[WindowSize, float]:
         try:
             width = self.client.camera.image_width
             window = window_from_canvas(width, self.client.camera.image_height)
@@ -180,7 +181,7 @@ class FollowView:
             gui = self.client.gui
             for column in grid.columns:
                 steps, _ = dock_plan(len(column))
-                handles: dict[int, Any] = {}
+                handles: dict[int, viser.PanelHandle] = {}
                 for cell, anchor in steps:
                     panel = gui.add_panel()
                     for name in column[cell]:
@@ -213,7 +214,8 @@ class FollowView:
         except (AssertionError, ValueError):
             pass
 
-    def set_camera(self, position: Any, look_at: Any, up: Any) -> None:
+    def set_camera(self, position: tuple[float, float, float], look_at: tuple[float, float, float],
+                   up: tuple[float, float, float]) -> None:
         """Put this tab's view camera where the instructor's is (cameras locked)."""
         with self.lock:
             if self.closed:

@@ -19,10 +19,12 @@ import logging
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
+
+import viser
 
 from ...classroom import (
-    AnswersChanged, CamerasLocked, Classroom, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged,
+    AnswersChanged, CamerasLocked, Classroom, Event, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged,
     PauseChanged, QuestionAsked, RosterChanged, SharedChanged, SnapshotShown,
 )
 from ...scene import SceneModel
@@ -31,12 +33,17 @@ from ..workbench.fields import FieldError, notify_error, on_event
 from .camera_lock import CameraLock
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
+from .pacing_form import lesson_steps
 from .course_gate import CourseGate
 from .room_html import step_caption
-from .room_sender import RoomSender, frame_from_scene, frame_of
+from .room_sender import FrameSender, RoomSender, frame_from_scene, frame_of
 from .snapshot_pane import RoomSnapshots
 from .student_bar import JoinPage, StudentBar, notify_refusal, stored_name
 from .instructor_panel import InstructorPanel
+
+if TYPE_CHECKING:
+    from ...lessons import LessonRun
+    from ..workbench.app import ClientView, EgtvizApp
 
 __all__ = ["NAME_KEY", "ClassroomHost"]
 
@@ -46,6 +53,7 @@ NAME_KEY = "egtviz-classroom-name"
 NAME_TIMEOUT = 3.0
 #: Seconds to wait for the instructor's own frame of a scene published on another process before drawing it here.
 SHARED_GRACE_S = 0.2
+_T = TypeVar("_T")
 _REFUSED_PAGE = ('<div data-egtviz="refused" style="padding:0.6em;font-size:1.2em">This link is not valid.</div>')
 
 
@@ -58,13 +66,13 @@ class ClassroomHost:
         student_url: the URL students open (shown with its QR code in the instructor's panel).
     """
 
-    def __init__(self, app: Any, room: Classroom | None = None, *, student_url: str = "") -> None:
+    def __init__(self, app: EgtvizApp, room: Classroom | None = None, *, student_url: str = "") -> None:
         self.app = app
         progress = getattr(app.course, "progress", None)
         self.room = room if room is not None else Classroom(progress)
         self.student_url = student_url
         self._lock = threading.RLock()
-        self._clients: dict[int, Any] = {}
+        self._clients: dict[int, viser.ClientHandle] = {}
         self._roles: dict[int, str] = {}
         self._fresh: set[int] = set()
         self.followers: dict[int, FollowView] = {}
@@ -76,8 +84,8 @@ class ClassroomHost:
         self._publishing = threading.local()
         self._routes = ThreadPoolExecutor(max_workers=2, thread_name_prefix="egtviz-class-route")
         #: Sends the room's frames to this process's followers (a relay between processes may wrap it).
-        self.sender: Any = RoomSender(lambda: list(self._copy(self.followers).values()))
-        self._own_sender = self.sender
+        self._own_sender = RoomSender(lambda: list(self._copy(self.followers).values()))
+        self.sender: FrameSender = self._own_sender
         self.cameras = CameraLock(self.room, lambda: self._copy(self.followers),
                                   released=lambda: (self._copy(self._roles), dict(self.app.views)))
         self._refresh = _Throttled(self._refresh_panels, 0.25)
@@ -85,20 +93,18 @@ class ClassroomHost:
         serve_page_under(app.server, INSTRUCTOR_PREFIX)
         # Whatever logs a request path (websockets, viser, a handler added later to the root) shortens the token.
         self._log_filter = self.room.log_filter()
-        self._log_handlers = [h for h in (*logging.getLogger().handlers, logging.lastResort) if h is not None]
-        for handler in self._log_handlers:
-            handler.addFilter(self._log_filter)
+        self._log_handlers = _filter_logs(self._log_filter)
         self._unsubscribe = self.room.subscribe(self._on_event)
         app.classroom = self
 
-    def _copy(self, tabs: dict[int, Any]) -> dict[int, Any]:
+    def _copy(self, tabs: dict[int, _T]) -> dict[int, _T]:
         """A copy of one of the tab registries, taken under the lock (routing threads change them)."""
         with self._lock:
             return dict(tabs)
 
     # -- the app's hooks ------------------------------------------------------------------------------
 
-    def open(self, client: Any) -> bool:
+    def open(self, client: viser.ClientHandle) -> bool:
         """A new tab: the instructor's (a workbench with the instructor's panel on top), a student's (their
         name first), or a refused one. True: this host showed the tab."""
         cid = client.client_id
@@ -132,14 +138,14 @@ class ClassroomHost:
                  present=bool(getattr(self.app, "present", False)))
         return True
 
-    def _open_instructor(self, client: Any) -> None:
+    def _open_instructor(self, client: viser.ClientHandle) -> None:
         """The instructor's workbench (the course one click away), on the room's scene if the class has one: an
         instructor who reconnects carries on where the room is."""
         shared = self.room.shared().scene  # read first: the new workbench, drawn, would publish its own scene
         opener = self.app.course.open_workbench if self.app.course is not None else self.app.show_workbench
         opener(client, SceneModel(shared) if shared is not None else None)
 
-    def cleared(self, client: Any) -> None:
+    def cleared(self, client: viser.ClientHandle) -> None:
         """The app emptied the tab: put the instructor's panel or the student's bar back on top."""
         cid = client.client_id
         with self._lock:
@@ -152,7 +158,7 @@ class ClassroomHost:
             self._build_bar(client)
         self.snapshots.show_in(client)
 
-    def built(self, client: Any, view: Any) -> None:
+    def built(self, client: viser.ClientHandle, view: ClientView) -> None:
         """The app built a workbench in the tab: the instructor's feeds the room, a student's keeps their scene."""
         cid = client.client_id
         with self._lock:
@@ -192,7 +198,7 @@ class ClassroomHost:
 
     # -- students ---------------------------------------------------------------------------------------
 
-    def join(self, client: Any, name: Any) -> None:
+    def join(self, client: viser.ClientHandle, name: object) -> None:
         """The student on ``client`` joins the class as ``name`` (refused names raise, and the tab says why)."""
         if not isinstance(name, str) or not name.strip():
             raise FieldError("your name: type it to join the class")
@@ -228,7 +234,7 @@ class ClassroomHost:
             except Exception as exc:  # noqa: BLE001 - a tab that cannot be shown says why; the others carry on
                 notify_error(client, exc)
 
-    def _show_following(self, client: Any) -> None:
+    def _show_following(self, client: viser.ClientHandle) -> None:
         cid = client.client_id
         with self._lock:
             if cid in self.followers or cid not in self._clients:
@@ -243,12 +249,17 @@ class ClassroomHost:
                 view.close()
                 return
             self.followers[cid] = view
+        # A frame the sender posted while the view was being built went to the followers it knew then, not to
+        # this one: show the newest now (a frame no newer than the one shown is ignored).
+        latest = self.sender.latest
+        if latest is not None:
+            view.show(latest)
         self._sync_bar(cid)
         on_event(client.camera.on_update, lambda cam: self.cameras.follower_moved(cid),
                  lambda exc: notify_error(client, exc))
         self.cameras.hold(view)
 
-    def _show_own(self, client: Any) -> None:
+    def _show_own(self, client: viser.ClientHandle) -> None:
         cid = client.client_id
         with self._lock:
             follower = self.followers.pop(cid, None)
@@ -289,7 +300,7 @@ class ClassroomHost:
                 model = self._models.setdefault(name, model)
         return model
 
-    def _student_rendered(self, view: Any) -> None:
+    def _student_rendered(self, view: ClientView) -> None:
         """A student's own view drew: keep their scene for a reconnect, and tell the roster where they are."""
         cid = view.client.client_id
         name = self.room.name_of(cid)
@@ -302,7 +313,7 @@ class ClassroomHost:
             self.room.keep_scene(name, self.cameras.scenes.without_class_locks(view.model, view.model.scene))
             self.room.report_step(cid, None, None)
 
-    def _build_bar(self, client: Any) -> None:
+    def _build_bar(self, client: viser.ClientHandle) -> None:
         cid = client.client_id
         name = self.room.name_of(cid) or ""
         bar = StudentBar(client, name, on_follow=lambda on: self.room.follow(cid, on),
@@ -319,12 +330,12 @@ class ClassroomHost:
 
     # -- the instructor ---------------------------------------------------------------------------------
 
-    def _build_panel(self, client: Any) -> None:
+    def _build_panel(self, client: viser.ClientHandle) -> None:
         panel = InstructorPanel(client, self, lambda exc: notify_refusal(client, exc))
         with self._lock:
             self.panels[client.client_id] = panel
 
-    def _instructor_rendered(self, view: Any) -> None:
+    def _instructor_rendered(self, view: ClientView) -> None:
         """The instructor's tab drew an update: while students follow, it is the room's new frame."""
         if self.room.mode is not Mode.FOLLOW:
             return
@@ -337,13 +348,13 @@ class ClassroomHost:
             self._publishing.on = False
         self.sender.post(frame_of(view, version, self.sender.next_number(), step_caption(run)))
 
-    def _lesson_run(self, cid: int, view: Any) -> Any:
+    def _lesson_run(self, cid: int, view: ClientView) -> LessonRun | None:
         """The lesson run the tab's view shows (None: the workbench)."""
         tab = self.app.course.tabs.get(cid) if self.app.course is not None else None
         run = getattr(tab, "run", None)
         return run if run is not None and getattr(run, "model", None) is view.model else None
 
-    def set_follow_me(self, client: Any, on: bool) -> None:
+    def set_follow_me(self, client: viser.ClientHandle, on: bool) -> None:
         """Follow me (every student shows this tab's scene) or release them to explore."""
         if not on:
             if self.room.mode is Mode.FOLLOW:  # already released (to the tasks, say): stays so
@@ -359,9 +370,9 @@ class ClassroomHost:
         """Release the students to their own scenes (``EXPLORE``) or to the lesson step's tasks (``TASKS``)."""
         self.room.set_mode(mode)
 
-    def lesson_names(self) -> list[str]:
-        course = self.app.course
-        return list(course.lessons) if course is not None else []
+    def lesson_steps(self) -> dict[str, int]:
+        """The course's lessons, in its order, and how many steps each has (``{}``: no course)."""
+        return lesson_steps(self.app.course)
 
     def student_tabs(self) -> dict[str, int]:
         """Connected students' names and one tab of each (the snapshot's choices)."""
@@ -376,7 +387,7 @@ class ClassroomHost:
 
     # -- the classroom's events --------------------------------------------------------------------------
 
-    def _on_event(self, event: Any) -> None:
+    def _on_event(self, event: Event) -> None:
         if isinstance(event, FollowChanged):
             self._routes.submit(self._route, event.tab)
         elif isinstance(event, ModeChanged):
@@ -445,6 +456,15 @@ class ClassroomHost:
         self.sender.close()
         self._refresh.close()
         self._routes.shutdown(wait=False, cancel_futures=True)
+
+
+def _filter_logs(log_filter: logging.Filter) -> list[logging.Handler]:
+    """Add ``log_filter`` to the root logger's handlers and to logging's last resort; returns them (to take it off
+    again)."""
+    handlers = [h for h in (*logging.getLogger().handlers, logging.lastResort) if h is not None]
+    for handler in handlers:
+        handler.addFilter(log_filter)
+    return handlers
 
 
 class _Throttled:

@@ -3,27 +3,26 @@ pacing, the roster, the question and its live histogram, snapshots, the roster a
 code.
 
 The panel only reads the classroom and calls it; what each control does to the students' tabs is the
-:class:`~egtviz.viewer.classroom.host.ClassroomHost`'s job. Names, questions and messages are shown as text.
+:class:`~egtviz.viewer.classroom.host.ClassroomHost`'s job (the panel knows it as a :class:`PanelHost`: the host
+builds the panels, so the panel cannot name the host's class). Names, questions and messages are shown as text.
 """
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from html import escape
-from typing import TYPE_CHECKING, Any
+from typing import Protocol
 
 import viser
 
-from ...classroom import Mode
+from ...classroom import Classroom, Mode
 from ..workbench.fields import FieldError, on_event
 from .links import qr_svg
-from .pacing_form import lesson_steps, pacing_html, paced_step
+from .pacing_form import pacing_html, paced_step
 from .room_html import histogram_html, roster_html, status_html
 
-if TYPE_CHECKING:
-    from .host import ClassroomHost
-
-__all__ = ["ALL_STEPS", "InstructorPanel", "RELEASE_TO"]
+__all__ = ["ALL_STEPS", "InstructorPanel", "PanelHost", "RELEASE_TO", "SnapshotPicker"]
 
 #: The release buttons: label -> the mode students are released to.
 RELEASE_TO = {"explore": Mode.EXPLORE, "tasks": Mode.TASKS}
@@ -32,6 +31,50 @@ ALL_STEPS = ""
 #: Bins of the answers' histogram.
 HISTOGRAM_BINS = 8
 _NO_STUDENT = "(nobody)"
+
+
+class PanelHost(Protocol):
+    """What the panel reads of the class's host and calls on it (the host is
+    :class:`~egtviz.viewer.classroom.host.ClassroomHost`)."""
+
+    @property
+    def room(self) -> Classroom: ...
+
+    @property
+    def student_url(self) -> str: ...
+
+    def lesson_steps(self) -> dict[str, int]: ...
+
+    def student_tabs(self) -> dict[str, int]: ...
+
+    def set_follow_me(self, client: viser.ClientHandle, on: bool) -> None: ...
+
+    def release(self, mode: Mode) -> None: ...
+
+
+class SnapshotPicker:
+    """The panel's "Snapshot" folder: the connected student whose scene to show the room, and the buttons.
+
+    Args:
+        gui: the instructor tab's GUI (the folder is added where the caller's ``with`` puts it).
+    """
+
+    def __init__(self, gui: viser.GuiApi) -> None:
+        self._tabs: dict[str, int] = {}
+        with gui.add_folder("Snapshot", expand_by_default=False):
+            self.student = gui.add_dropdown("student", (_NO_STUDENT,), initial_value=_NO_STUDENT)
+            self.buttons = gui.add_button_group("snapshot", ("show to the room", "hide"))
+
+    def offer(self, tabs: dict[str, int]) -> None:
+        """The students to choose from now: their names and one tab of each."""
+        self._tabs = tabs
+        options = tuple(tabs) or (_NO_STUDENT,)
+        if tuple(self.student.options) != options:
+            self.student.options = options
+
+    def chosen_tab(self) -> int | None:
+        """The chosen student's tab (None: nobody, or a student no longer connected)."""
+        return self._tabs.get(self.student.value)
 
 
 class InstructorPanel:
@@ -43,12 +86,12 @@ class InstructorPanel:
         report: shows an exception in the tab.
     """
 
-    def __init__(self, client: Any, host: ClassroomHost, report: Any) -> None:
+    def __init__(self, client: viser.ClientHandle, host: PanelHost,
+                 report: Callable[[BaseException], None]) -> None:
         self.client = client
         self.host = host
         self.room = host.room
         self._report = report
-        self._students: dict[str, int] = {}
         # Per thread: a value written back by refresh() calls its callbacks at once, in the refreshing thread.
         self._syncing = threading.local()
         self._shown: dict[int, bool] = {}  # id(checkbox) -> the class state last written to it
@@ -65,24 +108,25 @@ class InstructorPanel:
             self._build_join(gui)
             self._build_roster(gui)
             self._build_question(gui)
-            self._build_snapshot(gui)
+            self.snapshot = SnapshotPicker(gui)
             self._build_pacing(gui)
         self._wire()
         self.refresh()
 
-    def _build_join(self, gui: Any) -> None:
+    def _build_join(self, gui: viser.GuiApi) -> None:
         with gui.add_folder("Join (student URL)", expand_by_default=False):
             url = self.host.student_url
             self.join = gui.add_html(
                 f'<div data-egtviz="join-qr" style="padding:0 0.6em;text-align:center">{qr_svg(url) if url else ""}'
                 f'<div style="font-size:1.1em;word-break:break-all">{escape(url)}</div></div>')
 
-    def _build_roster(self, gui: Any) -> None:
+    def _build_roster(self, gui: viser.GuiApi) -> None:
+        # The button above the list: a roster that grows as students join never moves it under a click.
         with gui.add_folder("Students", expand_by_default=False):
-            self.roster = gui.add_html("")
             self.csv = gui.add_button("Download roster (CSV)", icon=viser.Icon.DOWNLOAD)
+            self.roster = gui.add_html("")
 
-    def _build_question(self, gui: Any) -> None:
+    def _build_question(self, gui: viser.GuiApi) -> None:
         with gui.add_folder("Question", expand_by_default=True):
             self.question = gui.add_text("question", "")
             self.ask = gui.add_button_group("ask the room", ("ask", "clear"))
@@ -90,13 +134,8 @@ class InstructorPanel:
                                                hint="Off on a projector: only counts are shown.")
             self.histogram = gui.add_html("")
 
-    def _build_snapshot(self, gui: Any) -> None:
-        with gui.add_folder("Snapshot", expand_by_default=False):
-            self.student = gui.add_dropdown("student", (_NO_STUDENT,), initial_value=_NO_STUDENT)
-            self.snapshot = gui.add_button_group("snapshot", ("show to the room", "hide"))
-
-    def _build_pacing(self, gui: Any) -> None:
-        lessons = tuple(self.host.lesson_names()) or ("(no lessons)",)
+    def _build_pacing(self, gui: viser.GuiApi) -> None:
+        lessons = tuple(self.host.lesson_steps()) or ("(no lessons)",)
         with gui.add_folder("Pacing", expand_by_default=False):
             self.lesson = gui.add_dropdown("lesson", lessons, initial_value=lessons[0])
             self.max_step = gui.add_text("up to step", ALL_STEPS, hint="Blank: every step.")
@@ -118,18 +157,18 @@ class InstructorPanel:
                  lambda e: self.room.ask(self.question.value if e.target.value == "ask" else None), rep)
         on_event(self.show_names.on_update, lambda e: self._unless_syncing(
             lambda: self.room.show_names(bool(e.target.value))), rep)
-        on_event(self.snapshot.on_click, lambda e: self._snapshot(e.target.value), rep)
+        on_event(self.snapshot.buttons.on_click, lambda e: self._snapshot(e.target.value), rep)
         on_event(self.apply_pacing.on_click, lambda _: self._apply_pacing(), rep)
 
     # -- actions ---------------------------------------------------------------------------------------
 
-    def _unless_syncing(self, action: Any) -> None:
+    def _unless_syncing(self, action: Callable[[], None]) -> None:
         """Run a checkbox's action, unless the change is :meth:`refresh` writing the class's state back."""
         if not getattr(self._syncing, "on", False):
             action()
 
     @staticmethod
-    def _release_mode(label: Any) -> Mode:
+    def _release_mode(label: object) -> Mode:
         mode = RELEASE_TO.get(label) if isinstance(label, str) else None
         if mode is None:
             raise FieldError(f"release to: expected one of {sorted(RELEASE_TO)}")
@@ -141,22 +180,22 @@ class InstructorPanel:
         else:
             self.room.pause(None)
 
-    def _snapshot(self, action: Any) -> None:
+    def _snapshot(self, action: str) -> None:
         if action == "hide":
             self.room.show_snapshot(None)
             return
         if action != "show to the room":
             raise FieldError("snapshot: no such action")
-        tab = self._students.get(self.student.value)
+        tab = self.snapshot.chosen_tab()
         if tab is None:
             raise FieldError("snapshot: choose a connected student first")
         self.room.show_snapshot(self.room.snapshot(tab))
 
     def _apply_pacing(self) -> None:
-        lesson = self.lesson.value
-        if lesson not in self.host.lesson_names():
+        lesson, steps = self.lesson.value, self.host.lesson_steps()
+        if lesson not in steps:
             raise FieldError("pacing: no lesson to pace")
-        last = paced_step(self.max_step.value, lesson, lesson_steps(self.host.app.course).get(lesson, 0))
+        last = paced_step(self.max_step.value, lesson, steps.get(lesson, 0))
         self.room.pace(lesson, last)
         self.room.allow_lessons([lesson] if self.only.value else None)
 
@@ -168,6 +207,7 @@ class InstructorPanel:
         connected = [r for r in rows if r.connected]
         paused = self.room.paused()
         mode = self.room.mode
+        steps = self.host.lesson_steps()
         with self.client.atomic():
             self.status.content = status_html(len(connected), sum(r.following for r in connected), mode.value,
                                               paused)
@@ -175,16 +215,13 @@ class InstructorPanel:
             self._sync_checkbox(self.follow_me, mode is Mode.FOLLOW)
             self._sync_checkbox(self.lock, self.room.cameras_locked)
             self._sync_checkbox(self.show_names, self.room.names_shown())
-            self.roster.content = roster_html(rows, {n: k for k, n in enumerate(self.host.lesson_names(), 1)})
-            self._students = self.host.student_tabs()
-            options = tuple(self._students) or (_NO_STUDENT,)
-            if tuple(self.student.options) != options:
-                self.student.options = options
+            self.roster.content = roster_html(rows, {n: k for k, n in enumerate(steps, 1)})
+            self.snapshot.offer(self.host.student_tabs())
             self.histogram.content = self._histogram_html()
             allowed, paced = self.room.pacing()
-            self.pacing.content = pacing_html(allowed, paced, lesson_steps(self.host.app.course))
+            self.pacing.content = pacing_html(allowed, paced, steps)
 
-    def _sync_checkbox(self, box: Any, state: bool) -> None:
+    def _sync_checkbox(self, box: viser.GuiCheckboxHandle, state: bool) -> None:
         """Show the class's ``state`` in ``box`` when that state changed since it was last shown there.
 
         Only a change of the class is written: a click whose callback has not run yet has already set the box's
@@ -196,7 +233,8 @@ class InstructorPanel:
         if box.value != state:
             self._syncing.on = True
             try:
-                box.value = state
+                # viser's input handle has a value setter (it syncs the box); mypy sees the props' read-only one.
+                box.value = state  # type: ignore[misc]
             finally:
                 self._syncing.on = False
 

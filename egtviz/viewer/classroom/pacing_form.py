@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import re
 from html import escape
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..workbench.fields import FieldError
+
+if TYPE_CHECKING:
+    from ..course.start_page import Course
 
 __all__ = ["FIELD", "lesson_steps", "pacing_html", "paced_step"]
 
@@ -17,7 +20,7 @@ FIELD = "up to step"
 _WHOLE = re.compile(r"[+-]?[0-9]{1,9}")
 
 
-def paced_step(text: Any, lesson: str, steps: int) -> int | None:
+def paced_step(text: object, lesson: str, steps: int) -> int | None:
     """The last step (0-based) students may open, from the field's text; None for blank (every step).
 
     Args:
@@ -53,6 +56,6 @@ def pacing_html(allowed: frozenset[str] | None, paced: dict[str, int], steps: di
     return f'<div data-egtviz="pacing" style="padding:0 0.6em">{lines}</div>'
 
 
-def lesson_steps(course: Any) -> dict[str, int]:
+def lesson_steps(course: Course | None) -> dict[str, int]:
     """How many steps each lesson of ``course`` has (``{}``: no course)."""
     return {} if course is None else {name: len(lesson.steps) for name, lesson in course.lessons.items()}

@@ -8,7 +8,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from html import escape
-from typing import Any
+from typing import TYPE_CHECKING
+
+from ...classroom import Histogram, RosterRow
+
+if TYPE_CHECKING:
+    from ...lessons import LessonRun
 
 __all__ = ["histogram_html", "pause_html", "roster_html", "status_html", "step_caption", "student_status_html"]
 
@@ -21,7 +26,7 @@ _TD = "vertical-align:top;padding:0.2em 0.5em 0 0"
 _TH = "text-align:left;white-space:nowrap;padding:0 0.5em 0.1em 0;font-weight:600"
 
 
-def _where(row: Any, numbers: Mapping[str, int]) -> tuple[str, str]:
+def _where(row: RosterRow, numbers: Mapping[str, int]) -> tuple[str, str]:
     """Where a roster row's student is: following, on their own scene, or away; and the lesson and step."""
     state = "away" if not row.connected else "following" if row.following else "own scene"
     if row.lesson is None:
@@ -30,7 +35,7 @@ def _where(row: Any, numbers: Mapping[str, int]) -> tuple[str, str]:
     return state, lesson if row.step is None else f"{lesson} · step {row.step + 1}"
 
 
-def roster_html(rows: Sequence[Any], numbers: Mapping[str, int] | None = None) -> str:
+def roster_html(rows: Sequence[RosterRow], numbers: Mapping[str, int] | None = None) -> str:
     """The roster as a table that fits the instructor's panel without scrolling sideways, two lines a student:
     their name and the tasks passed of the lesson's ("3/12"); under it, where they are (following, own scene or
     away, and the lesson and step, from 1).
@@ -64,7 +69,7 @@ def _number(x: float) -> str:
     return f"{x:.4g}"
 
 
-def histogram_html(hist: Any, *, names: Mapping[str, float | str] | None = None, width_px: int = 320) -> str:
+def histogram_html(hist: Histogram, *, names: Mapping[str, float | str] | None = None, width_px: int = 320) -> str:
     """A bar chart of the answers to one question (an :class:`egtviz.classroom.Histogram`), no names in it;
     ``names`` (each student's answer) adds a list under it, for the instructor's eyes only."""
     q = escape(hist.question)
@@ -98,9 +103,11 @@ def histogram_html(hist: Any, *, names: Mapping[str, float | str] | None = None,
 
 
 def status_html(students: int, following: int, mode: str, paused: str | None) -> str:
-    """The instructor's one-line summary of the room."""
+    """The instructor's summary of the room, in a box two lines high whether or not it wraps: the controls below
+    it stay where they are when a count, the mode or the pause changes (a click aimed at them lands on them)."""
     pause = f' · <b style="color:#D55E00">paused</b>' if paused is not None else ""
-    return (f'<div data-egtviz="room-status" style="padding:0 0.6em;font-size:1.05em">'
+    return (f'<div data-egtviz="room-status" style="padding:0 0.6em;font-size:1.05em;line-height:1.3;'
+            f'min-height:2.6em">'
             f"{students} connected · {following} following · mode: {escape(mode)}{pause}</div>")
 
 
@@ -119,7 +126,7 @@ def pause_html(message: str) -> str:
             f"{escape(message)}</div>")
 
 
-def step_caption(run: Any) -> str:
+def step_caption(run: LessonRun | None) -> str:
     """The lesson step a :class:`~egtviz.lessons.LessonRun` is on, for followers: lesson and step titles (text)
     and the step's text (the lesson's own HTML, made from its markup); ``""`` for None."""
     if run is None:

@@ -12,16 +12,20 @@ import itertools
 import logging
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Protocol
 
+from ...scene import Scene
 from .follow_view import FollowView, RoomFrame
 
-__all__ = ["RoomSender", "frame_from_scene", "frame_of", "panel_titles"]
+if TYPE_CHECKING:
+    from ..workbench.app import ClientView
+
+__all__ = ["FrameSender", "RoomSender", "frame_from_scene", "frame_of", "panel_titles"]
 
 _log = logging.getLogger(__name__)
 
 
-def panel_titles(scene: Any) -> dict[str, str]:
+def panel_titles(scene: Scene) -> dict[str, str]:
     """The tab title of each panel key of ``scene``: ``"<camera>: image plane"``, a figure plot's title."""
     from ..workbench.panel_dock import plot_key
 
@@ -30,7 +34,7 @@ def panel_titles(scene: Any) -> dict[str, str]:
     return titles
 
 
-def frame_of(view: Any, version: int, number: int, caption: str = "") -> RoomFrame:
+def frame_of(view: ClientView, version: int, number: int, caption: str = "") -> RoomFrame:
     """The room's frame of the instructor's :class:`~egtviz.viewer.workbench.app.ClientView` as just drawn
     (``caption``: the lesson step's title and text, HTML)."""
     scene = view.model.scene
@@ -39,7 +43,7 @@ def frame_of(view: Any, version: int, number: int, caption: str = "") -> RoomFra
     return RoomFrame(number, version, scene, view.model.derived, panels, view.readout, bool(view.present), caption)
 
 
-def frame_from_scene(scene: Any, version: int, number: int, *, present: bool = False) -> RoomFrame:
+def frame_from_scene(scene: Scene, version: int, number: int, *, present: bool = False) -> RoomFrame:
     """The room's frame of a shared scene that no tab of this process drew (the instructor works on another
     server process): its derived geometry and panels made here, once, each panel fitted as a new one is, for a
     window of the default size."""
@@ -65,6 +69,27 @@ def frame_from_scene(scene: Any, version: int, number: int, *, present: bool = F
                               max_height=f"{grid.svg_max_height_px(spec.name):.0f}px" if grid.columns else None)
         panels.append((spec.name, titles[spec.name], svg))
     return RoomFrame(number, version, scene, derived, tuple(panels), pair_html(derived), present)
+
+
+class FrameSender(Protocol):
+    """What sends the room's frames to the followers: a :class:`RoomSender`, or a relay between server processes
+    that wraps one (:mod:`egtviz.viewer.server.class_bus`)."""
+
+    @property
+    def latest(self) -> RoomFrame | None:
+        """The newest frame posted (None before the first)."""
+
+    def next_number(self) -> int:
+        """The number of the next frame made."""
+
+    def post(self, frame: RoomFrame) -> None:
+        """Make ``frame`` the newest."""
+
+    def clear_pending(self) -> None:
+        """A frame waiting need not be sent."""
+
+    def close(self) -> None:
+        """Stop sending."""
 
 
 class RoomSender:

@@ -4,8 +4,10 @@ every tab of the class (the instructor's and the students'), beside the scene th
 from __future__ import annotations
 
 from html import escape
-from typing import Any
 
+import viser
+
+from ...classroom import Snapshot
 from ...scene import compute_derived
 from ..render.panels import initial_view
 from ..render.svg import NORMAL, PRESENT, image_plane_svg
@@ -24,7 +26,7 @@ class RenderedSnapshot:
         self.panels = panels
 
 
-def render_snapshot(snapshot: Any, *, present: bool = False) -> RenderedSnapshot:
+def render_snapshot(snapshot: Snapshot, *, present: bool = False) -> RenderedSnapshot:
     """Draw ``snapshot``'s image planes (an :class:`egtviz.classroom.Snapshot`), each fitted as a new panel is."""
     scene = snapshot.scene
     derived = compute_derived(scene)
@@ -46,7 +48,7 @@ def render_snapshot(snapshot: Any, *, present: bool = False) -> RenderedSnapshot
 class SnapshotPane:
     """The snapshot's floating panel in one tab; :meth:`remove` takes it away."""
 
-    def __init__(self, client: Any, rendered: RenderedSnapshot) -> None:
+    def __init__(self, client: viser.ClientHandle, rendered: RenderedSnapshot) -> None:
         gui = client.gui
         with client.atomic():
             self.panel = gui.add_panel()
@@ -73,7 +75,7 @@ class RoomSnapshots:
         self._shown: RenderedSnapshot | None = None
         self._panes: dict[int, SnapshotPane] = {}
 
-    def set(self, snapshot: Any, *, present: bool) -> None:
+    def set(self, snapshot: Snapshot | None, *, present: bool) -> None:
         """The snapshot to show (None: none); call :meth:`show_in` for each tab then."""
         self._shown = None if snapshot is None else render_snapshot(snapshot, present=present)
 
@@ -81,7 +83,7 @@ class RoomSnapshots:
         """The tab was cleared or left: its pane is gone with it."""
         self._panes.pop(client_id, None)
 
-    def show_in(self, client: Any) -> None:
+    def show_in(self, client: viser.ClientHandle) -> None:
         """Show the room's snapshot in this tab, or take it away."""
         old = self._panes.pop(client.client_id, None)
         if old is not None:

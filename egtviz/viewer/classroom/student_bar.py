@@ -9,8 +9,7 @@ built again whenever the tab is cleared. Every callback's failure is shown in th
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
-
+from typing import Protocol
 import viser
 
 from ..render.palette import PRESENT_GUI_CSS
@@ -29,7 +28,17 @@ JOIN_WIDTH_PX = 480
 JOIN_MARGIN_PX = 16
 
 
-def stored_name(client: Any, key: str, timeout: float) -> str | None:
+class _Modal(Protocol):
+    """The paused screen's modal (viser exports no name for its handle): entered to fill it, closed to go."""
+
+    def __enter__(self) -> object: ...
+
+    def __exit__(self, *args: object) -> None: ...
+
+    def close(self) -> None: ...
+
+
+def stored_name(client: viser.ClientHandle, key: str, timeout: float) -> str | None:
     """The name the tab's browser keeps under ``key`` (a student back after a reconnect); None if it keeps none,
     or does not answer within ``timeout`` seconds."""
     try:
@@ -39,7 +48,7 @@ def stored_name(client: Any, key: str, timeout: float) -> str | None:
     return value if isinstance(value, str) and value.strip() else None
 
 
-def typed_answer(text: Any) -> float | str:
+def typed_answer(text: object) -> float | str:
     """An answer as typed: a plain finite decimal (``1,5`` reads as 1.5) is a number, anything else its text.
 
     Raises:
@@ -64,8 +73,8 @@ class JoinPage:
         present: presentation mode (large type).
     """
 
-    def __init__(self, client: Any, on_join: Callable[[str], None], report: Callable[[BaseException], None], *,
-                 present: bool = False) -> None:
+    def __init__(self, client: viser.ClientHandle, on_join: Callable[[str], None],
+                 report: Callable[[BaseException], None], *, present: bool = False) -> None:
         gui = client.gui
         with client.atomic():
             gui.configure_theme(dark_mode=False, show_logo=False)
@@ -83,7 +92,7 @@ class JoinPage:
         on_event(self.button.on_click, lambda _: on_join(self.name.value), report)
 
 
-def notify_refusal(client: Any, exc: BaseException) -> None:
+def notify_refusal(client: viser.ClientHandle, exc: BaseException) -> None:
     """:func:`~egtviz.viewer.workbench.fields.notify_error`, with the class's refusals (a name the course does not
     take, a question or an answer it cannot keep) shown as the refusal they are, in their own words."""
     if isinstance(exc, LearnerNameError):
@@ -104,13 +113,13 @@ class StudentBar:
         report: shows an exception in the tab.
     """
 
-    def __init__(self, client: Any, name: str, *, on_follow: Callable[[bool], None],
+    def __init__(self, client: viser.ClientHandle, name: str, *, on_follow: Callable[[bool], None],
                  on_answer: Callable[[str, float | str], None], report: Callable[[BaseException], None]) -> None:
         self.client = client
         self.name = name
         self.following = False
         self.question: str | None = None
-        self._modal: Any = None
+        self._modal: _Modal | None = None
         gui = client.gui
         with client.atomic():
             self.status = gui.add_html("", order=BAR_ORDER)

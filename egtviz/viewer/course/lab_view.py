@@ -22,9 +22,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from html import escape
-from typing import Any
 
 import numpy as np
+import viser
+from viser import uplot
 
 from ...lessons.changes import SetLab
 from ...scene import Derived, Scene, SceneError
@@ -118,10 +119,8 @@ class LabPanel:
         drawn: the fit first drawn in the panels.
     """
 
-    def __init__(self, client: Any, run: LessonInstruments, *, redraw: Callable[[], None],
+    def __init__(self, client: viser.ClientHandle, run: LessonInstruments, *, redraw: Callable[[], None],
                  report: Callable[[BaseException], None], order: float, drawn: str = "normalized") -> None:
-        from viser import uplot
-
         self.client = client
         self.run = run
         self._redraw = redraw
@@ -166,11 +165,11 @@ class LabPanel:
 
     # -- events ---------------------------------------------------------------------------
 
-    def _setter(self, key: str) -> Callable[[Any], None]:
+    def _setter(self, key: str) -> Callable[[viser.GuiEvent[viser.GuiSliderHandle[float]]], None]:
         """The update callback of the slider for setting ``key``."""
         return lambda event: self._set(key, event.target.value)
 
-    def _set(self, key: str, value: Any) -> None:
+    def _set(self, key: str, value: object) -> None:
         if self._syncing:
             return
         if isinstance(value, bool) or not isinstance(value, (int, float)):  # a raw client can send anything
@@ -179,7 +178,7 @@ class LabPanel:
             self.run.apply(SetLab(((key, float(value)),)))  # LabSettings checks the range
         self._redraw()
 
-    def _choose(self, title: Any) -> None:
+    def _choose(self, title: object) -> None:
         if self._syncing:
             return
         methods = {METHOD_TITLES[m]: m for m in METHODS}
@@ -197,7 +196,8 @@ class LabPanel:
             for handle, value in ((self.noise, lab.noise_px), (self.outliers, lab.outlier_percent),
                                   (self.threshold, lab.threshold_px)):
                 if handle.value != value:
-                    handle.value = value
+                    # viser's value setter sits apart from its getter: mypy takes the property as read-only.
+                    handle.value = value  # type: ignore[misc]
         finally:
             self._syncing = False
 

@@ -26,14 +26,16 @@ import math
 from collections.abc import Callable
 from dataclasses import fields
 from html import escape
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
+import viser
 
 from ...lessons import instruments
-from ...lessons.changes import SetLens
+from ...lessons.changes import Change, SetLens
 from ...scene import Derived, Scene, SceneError
 from ...scene.derived import with_pair_lines
+from ...scene.lab import LabSettings
 from ...scene.lens import LensToggles, LensView, lens_view
 from ..workbench.fields import on_event
 
@@ -57,13 +59,13 @@ HIDDEN_NOTE = ("<small><b>A mistake is hidden in this step.</b> A ticked box is 
 class LessonInstruments(Protocol):
     """What the lab and the lens read and change: a :class:`~egtviz.lessons.LessonRun`."""
 
-    lab: Any
+    lab: LabSettings
     lens: LensToggles
 
-    def apply(self, change: Any) -> None: ...
+    def apply(self, change: Change) -> None: ...
 
 
-def hidden_lens(run: Any) -> LensToggles | None:
+def hidden_lens(run: LessonInstruments) -> LensToggles | None:
     """The lens the current step set, when the step hides it (:func:`egtviz.lessons.instruments.hidden_lens`);
     None when the lens shows its settings. A run without a lesson hides nothing."""
     lesson, index = getattr(run, "lesson", None), getattr(run, "step_index", None)
@@ -109,7 +111,7 @@ class LensPanel:
         order: the folder's place in the control panel.
     """
 
-    def __init__(self, gui: Any, run: LessonInstruments, *, redraw: Callable[[], None],
+    def __init__(self, gui: viser.GuiApi, run: LessonInstruments, *, redraw: Callable[[], None],
                  report: Callable[[BaseException], None], order: float) -> None:
         self.run = run
         self._redraw = redraw
@@ -121,7 +123,7 @@ class LensPanel:
             gui.add_markdown("<small>Each toggle applies a mistake people make; the panels draw what the "
                              "mistaken code computes.</small>")
             self.note = gui.add_markdown("")
-            self.toggles: dict[str, Any] = {}
+            self.toggles: dict[str, viser.GuiCheckboxHandle] = {}
             shown = self._shown()
             for f in fields(LensToggles):
                 box = gui.add_checkbox(LENS_LABELS[f.name], getattr(shown, f.name))
@@ -135,11 +137,11 @@ class LensPanel:
         hidden = hidden_lens(self.run)
         return self.run.lens if hidden is None else hidden.switched(self.run.lens)
 
-    def _toggler(self, key: str) -> Callable[[Any], None]:
+    def _toggler(self, key: str) -> Callable[[viser.GuiEvent[viser.GuiCheckboxHandle]], None]:
         """The update callback of the checkbox for the lens toggle ``key``."""
         return lambda event: self._toggle(key, event.target.value)
 
-    def _toggle(self, key: str, value: Any) -> None:
+    def _toggle(self, key: str, value: object) -> None:
         if self._syncing:
             return
         if not isinstance(value, bool):  # a raw client can send anything
@@ -158,7 +160,8 @@ class LensPanel:
             self.note.content = HIDDEN_NOTE if hidden_lens(self.run) is not None else ""
             for key, box in self.toggles.items():
                 if box.value != getattr(shown, key):
-                    box.value = getattr(shown, key)
+                    # viser's value setter sits apart from its getter: mypy takes the property as read-only.
+                    box.value = getattr(shown, key)  # type: ignore[misc]
         finally:
             self._syncing = False
 

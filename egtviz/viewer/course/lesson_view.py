@@ -41,30 +41,34 @@ notification in this tab.
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from html import escape
-from typing import Any
+from typing import Protocol, TypeVar
 
 import numpy as np
+import viser
 
 from ...lessons import Lesson, LessonRun, ProgressStore
 from ...lessons.changes import RANGED_FIELDS
 from ...lessons.instruments import lesson_needs
 from ...lessons.progress import LearnerNameError, learner_key
-from ...lessons.runner import ResolvedTask
+from ...lessons.runner import Attempt, ResolvedTask
 from ...lessons.tasks import RESET_ADVICE
-from ...scene import SceneError
+from ...scene import SceneError, SceneModel
 from ...scene.constraints import CameraRanges
 from ..workbench.camera_fields import field_of_spec
 from ..workbench.fields import Debouncer, FieldError, NumberRule, format_number, on_event
 from .answers import answer_widget
 from .answers.choice import CHOOSE
+from .lab_view import LabPanel
+from .lens_view import LensPanel
 from .progress_notice import progress_notice_html, show_name_in_use
 from ..workbench.lesson_policy import LessonPolicy
 
 __all__ = [
-    "CHOOSE", "HELD_NAME_HINT", "LessonPanel", "StepNav", "TaskRow", "lesson_instruments", "lesson_ranges",
-    "lock_refusal", "pose_within_ranges", "range_refusal", "refuse_held_name", "typed_learner_key",
+    "CHOOSE", "HELD_NAME_HINT", "LessonPanel", "LessonTab", "StepNav", "TaskRow", "lesson_instruments",
+    "lesson_ranges", "lock_refusal", "pose_within_ranges", "range_refusal", "refuse_held_name", "typed_learner_key",
 ]
 
 #: The step buttons, in their group's order.
@@ -77,6 +81,36 @@ LENS_ORDER = -80.0
 MATH_CSS = ('<style>math[display="block"]{max-width:100%;overflow-x:auto;overflow-y:hidden;'
             "font-size:0.92em;padding:0.35em 0 0.2em}</style>")
 DEMO_TITLES = {"pinhole": "the pin-hole demo (Puma 560)", "panoramic": "the panoramic demo (mobile robot)"}
+
+#: The event a viser handle passes the callbacks :meth:`LessonPanel._on` attaches.
+_Event = TypeVar("_Event")
+
+
+class LessonTab(Protocol):
+    """What a lesson panel uses of the workbench tab it sits in: a :class:`~egtviz.viewer.workbench.app.ClientView`
+    (named by what it offers: the workbench's app builds the course, so the course cannot import it)."""
+
+    #: The tab's lesson policy: the panel sets what the panels draw through and what a typed field must respect.
+    policy: LessonPolicy
+
+    @property
+    def client(self) -> viser.ClientHandle: ...
+
+    @property
+    def model(self) -> SceneModel: ...
+
+    @property
+    def lock(self) -> AbstractContextManager[object]: ...
+
+    @property
+    def closed(self) -> bool: ...
+
+    @property
+    def open_demo(self) -> Callable[..., object] | None: ...
+
+    def redraw(self) -> None: ...
+
+    def report(self, exc: BaseException) -> None: ...
 
 
 def lesson_instruments(lesson: Lesson) -> tuple[bool, bool]:
@@ -145,7 +179,7 @@ def _range_terms(run: LessonRun, camera: str, field: str) -> _RangeTerms:
     return _RangeTerms(label, NumberRule(label, unit, lo, hi), convert, lo, hi)
 
 
-def _range_words(run: LessonRun, camera: str, fields: dict[str, Any]) -> str:
+def _range_words(run: LessonRun, camera: str, fields: dict[str, object]) -> str:
     """A breach of the step's ``set_range`` limit of ``camera``'s field (``fields``: that field and its value) in
     the GUI field's words and unit (the focal length in mm, the pixel size in µm), as the learner types it."""
     ((field, value),) = fields.items()
@@ -179,7 +213,7 @@ def pose_within_ranges(run: LessonRun, camera: str, position: np.ndarray,
     return np.array(allowed.position), R_world if kept else allowed.pose.R
 
 
-def typed_learner_key(name: Any) -> str:
+def typed_learner_key(name: object) -> str:
     """The progress key of the name typed in a *your name* field; ``""`` for a blank field (no learner yet).
 
     Raises:
@@ -199,7 +233,7 @@ def typed_learner_key(name: Any) -> str:
 HELD_NAME_HINT = "In the class your progress is kept under the name you joined with."
 
 
-def refuse_held_name(field: Any, held: str, text: Any) -> None:
+def refuse_held_name(field: viser.GuiTextHandle, held: str, text: object) -> None:
     """A class student's *your name* ``field`` was sent ``text``: nothing if it is ``held``, the name they joined
     with (the field showing it again); else the field shows ``held`` again and the change is refused (their progress
     never goes under another name, perhaps another student's).
@@ -229,13 +263,13 @@ def _feedback_markdown(passed: bool, feedback: str, hint: str | None, *, unread:
 class TaskRow:
     """One task of the step in the panel: prompt, the answer widget the task declares, Check button, feedback."""
 
-    def __init__(self, gui: Any, number: int, resolved: ResolvedTask, *, passed_before: bool) -> None:
+    def __init__(self, gui: viser.GuiApi, number: int, resolved: ResolvedTask, *, passed_before: bool) -> None:
         self.task_id = resolved.task.id
         self.number = number
         self.prompt = gui.add_markdown(f"**Task {number}.** {resolved.prompt_html}")
         self.widget = answer_widget(gui, f"answer {number}", resolved.task.needs.answer)
         #: The GUI handle the learner answers in (None: the task is done in the scene).
-        self.answer: Any = self.widget.field
+        self.answer: viser.GuiInputHandle[str] | None = self.widget.field
         self.button = gui.add_button(f"Check task {number}")
         self.feedback = gui.add_markdown("\u2713 passed before." if passed_before else "")
 
@@ -247,7 +281,7 @@ class TaskRow:
 class StepNav:
     """The step's header: title, "step k of n", the progress bar and the step buttons."""
 
-    def __init__(self, gui: Any) -> None:
+    def __init__(self, gui: viser.GuiApi) -> None:
         self.head = gui.add_html("")
         self.bar = gui.add_progress_bar(0.0, color="teal")
         self.buttons = gui.add_button_group("step", STEP_BUTTONS)
@@ -266,7 +300,7 @@ class LessonPanel:
             every keystroke: "Ada" must not make learners "A" and "Ad"); 0: at once.
     """
 
-    def __init__(self, view: Any, run: LessonRun, *, progress: ProgressStore | None = None,
+    def __init__(self, view: LessonTab, run: LessonRun, *, progress: ProgressStore | None = None,
                  on_back: Callable[[], object] | None = None, on_learner: Callable[[str], None] | None = None,
                  field_delay: float = 0.0) -> None:
         if view.model is not run.model:
@@ -284,13 +318,13 @@ class LessonPanel:
         self._typing = Debouncer(field_delay)
         self.rows: list[TaskRow] = []
         #: The lesson's summary under the last step's tasks (None on the other steps).
-        self.summary: Any = None
+        self.summary: viser.GuiMarkdownHandle | None = None
         #: The last attempt per task id in this step (tests read it; the page shows it).
-        self.attempts: dict[str, Any] = {}
-        self.lab: Any = None
-        self.lens: Any = None
+        self.attempts: dict[str, Attempt] = {}
+        self.lab: LabPanel | None = None
+        self.lens: LensPanel | None = None
         #: The button that opens the step's servo run (None: the step has none).
-        self.demo_button: Any = None
+        self.demo_button: viser.GuiButtonHandle | None = None
         client = view.client
         gui = client.gui
         lesson = run.lesson
@@ -314,14 +348,10 @@ class LessonPanel:
             needs = lesson_needs(lesson)
             panel_filter = None
             if needs.lab:
-                from .lab_view import LabPanel
-
                 self.lab = LabPanel(client, run, redraw=view.redraw, report=view.report, order=LAB_ORDER,
                                     drawn=needs.lab_draws)
                 panel_filter = self.lab.panel_filter
             elif needs.lens:
-                from .lens_view import LensPanel
-
                 self.lens = LensPanel(gui, run, redraw=view.redraw, report=view.report, order=LENS_ORDER)
                 panel_filter = self.lens.panel_filter
             # The model holds the ranges, for every route into it (a gizmo, a raw client message, a script); a typed
@@ -336,10 +366,10 @@ class LessonPanel:
         if self.btn_back is not None and on_back is not None:
             self._on(self.btn_back.on_click, lambda _: on_back())
 
-    def _on(self, register: Any, callback: Callable[[Any], object]) -> None:
+    def _on(self, register: Callable[[Callable[[_Event], None]], object], callback: Callable[[_Event], object]) -> None:
         """Attach ``callback`` safely; it runs under the tab's lock, and not after the tab closed."""
 
-        def locked(event: Any) -> None:
+        def locked(event: _Event) -> None:
             with self.view.lock:
                 if self.view.closed:
                     return
@@ -365,7 +395,7 @@ class LessonPanel:
             except Exception:  # noqa: BLE001 - the tab may be gone; the notice stays in the panel
                 pass
 
-    def _name_typed(self, text: Any) -> None:
+    def _name_typed(self, text: object) -> None:
         """The name field changed: take the name once the typing stops (latest text wins); a class student's
         name is refused at once."""
         if self.held_name is not None:
@@ -398,7 +428,8 @@ class LessonPanel:
             f'<div style="color:#555">{escape(run.lesson.title)}</div>'
             f"<b>Step {i + 1} of {n}: {escape(run.step.title)}</b></div>"
         )
-        self.nav.bar.value = 100.0 * (i + 1) / n
+        # viser's value setter sits apart from its getter: mypy takes the property as read-only.
+        self.nav.bar.value = 100.0 * (i + 1) / n  # type: ignore[misc]
         self.text.content = run.step.html
         passed = run.progress.passed_tasks(run.learner, run.lesson.name) if run.progress is not None else frozenset()
         self.tasks_folder.remove()
@@ -444,7 +475,7 @@ class LessonPanel:
             on_event(self.demo_button.on_click,
                      lambda _: None if self.view.closed else opener(demo.demo, **demo.options()), self.view.report)
 
-    def _navigate(self, action: Any) -> None:
+    def _navigate(self, action: object) -> None:
         if action not in STEP_BUTTONS:  # a raw client can send any string
             raise FieldError(f"step: no button {str(action)[:40]!r}")
         with self.view.client.atomic():
@@ -489,7 +520,7 @@ class LessonPanel:
 
     # -- tasks --------------------------------------------------------------------------------
 
-    def _checker(self, row: TaskRow) -> Callable[[Any], None]:
+    def _checker(self, row: TaskRow) -> Callable[[viser.GuiEvent[viser.GuiButtonHandle]], None]:
         """The click callback of ``row``'s check button."""
         return lambda _event: self._check(row)
 
@@ -515,7 +546,7 @@ class LessonPanel:
 
     # -- the learner ------------------------------------------------------------------------------
 
-    def _set_learner(self, name: Any) -> None:
+    def _set_learner(self, name: object) -> None:
         """A name typed: the run is keyed by it from now on, and resumes where that learner was. A refused name
         is not left in the field: it shows the name in use again, and the notification says why."""
         try:

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from html import escape
-from typing import Any
+
+import viser
 
 __all__ = ["progress_notice_html", "show_name_in_use"]
 
@@ -17,11 +18,12 @@ def progress_notice_html(problem: str | None) -> str:
             f'border-left:3px solid #c98a00" data-egtviz="progress-notice">{escape(problem)}</div>')
 
 
-def show_name_in_use(field: Any, name: str) -> None:
+def show_name_in_use(field: viser.GuiTextHandle, name: str) -> None:
     """After a refused name: ``field`` (a *your name* text field) shows the name still in use, not the refused
     text (the notification says why it was refused). A field a raw client gave a value of another type (a
     number) cannot hold text again: it is left as it is."""
     try:
-        field.value = name
+        # viser's value setter sits apart from its getter: mypy takes the property as read-only.
+        field.value = name  # type: ignore[misc]
     except (TypeError, ValueError):
         pass

@@ -16,27 +16,66 @@ used, :attr:`ProgressStore.problem`), the page says so under its title, naming t
 from __future__ import annotations
 
 import threading
+import time
+from collections.abc import Callable
 from html import escape
-from typing import Any
+from typing import Protocol, TypeVar
 
 import viser
 
 from ...lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
 from ...lessons.progress import LessonProgress
-from ...scene import SceneModel
-from ..workbench.fields import Debouncer, FieldError, on_event
-from .lesson_view import HELD_NAME_HINT, LESSON_ORDER, LessonPanel, refuse_held_name, typed_learner_key
+from ...lessons.records import records_csv
+from ...scene import Scene, SceneModel
+from ..workbench.fields import Debouncer, FieldError, notify_error, on_event
+from .lesson_view import HELD_NAME_HINT, LESSON_ORDER, LessonPanel, LessonTab, refuse_held_name, typed_learner_key
 from ..render.palette import PRESENT_GUI_CSS
+from ..render.panels import DEFAULT_WINDOW, WindowSize, window_from_canvas
 from .start_preview import start_preview_html
 from .progress_notice import progress_notice_html, show_name_in_use
 
-__all__ = ["Course", "LessonStatus", "StartPage", "course_statuses", "lesson_status"]
+__all__ = ["ClassGate", "Course", "CourseApp", "LessonStatus", "StartPage", "course_statuses", "lesson_status"]
 
 #: The start page's control panel is wider than the workbench's: it is the page.
 START_PAGE_WIDTH_PX = 560
 START_PAGE_MARGIN_PX = 16
 #: In presentation mode the column is this much wider (its type is 1.25 times larger).
 PRESENT_WIDTH_SCALE = 1.25
+
+#: The event a viser handle passes the callbacks :meth:`StartPage._on` attaches.
+_Event = TypeVar("_Event")
+#: What :meth:`Course.wait_for_tab` waits for.
+_Shown = TypeVar("_Shown")
+
+
+class CourseApp(Protocol):
+    """What the course uses of the app that serves it: an :class:`~egtviz.viewer.workbench.app.EgtvizApp` (named
+    by what it offers: the app builds the course, so the course cannot import it)."""
+
+    @property
+    def field_delay(self) -> float: ...
+
+    @property
+    def initial_scene(self) -> Scene: ...
+
+    def show_workbench(self, client: viser.ClientHandle, model: SceneModel | None = None) -> LessonTab | None: ...
+
+    def clear_tab(self, client: viser.ClientHandle) -> None: ...
+
+
+class ClassGate(Protocol):
+    """What the course asks a class on its pages: a :class:`egtviz.viewer.classroom.course_gate.CourseGate` (named
+    by what it offers: the gate shows the course's start pages again, so the course cannot import it)."""
+
+    def refusal(self, tab: int, lesson: str) -> str | None: ...
+
+    def note(self, tab: int, lesson: str, steps: int) -> str: ...
+
+    def paced_run(self, tab: int, run: LessonRun) -> Callable[[str, int], bool] | None: ...
+
+    def workbench_model(self, tab: int) -> SceneModel | None: ...
+
+    def student_name(self, tab: int) -> str | None: ...
 
 
 class LessonStatus:
@@ -72,7 +111,7 @@ class StartPage:
         learner: the name to show (the tab's last one; a class student's is the name they joined with).
     """
 
-    def __init__(self, client: Any, course: Course, learner: str = "") -> None:
+    def __init__(self, client: viser.ClientHandle, course: Course, learner: str = "") -> None:
         self.client = client
         self.course = course
         #: In a class, the name the student joined with: the name field shows it read-only (None: free).
@@ -112,23 +151,25 @@ class StartPage:
             self.btn_record = gui.add_button(
                 "Download my record", icon=viser.Icon.DOWNLOAD,
                 hint="A CSV file of your tasks: passed, attempts, hints used, last attempt.")
-            self.buttons: dict[str, Any] = {}
-            self.status: dict[str, Any] = {}
+            self.buttons: dict[str, viser.GuiButtonHandle] = {}
+            self.status: dict[str, viser.GuiHtmlHandle] = {}
             with gui.add_folder("Lessons", expand_by_default=True):
                 for k, lesson in enumerate(course.lessons.values(), start=1):
                     self.buttons[lesson.name] = gui.add_button(f"{k}. {lesson.title}")
                     self.status[lesson.name] = gui.add_html("")
             self._show_status()
         for name, button in self.buttons.items():
-            self._on(button.on_click, lambda _, n=name: self.course.open_lesson(self.client, n, self.learner))
+            self._on(button.on_click, self._opener(name))
         self._on(self.btn_workbench.on_click, lambda _: self.course.open_workbench(self.client))
         self._on(self.btn_record.on_click, lambda _: self.download_record())
         self._on(self.name.on_update, lambda e: self._name_typed(e.target.value))
 
-    def _window(self) -> Any:
-        """The tab's window, as it reported its canvas (nothing is docked on the start page)."""
-        from ..render.panels import DEFAULT_WINDOW, window_from_canvas
+    def _opener(self, name: str) -> Callable[[viser.GuiEvent[viser.GuiButtonHandle]], object]:
+        """The click callback of lesson ``name``'s button."""
+        return lambda _: self.course.open_lesson(self.client, name, self.learner)
 
+    def _window(self) -> WindowSize:
+        """The tab's window, as it reported its canvas (nothing is docked on the start page)."""
         try:
             return window_from_canvas(self.client.camera.image_width, self.client.camera.image_height)
         except (AssertionError, AttributeError):  # no camera message yet
@@ -149,12 +190,10 @@ class StartPage:
 
     def report(self, exc: BaseException) -> None:
         """Show what went wrong in this tab."""
-        from ..workbench.fields import notify_error
-
         notify_error(self.client, exc)
 
-    def _on(self, register: Any, callback: Any) -> None:
-        def guarded(event: Any) -> None:
+    def _on(self, register: Callable[[Callable[[_Event], None]], object], callback: Callable[[_Event], object]) -> None:
+        def guarded(event: _Event) -> None:
             with self._lock:
                 if self.closed:
                     return
@@ -162,7 +201,7 @@ class StartPage:
 
         on_event(register, guarded, self.report)
 
-    def _name_typed(self, text: Any) -> None:
+    def _name_typed(self, text: object) -> None:
         """The name field changed: take the name once the typing stops (each keystroke is not a learner); a class
         student's name is refused at once."""
         if self.held_name is not None:
@@ -170,7 +209,7 @@ class StartPage:
             return
         self._typing.submit("learner", lambda: self._later(lambda: self._set_name(text)))
 
-    def _later(self, action: Any) -> None:
+    def _later(self, action: Callable[[], None]) -> None:
         """Run a debounced action (from a timer thread: no callback wrapper above it) under the page's lock."""
         try:
             with self._lock:
@@ -179,7 +218,7 @@ class StartPage:
         except Exception as exc:  # noqa: BLE001 - every failure must reach the tab
             self.report(exc)
 
-    def _set_name(self, name: Any) -> None:
+    def _set_name(self, name: object) -> None:
         try:
             key = typed_learner_key(name)
         except FieldError:
@@ -194,8 +233,6 @@ class StartPage:
         """Send this learner's record to the browser as a CSV download (the server writes no file)."""
         if not self.learner:
             raise FieldError("download my record: type your name first (your record is kept under it)")
-        from ...lessons.records import records_csv
-
         text = records_csv(self.course.progress.task_records(self.learner))
         self.client.send_file_download("egtviz-record.csv", text.encode("utf-8"), save_immediately=True)
 
@@ -245,7 +282,7 @@ class Course:
         LessonError: ``lesson`` is not a shipped lesson, or a shipped lesson is invalid.
     """
 
-    def __init__(self, app: Any, *, lesson: str | None = None, progress: ProgressStore | None = None) -> None:
+    def __init__(self, app: CourseApp, *, lesson: str | None = None, progress: ProgressStore | None = None) -> None:
         self.app = app
         self.progress = progress if progress is not None else ProgressStore()
         #: Every shipped lesson, in course order.
@@ -259,12 +296,12 @@ class Course:
         #: there at a step the pacing allows and gives what "next" asks (None: anything), ``workbench_model(tab)``
         #: the scene a tab's workbench shows (None: a new one), ``student_name(tab)`` the name a class student joined
         #: with (None: the tab names its learner); None: no class.
-        self.gate: Any = None
+        self.gate: ClassGate | None = None
         #: What each tab shows: a :class:`StartPage`, a :class:`LessonPanel`, or a workbench view.
-        self.tabs: dict[int, Any] = {}
+        self.tabs: dict[int, StartPage | LessonPanel | LessonTab] = {}
         self._learners: dict[int, str] = {}
 
-    def open(self, client: Any) -> None:
+    def open(self, client: viser.ClientHandle) -> None:
         """A new tab: the lesson of ``egtviz lesson NAME``, else the start page."""
         if self.lesson is not None:
             self.open_lesson(client, self.lesson, "")
@@ -280,14 +317,14 @@ class Course:
         with self._lock:
             self._learners[client_id] = learner
 
-    def _set_tab(self, client: Any, what: Any) -> None:
+    def _set_tab(self, client: viser.ClientHandle, what: StartPage | LessonPanel | LessonTab) -> None:
         with self._lock:
             old = self.tabs.get(client.client_id)
             self.tabs[client.client_id] = what
         if isinstance(old, StartPage):
             old.close()
 
-    def show_start(self, client: Any) -> StartPage:
+    def show_start(self, client: viser.ClientHandle) -> StartPage:
         """Show the start page in this tab."""
         self._close_tab(client)
         self.app.clear_tab(client)
@@ -297,13 +334,13 @@ class Course:
         self._set_tab(client, page)
         return page
 
-    def _close_tab(self, client: Any) -> None:
+    def _close_tab(self, client: viser.ClientHandle) -> None:
         with self._lock:
             old = self.tabs.pop(client.client_id, None)
         if isinstance(old, StartPage):
             old.close()
 
-    def open_lesson(self, client: Any, name: str, learner: str) -> LessonPanel | None:
+    def open_lesson(self, client: viser.ClientHandle, name: str, learner: str) -> LessonPanel | None:
         """Open lesson ``name`` for ``learner`` in this tab (at the step they were at); None if the tab left."""
         lesson = self.lessons.get(name)
         if lesson is None:
@@ -325,7 +362,8 @@ class Course:
         self._set_tab(client, panel)
         return panel
 
-    def _lesson_panel(self, client: Any, view: Any, run: LessonRun, may_enter: Any) -> LessonPanel:
+    def _lesson_panel(self, client: viser.ClientHandle, view: LessonTab, run: LessonRun,
+                      may_enter: Callable[[str, int], bool] | None) -> LessonPanel:
         """The lesson's panel on ``view``; a class student's name in it is the one they joined with."""
         panel = LessonPanel(view, run, progress=self.progress, on_back=lambda: self.show_start(client),
                             on_learner=lambda key: self.remember(client.client_id, key),
@@ -336,7 +374,7 @@ class Course:
             panel.hold_learner(held)
         return panel
 
-    def open_workbench(self, client: Any, model: SceneModel | None = None) -> Any:
+    def open_workbench(self, client: viser.ClientHandle, model: SceneModel | None = None) -> LessonTab | None:
         """Open the workbench in this tab (on ``model``, default a new one or, in a class, the student's own), with a
         button back to the course."""
         if model is None and self.gate is not None:
@@ -349,7 +387,7 @@ class Course:
         self._set_tab(client, view)
         return view
 
-    def restore(self, client: Any, view: Any) -> None:
+    def restore(self, client: viser.ClientHandle, view: LessonTab) -> None:
         """The tab is back from a servo demo on ``view``: its lesson's panel (same run) or its way back to the
         course comes back with it."""
         with self._lock:
@@ -362,7 +400,7 @@ class Course:
             self._add_back_button(client, view)
             self._set_tab(client, view)
 
-    def _add_back_button(self, client: Any, view: Any) -> None:
+    def _add_back_button(self, client: viser.ClientHandle, view: LessonTab) -> None:
         with view.lock, client.atomic():
             back = client.gui.add_button("Back to the course", order=LESSON_ORDER)
         on_event(back.on_click, lambda _: self.show_start(client), view.report)
@@ -375,14 +413,12 @@ class Course:
         if isinstance(old, StartPage):
             old.close()
 
-    def wait_for_tab(self, kind: type, timeout: float = 10.0, count: int = 1) -> list[Any]:
+    def wait_for_tab(self, kind: type[_Shown], timeout: float = 10.0, count: int = 1) -> list[_Shown]:
         """Block until ``count`` tabs show a ``kind`` (:class:`StartPage`, :class:`LessonPanel`; tests)."""
-        import time
-
         deadline = time.time() + timeout
         while time.time() < deadline:
             with self._lock:
-                found = [t for t in self.tabs.values() if isinstance(t, kind)]
+                found: list[_Shown] = [t for t in self.tabs.values() if isinstance(t, kind)]
             if len(found) >= count:
                 return found
             time.sleep(0.02)

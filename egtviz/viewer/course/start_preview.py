@@ -10,9 +10,8 @@ input.
 from __future__ import annotations
 
 from html import escape
-from typing import Any
 
-from ...scene import compute_derived
+from ...scene import Scene, compute_derived
 from ..render.panel_view import fit_view
 from ..render.panels import WindowSize, initial_view
 from ..render.svg import NORMAL, PRESENT, image_plane_svg
@@ -27,7 +26,7 @@ PREVIEW_MIN_PX = 260.0
 PREVIEW_GAP_PX = 24.0
 
 
-def start_preview_html(scene: Any, window: WindowSize, *, left_px: float, margin_px: float,
+def start_preview_html(scene: Scene, window: WindowSize, *, left_px: float, margin_px: float,
                        present: bool = False) -> str:
     """The preview's HTML: a heading, one line on what the panels show, and the panels; ``""`` if it cannot fit.
 

@@ -17,9 +17,15 @@ from __future__ import annotations
 import contextlib
 import io
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # only named: the export imports viser and the scene layer when it records
+    import viser
+
+    from ...scene import Derived, Scene
+    from ...scene.extent import SceneExtent
 
 __all__ = ["PANEL_SCALE", "scene_page"]
 
@@ -31,13 +37,13 @@ PANEL_WIDTH_GLYPHS = 3.0
 CANVAS_ASPECT = 1.4
 
 
-def _locked(scene: Any) -> Any:
+def _locked(scene: Scene) -> Scene:
     """The scene with every camera and point locked: the gizmos show no handles."""
     marks = set(scene.camera_names) | {f"point:{i}" for i in range(len(scene.points))}
     return scene.replace(locked=frozenset(marks) | scene.locked)
 
 
-def _panel_picture(scene: Any, camera: str) -> np.ndarray:
+def _panel_picture(scene: Scene, camera: str) -> np.ndarray:
     """(H, W, 3) uint8 picture of ``camera``'s image panel as the figure export draws it."""
     import imageio.v3 as iio
 
@@ -48,7 +54,7 @@ def _panel_picture(scene: Any, camera: str) -> np.ndarray:
     return np.ascontiguousarray(picture[..., :3])
 
 
-def _facing(toward: np.ndarray) -> tuple[float, ...]:
+def _facing(toward: np.ndarray) -> tuple[float, float, float, float]:
     """Orientation (wxyz) of an upright picture whose face looks along the horizontal part of ``toward``."""
     from viser.transforms import SO3
 
@@ -57,10 +63,12 @@ def _facing(toward: np.ndarray) -> tuple[float, ...]:
     up = np.array([0.0, 0.0, 1.0])
     # viser lays a picture in its node's x-y plane with the first row towards -y (image axes, as a camera's):
     # x to the viewer's right, y down, and so z away from the viewer.
-    return tuple(float(q) for q in SO3.from_matrix(np.column_stack([np.cross(up, normal), -up, -normal])).wxyz)
+    w, x, y, z = (float(q) for q in SO3.from_matrix(np.column_stack([np.cross(up, normal), -up, -normal])).wxyz)
+    return w, x, y, z
 
 
-def _panel_places(scene: Any, derived: Any, extent: Any) -> list[tuple[str, np.ndarray, float, float, np.ndarray]]:
+def _panel_places(scene: Scene, derived: Derived,
+                  extent: SceneExtent) -> list[tuple[str, np.ndarray, float, float, np.ndarray]]:
     """``(camera, picture, width, height, centre)`` of each camera's panel picture, standing over the camera's
     centre above everything in the scene (a mirror or a point would hide it)."""
     glyph = extent.glyph
@@ -83,7 +91,8 @@ def _panel_reach(places: list[tuple[str, np.ndarray, float, float, np.ndarray]])
     return np.array(corners).reshape(-1, 3)
 
 
-def _add_panels(api: Any, places: list[tuple[str, np.ndarray, float, float, np.ndarray]], viewer: np.ndarray) -> None:
+def _add_panels(api: viser.SceneApi, places: list[tuple[str, np.ndarray, float, float, np.ndarray]],
+                viewer: np.ndarray) -> None:
     """The panel pictures, upright, each facing the first view (see :func:`_panel_places`).
 
     They are not tied to a camera's image plane (a panoramic camera has no plane in the scene): they stand in
@@ -94,7 +103,7 @@ def _add_panels(api: Any, places: list[tuple[str, np.ndarray, float, float, np.n
                       receive_shadow=False, wxyz=_facing(viewer - centre), position=tuple(centre))
 
 
-def scene_page(scene: Any) -> str:
+def scene_page(scene: Scene) -> str:
     """viser's client page with ``scene`` recorded in it (see the module docstring).
 
     Args:

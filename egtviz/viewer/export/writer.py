@@ -7,11 +7,14 @@ import os
 import stat
 from html import escape
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ... import __version__
 from ...files import FileSafetyError, printable, write_atomic
 from .page import SCENE_FRAME, markdown_to_html, page_html
+
+if TYPE_CHECKING:  # only named: the scene layer is imported when a scene is read
+    from ...scene import Scene
 
 __all__ = ["MARKER", "ExportError", "ExportFailed", "export_lesson", "export_scene"]
 
@@ -52,7 +55,7 @@ def _check_out(out: str | os.PathLike) -> Path:
     return path
 
 
-def _write(out: Path, page: str, scene_page: str, marker: dict[str, Any]) -> None:
+def _write(out: Path, page: str, scene_page: str, marker: dict[str, object]) -> None:
     try:
         out.mkdir(parents=True, exist_ok=True)
         write_atomic(out / SCENE_FRAME, scene_page.encode("utf-8"))
@@ -64,7 +67,7 @@ def _write(out: Path, page: str, scene_page: str, marker: dict[str, Any]) -> Non
         raise ExportFailed(f"--out {printable(out)}: {exc.strerror or exc}") from None
 
 
-def _recorded(scene: Any) -> str:
+def _recorded(scene: Scene) -> str:
     """:func:`.recording.scene_page`, its failures (viser's client page missing, say) as :class:`ExportFailed`."""
     from .recording import scene_page
 
@@ -106,7 +109,7 @@ def export_lesson(name: str, step: int, out: str | os.PathLike) -> Path:
     return path / PAGE
 
 
-def _scene_description(scene: Any) -> str:
+def _scene_description(scene: Scene) -> str:
     cameras = "".join(f"<li>{escape(c.name)} ({escape(c.kind)})</li>" for c in scene.cameras)
     return (f"<p>{len(scene.cameras)} cameras, {len(scene.points)} points.</p>"
             + (f"<ul>{cameras}</ul>" if cameras else ""))

@@ -26,13 +26,11 @@ import os
 import re
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
+from ...files import FileSafetyError, printable, write_atomic
+from ...scene import SCENES, ImagePlane, Scene, SceneError, compute_derived, limits, load_scene_file
 from .panel_view import ViewBox, fit_view
 from .svg import NORMAL, PRESENT, image_plane_svg
-
-if TYPE_CHECKING:
-    from ...scene.derived import ImagePlane
 
 __all__ = ["FIGURE_FORMATS", "add_arguments", "panel_svg", "panel_svg_of", "png_pixels", "png_refusal", "run",
            "svg_to_png"]
@@ -64,7 +62,7 @@ def panel_svg_of(plane: ImagePlane, *, present: bool = False, view: ViewBox | No
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + svg + "\n"
 
 
-def panel_svg(scene: Any, camera_name: str, *, present: bool = False, fit: bool = True) -> str:
+def panel_svg(scene: Scene, camera_name: str, *, present: bool = False, fit: bool = True) -> str:
     """The SVG figure of one camera's image plane in ``scene``.
 
     Args:
@@ -77,8 +75,6 @@ def panel_svg(scene: Any, camera_name: str, *, present: bool = False, fit: bool 
     Raises:
         KeyError: no camera ``camera_name`` in the scene (the message lists the names).
     """
-    from ...scene import compute_derived
-
     names = [c.name for c in scene.cameras]
     if camera_name not in names:
         raise KeyError(f"no camera {camera_name!r} in the scene (cameras: {', '.join(names) or 'none'})")
@@ -145,8 +141,6 @@ def png_refusal(svg: str, *, scale: float = 2.0) -> str | None:
     ``MAX_PNG_SVG_BYTES``, ``MAX_PNG_SVG_ELEMENTS`` and ``MAX_PNG_PIXELS`` (output width x height). The check
     reads the text only (no XML parse): it costs milliseconds for a panel of 2,000 points.
     """
-    from ...scene import limits
-
     pixels = png_pixels(svg, scale=scale)
     if pixels is None:
         return "the figure has no width and height in pixels, so no PNG is made. Download the SVG instead."
@@ -184,9 +178,6 @@ def _fail(message: str) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Write the figure; 0 on success, 2 (with one line on stderr) for a bad scene, camera, extension or output."""
-    from ...files import FileSafetyError, printable, write_atomic
-    from ...scene import SCENES, SceneError, load_scene_file
-
     out = Path(args.out)
     ext = out.suffix.lower()
     if ext not in FIGURE_FORMATS:

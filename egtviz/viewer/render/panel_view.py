@@ -21,9 +21,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 if TYPE_CHECKING:
     from ...scene.derived import ImagePlane
@@ -92,7 +93,7 @@ class ViewBox:
         """``(u, v)`` of the centre."""
         return self.u0 + self.width / 2.0, self.v0 + self.height / 2.0
 
-    def contains(self, uv: Any) -> np.ndarray:
+    def contains(self, uv: npt.ArrayLike) -> np.ndarray:
         """``(N,)`` mask of the rows of ``uv`` (N, 2) inside the box (edges included; NaN rows are outside)."""
         P = np.asarray(uv, float).reshape(-1, 2)
         with np.errstate(invalid="ignore"):
@@ -241,8 +242,8 @@ _DIRECTIONS = ((1, -1), (1, 0), (1, 1), (-1, -1), (-1, 0), (-1, 1), (0, -1), (0,
 PLACEMENT_RINGS = (1.0, 2.0, 3.5)
 
 
-def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: tuple[float, float, float, float],
-                 gap: float, placed: Any = ()) -> np.ndarray:
+def place_labels(anchors: npt.ArrayLike, radii: npt.ArrayLike, sizes: npt.ArrayLike, obstacles: npt.ArrayLike,
+                 bounds: tuple[float, float, float, float], gap: float, placed: npt.ArrayLike = ()) -> np.ndarray:
     """Greedy, deterministic label placement: each label next to its mark, clear of marks and earlier labels.
 
     Label ``i`` (in the given order, most important first) tries boxes of
@@ -277,12 +278,12 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
     near_boxes, reach_x, reach_y = _near_obstacles(A, R, S, O, gap)
     box_bounds = tuple(float(b) for b in bounds)
     earlier: list[tuple[float, float, float, float]] = [tuple(b) for b in np.asarray(placed, float).reshape(-1, 4).tolist()]
-    placed = earlier[:]
+    boxes = earlier[:]
     for (ax, ay), r, (w, h), others, rx, ry in zip(A.tolist(), R.tolist(), S.tolist(), near_boxes,
                                                   reach_x.tolist(), reach_y.tolist()):
         lo_x, hi_x, lo_y, hi_y = ax - rx, ax + rx, ay - ry, ay + ry
         # The obstacles, then the earlier labels, in the order given: the same sums as over all of them.
-        near_placed = [o for o in placed if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
+        near_placed = [o for o in boxes if o[0] <= hi_x and o[2] >= lo_x and o[1] <= hi_y and o[3] >= lo_y]
         if isinstance(others, np.ndarray):  # many obstacles near (an epipole among 200 points): kept in numpy
             if near_placed:
                 others = np.concatenate([others, np.array(near_placed, float)])
@@ -290,9 +291,9 @@ def place_labels(anchors: Any, radii: Any, sizes: Any, obstacles: Any, bounds: t
         else:
             box = _best_box(ax, ay, r + gap, w, h, others + near_placed, box_bounds)
         if box is None:  # every cost compared false: a NaN anchor, radius or size
-            raise ValueError(f"place_labels: label {len(placed) - len(earlier)} has no finite box")
-        placed.append(box)
-    return np.array(placed[len(earlier):])
+            raise ValueError(f"place_labels: label {len(boxes) - len(earlier)} has no finite box")
+        boxes.append(box)
+    return np.array(boxes[len(earlier):])
 
 
 def _near_obstacles(A: np.ndarray, R: np.ndarray, S: np.ndarray, O: np.ndarray, gap: float

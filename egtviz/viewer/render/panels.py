@@ -25,9 +25,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal, TypeVar
 
 import numpy as np
+import numpy.typing as npt
 
 from .panel_view import ViewBox, fit_view, fit_with_content, image_view, pan, steady_fit, zoom
 from .svg import NORMAL, PanelStyle, panel_layout
@@ -235,7 +236,11 @@ def _widest_fitting(image: tuple[float, float], max_height: float, style: PanelS
     return lo
 
 
-def _split(items: Sequence[Any], parts: int) -> list[list[Any]]:
+#: An item :func:`_split` deals into runs.
+_Item = TypeVar("_Item")
+
+
+def _split(items: Sequence[_Item], parts: int) -> list[list[_Item]]:
     """``items`` in ``parts`` consecutive runs, the longer runs first (sizes differ by at most one)."""
     q, r = divmod(len(items), parts)
     out, start = [], 0
@@ -389,7 +394,7 @@ class FramedCamera:
 VIEW_DIRECTION = np.array([0.3, -1.45, 0.9]) / np.linalg.norm([0.3, -1.45, 0.9])
 
 
-def framed_camera(points: Any, canvas_aspect: float, *, fov: float = math.radians(60.0),
+def framed_camera(points: npt.ArrayLike, canvas_aspect: float, *, fov: float = math.radians(60.0),
                   margin: float = 1.25, pad: float = 1.0, min_radius: float = 3.0) -> FramedCamera:
     r"""The closest 3D view that shows every point of ``points`` in a canvas of aspect ``canvas_aspect``.
 

@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ...scene import Epipole, ImagePlane
+from ...scene.annotations import Plot
 from ...scene.shown_numbers import shown_components
 from .panel_view import FIT_MARGIN, FIT_MAX_EXTENT, ViewBox, aspect_box
 from .svg import NORMAL, PanelStyle, image_plane_svg, panel_layout
@@ -36,7 +37,7 @@ PLOT_ASPECT = 4.0 / 3.0
 _BORDER = re.compile(r'<rect data-kind="border"[^>]*/>')
 
 
-def _content(plot: Any) -> np.ndarray:
+def _content(plot: Plot) -> np.ndarray:
     parts = [np.asarray(plot.points, float).reshape(-1, 2), np.asarray(plot.line_points, float).reshape(-1, 2)]
     for c in plot.circles:
         cx, cy = c.centre
@@ -58,7 +59,7 @@ def _content(plot: Any) -> np.ndarray:
     return P
 
 
-def plot_view(plot: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
+def plot_view(plot: Plot, *, margin: float = FIT_MARGIN) -> ViewBox:
     """The view of a plot: its content's bounding box plus ``margin`` of its span on each side, widened about
     its centre to :data:`PLOT_ASPECT` (an empty plot: the unit square around the origin)."""
     P = _content(plot)
@@ -70,7 +71,7 @@ def plot_view(plot: Any, *, margin: float = FIT_MARGIN) -> ViewBox:
     return aspect_box(lo - pad, hi + pad, PLOT_ASPECT)
 
 
-def _epipole(label: str, e: Any, size: tuple[int, int] | None) -> Epipole:
+def _epipole(label: str, e: npt.ArrayLike, size: tuple[int, int] | None) -> Epipole:
     e = np.asarray(e, float)
     if abs(e[2]) <= 1e-12 * float(np.linalg.norm(e)):
         d = e[:2] / float(np.hypot(e[0], e[1]))
@@ -81,7 +82,7 @@ def _epipole(label: str, e: Any, size: tuple[int, int] | None) -> Epipole:
     return Epipole(label, xy, None, False, bool(inside))
 
 
-def plot_image_plane(plot: Any, view: ViewBox) -> ImagePlane:
+def plot_image_plane(plot: Plot, view: ViewBox) -> ImagePlane:
     """The plot as the content of an image-plane panel named ``Figure <n>`` (see the module docstring)."""
     P = np.asarray(plot.points, float).reshape(-1, 2)
     n = len(P)
@@ -113,7 +114,7 @@ def plot_image_plane(plot: Any, view: ViewBox) -> ImagePlane:
                       visible=np.ones(n, bool), in_image=in_image, n_hidden=0, epipoles=epipoles, lines=lines)
 
 
-def plot_svg(plot: Any, *, revision: int | None = None, max_height: str | None = None, style: PanelStyle = NORMAL,
+def plot_svg(plot: Plot, *, revision: int | None = None, max_height: str | None = None, style: PanelStyle = NORMAL,
              panel_px: float | None = None, fixed_size: bool = False) -> str:
     """Inline SVG of a figure's 2D plot (arguments as :func:`egtviz.viewer.render.svg.image_plane_svg`)."""
     view = plot_view(plot)

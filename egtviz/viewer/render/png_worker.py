@@ -43,7 +43,10 @@ from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:  # only named: the worker process, and the SVG builders, run without viser
+    import viser
 
 __all__ = [
     "IDLE_S",
@@ -169,6 +172,17 @@ class WorkerProcess:
             proc.wait()
 
 
+class PngWorker(Protocol):
+    """What a :class:`PngRenderer` thread renders with: a :class:`WorkerProcess`, or a test's stand-in."""
+
+    @property
+    def pid(self) -> int | None: ...
+
+    def render(self, svg: str, scale: float) -> bytes: ...
+
+    def close(self) -> None: ...
+
+
 @dataclass(frozen=True)
 class PngJob:
     """One requested render."""
@@ -204,7 +218,7 @@ class PngRenderer:
     """
 
     def __init__(self, workers: int | None = None, *, timeout: float = RENDER_TIMEOUT_S, idle: float = IDLE_S,
-                 worker_factory: Callable[..., Any] = WorkerProcess) -> None:
+                 worker_factory: Callable[..., PngWorker] = WorkerProcess) -> None:
         self.workers = default_workers() if workers is None else int(workers)
         if self.workers < 1:
             raise ValueError(f"workers: expected at least 1, got {workers}")
@@ -215,7 +229,7 @@ class PngRenderer:
         self._pending: dict[Hashable, PngJob] = {}
         self._running: set[Hashable] = set()
         self._threads: list[threading.Thread] = []
-        self._worker_processes: list[Any] = []
+        self._worker_processes: list[PngWorker] = []
         self._closed = False
         #: ``id(key)`` of the latest renders started, oldest first (tests read it; ids keep no tab alive).
         self.started: deque[int] = deque(maxlen=100)
@@ -281,7 +295,7 @@ class PngRenderer:
                 return key, self._pending.pop(key)
         return None
 
-    def _next(self, worker: Any) -> tuple[Hashable, PngJob] | None:
+    def _next(self, worker: PngWorker) -> tuple[Hashable, PngJob] | None:
         """Wait for a job and mark it running; None once the renderer is closed."""
         while True:
             with self._cond:
@@ -297,7 +311,7 @@ class PngRenderer:
                     continue
             worker.close()  # idle: give its memory back (outside the lock: it may wait); the next job starts one
 
-    def _serve(self, worker: Any) -> None:
+    def _serve(self, worker: PngWorker) -> None:
         try:
             while (item := self._next(worker)) is not None:
                 key, job = item
@@ -352,12 +366,12 @@ class PngDownloads:
         scale: device pixels per CSS pixel of the PNG (2: sharp on slides).
     """
 
-    def __init__(self, client: Any, renderer: PngRenderer | None = None, *, scale: float = 2.0) -> None:
+    def __init__(self, client: viser.ClientHandle, renderer: PngRenderer | None = None, *, scale: float = 2.0) -> None:
         self.client = client
         self._renderer = renderer
         self.scale = float(scale)
         self._lock = threading.Lock()
-        self._note: Any = None
+        self._note: viser.NotificationHandle | None = None
         self._closed = False
 
     @property
@@ -369,6 +383,8 @@ class PngDownloads:
 
     def request(self, filename: str, svg: str) -> bool:
         """Render ``svg`` and send it to the tab as ``filename``; False if refused (the tab was told why)."""
+        # Not at the top: this module is also the worker process, which imports the renderer only once its
+        # standard output no longer carries the replies (see main).
         from .figure_export import png_refusal
 
         refusal = png_refusal(svg, scale=self.scale)
@@ -409,6 +425,7 @@ class PngDownloads:
                 self._notify("Could not make the PNG", f"{filename}: {reason}. The SVG download still works.")
                 return
             try:
+                assert png is not None  # a job delivers a PNG whenever it delivers no error
                 self.client.send_file_download(filename, png, save_immediately=True)
             except Exception:  # noqa: BLE001 - the tab may have gone meanwhile
                 traceback.print_exc()
@@ -444,7 +461,7 @@ def main() -> int:
         os.nice(WORKER_NICENESS)
     except (AttributeError, OSError):
         pass
-    from .figure_export import svg_to_png
+    from .figure_export import svg_to_png  # only now: anything it prints on import goes to the log
 
     requests = sys.stdin.buffer
     try:

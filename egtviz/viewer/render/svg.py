@@ -61,17 +61,18 @@ from bisect import bisect_left
 from dataclasses import dataclass
 from functools import lru_cache
 from html import escape
-from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from collections.abc import Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ...scene.shown_numbers import format_value, format_vector
 from .palette import EPIPOLE_COLOUR, POINT_COLOURS, PRESENT_POINT_COLOURS, RIM_COLOUR
 from .panel_view import PLACEMENT_RINGS, ViewBox, image_view, place_labels, tick_values
 
 if TYPE_CHECKING:
-    from ...scene.derived import ImagePlane
+    from ...scene.derived import Epipole, ImagePlane
 
 __all__ = ["NORMAL", "PRESENT", "PanelLayout", "PanelStyle", "axes_svg", "empty_svg", "finite_runs", "image_plane_svg",
            "label_text", "number_fates", "panel_layout", "points_attr", "svg_number", "svg_open", "text_width_px"]
@@ -168,7 +169,7 @@ class PanelLayout:
         return css * self.k
 
 
-def _tick_labels(values: Any, decimals: int) -> list[str]:
+def _tick_labels(values: Iterable[float], decimals: int) -> list[str]:
     """Tick labels by the one rule of :mod:`egtviz.scene.shown_numbers` (``-0`` is written ``0``)."""
     return [format_value(v, f".{decimals}f") for v in values]
 
@@ -256,7 +257,8 @@ def svg_open(kind: str, attrs: str, lay: PanelLayout, style: PanelStyle, *, fixe
     )
 
 
-def _border_exit(view: ViewBox, target: Any, inset: float) -> tuple[tuple[float, float], tuple[float, float]]:
+def _border_exit(view: ViewBox, target: Sequence[float],
+                 inset: float) -> tuple[tuple[float, float], tuple[float, float]]:
     """Where the ray from the view's centre towards ``target`` leaves the view (``inset`` inside it), and its direction.
 
     Used only to place an arrow marker (layout, not geometry): the epipole
@@ -333,7 +335,7 @@ _FIX_TABLES: dict[int, np.ndarray] = {}
 _FIX_SMALL = 48
 
 
-def _fixed_strs(X: Any, dp: int) -> np.ndarray:
+def _fixed_strs(X: npt.ArrayLike, dp: int) -> np.ndarray:
     """``"%.{dp}f" % x`` for every entry of ``X``, as an object array of the same shape.
 
     The decimal rounding is done once in numpy: where ``x * 10**dp`` is not
@@ -351,10 +353,10 @@ def _fixed_strs(X: Any, dp: int) -> np.ndarray:
     if table is None:
         sc = 10**dp
         strs = []
-        for r in range(_FIX_LO, _FIX_HI):
-            a = abs(r)
+        for n in range(_FIX_LO, _FIX_HI):
+            a = abs(n)
             t = f"{a // sc}.{a % sc:0{dp}d}" if dp else str(a)
-            strs.append("-" + t if r < 0 else t)
+            strs.append("-" + t if n < 0 else t)
         table = np.empty(len(strs), dtype=object)
         table[:] = strs
         _FIX_TABLES[dp] = table
@@ -390,7 +392,8 @@ def finite_runs(P: np.ndarray) -> list[np.ndarray]:
     return [P[a:b] for a, b in zip(edges[::2], edges[1::2]) if b - a >= 2]
 
 
-def _conics_svg(conics: Any, selected_point: int | None, lw: float, integer: bool, colours: tuple[str, ...]) -> str:
+def _conics_svg(conics: Sequence[Sequence[np.ndarray]], selected_point: int | None, lw: float, integer: bool,
+                colours: tuple[str, ...]) -> str:
     """The ``epipolar-conic`` polylines of a panel, in index order, formatted in bulk.
 
     An arc with NaN vertices is split into its finite runs. Past
@@ -483,7 +486,7 @@ def numbered_points(n_in_image: int, show_labels: bool | str) -> bool:
 _LABEL_TEXT = '<text x="%.5g" y="%.5g" text-anchor="%s" data-box="%.5g %.5g %.5g %.5g"%s>%s</text>'
 
 
-def label_text(box: Any, size: float, text: str, attrs: str, mark_x: float) -> str:
+def label_text(box: Iterable[float], size: float, text: str, attrs: str, mark_x: float) -> str:
     """A text written in its placed box, on the side towards its mark (``mark_x``), baseline near the bottom.
 
     Left of the mark it ends at the box's right edge, right of it it starts at
@@ -673,7 +676,8 @@ def _clear_of_numbers(plan: _NumberPlan, boxes: np.ndarray) -> bool:
 
 
 def _place_numbers(plan: _NumberPlan, style: PanelStyle, k: float, bounds: tuple[float, float, float, float],
-                   epipoles: tuple[_EpipoleLabel, ...], ep_boxes: tuple) -> tuple[dict[int, Any], dict[int, Any], int]:
+                   epipoles: tuple[_EpipoleLabel, ...], ep_boxes: tuple
+                   ) -> tuple[dict[int, tuple[float, ...]], dict[int, tuple[float, ...]], int]:
     """Where the point numbers go, clear of the marks, of the epipole labels (placed first, in ``ep_boxes``) and of
     each other.
 
@@ -709,8 +713,9 @@ def _group_constants(style: PanelStyle, k: float) -> tuple[str, str, str, str, s
 
 
 @lru_cache(maxsize=256)
-def _point_group(i: int, kind: str, xy: tuple[float, float], *, ring: bool, selected: bool, label_box: Any,
-                 leader_box: Any, style: PanelStyle, k: float, dp: int) -> str:
+def _point_group(i: int, kind: str, xy: tuple[float, float], *, ring: bool, selected: bool,
+                 label_box: tuple[float, ...] | None, leader_box: tuple[float, ...] | None, style: PanelStyle,
+                 k: float, dp: int) -> str:
     """Point ``i``'s ``<g>``: its disc with (if any) its ring, its number and the number's leader line.
 
     Cached: the panel of the camera that does not move draws the same groups from one drag step to the next.
@@ -1068,8 +1073,8 @@ def _lines_svg(plane: ImagePlane, view: ViewBox, image: ViewBox, selected_point:
     return f'<g stroke-width="{svg_number(lw)}">{"".join(table.ravel().tolist())}</g>'
 
 
-def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, k: float, row: Iterator[float]
-                   ) -> tuple[list[tuple[Any, str, str, str]], list[_EpipoleLabel]]:
+def _epipole_marks(epipoles: tuple[Epipole, ...], view: ViewBox, style: PanelStyle, k: float, row: Iterator[float]
+                   ) -> tuple[list[tuple[Epipole, str, str, str]], list[_EpipoleLabel]]:
     """Each epipole's mark: in the view a cross, elsewhere an arrow at the frame pointing to it; one at infinity
     also gets a status row (from ``row``) saying its direction.
 
@@ -1082,7 +1087,7 @@ def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, 
     a = style.mark_px * 1.8 * k
     arrow_len = 2.6 * style.label_px * k
     st = style.status_px * k
-    ep_marks: list[tuple[Any, str, str, str]] = []
+    ep_marks: list[tuple[Epipole, str, str, str]] = []
     ep_labels: list[_EpipoleLabel] = []
     for ep in epipoles:
         label = str(ep.label)
@@ -1112,7 +1117,7 @@ def _epipole_marks(epipoles: tuple[Any, ...], view: ViewBox, style: PanelStyle, 
     return ep_marks, ep_labels
 
 
-def _epipole_groups(ep_marks: list[tuple[Any, str, str, str]], ep_labels: list[_EpipoleLabel], ep_boxes: tuple,
+def _epipole_groups(ep_marks: list[tuple[Epipole, str, str, str]], ep_labels: list[_EpipoleLabel], ep_boxes: tuple,
                     style: PanelStyle, k: float) -> list[str]:
     """Each epipole's ``<g>``: its mark and (not at infinity) its label in the box placed for it."""
     size = style.label_px * k

@@ -18,7 +18,10 @@ import asyncio
 import logging
 import socket
 import threading
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from websockets.asyncio.server import Server
 
 __all__ = ["CLOSED", "Dispatcher", "adopt_connections", "capture_serve", "missing_internals", "served"]
 
@@ -28,10 +31,10 @@ _log = logging.getLogger(__name__)
 CLOSED = b"-"
 _HANDED = b"c"
 
-_served: list[Any] = []
+_served: list[Server] = []
 
 
-def served() -> list[Any]:
+def served() -> list[Server]:
     """The websockets servers started in this process since :func:`capture_serve` (newest last)."""
     return list(_served)
 
@@ -51,12 +54,12 @@ def capture_serve(*, reuse_port: bool) -> None:
         egtviz_base = base
         egtviz_reuse_port = reuse_port
 
-        def __init__(self, *args: Any, **kwargs: Any) -> None:
+        def __init__(self, *args: object, **kwargs: object) -> None:
             if reuse_port:
                 kwargs.setdefault("reuse_port", True)
             super().__init__(*args, **kwargs)
 
-        async def __await_impl__(self) -> Any:
+        async def __await_impl__(self) -> Server:
             server = await super().__await_impl__()
             _served.append(server)
             return server
@@ -64,7 +67,7 @@ def capture_serve(*, reuse_port: bool) -> None:
     ws_server.serve = serve  # type: ignore[misc]
 
 
-def missing_internals(server: Any) -> list[str]:
+def missing_internals(server: object) -> list[str]:
     """What ``server`` (a websockets server from :func:`served`) lacks of the private names used here."""
     inner = getattr(server, "server", None)
     if inner is None:
@@ -74,7 +77,7 @@ def missing_internals(server: Any) -> list[str]:
     return []
 
 
-def adopt_connections(channel: socket.socket, server: Any, loop: asyncio.AbstractEventLoop) -> threading.Thread:
+def adopt_connections(channel: socket.socket, server: Server, loop: asyncio.AbstractEventLoop) -> threading.Thread:
     """In a worker: serve every connection the supervising process passes on ``channel`` with ``server`` (a
     websockets server running on ``loop``), and write :data:`CLOSED` on ``channel`` as each one closes. Returns the
     receiving thread (it ends when the channel closes).
@@ -85,7 +88,8 @@ def adopt_connections(channel: socket.socket, server: Any, loop: asyncio.Abstrac
     missing = missing_internals(server)
     if missing:
         raise RuntimeError(f"egtviz workers cannot be handed connections: {', '.join(missing)} not found")
-    factory = server.server._protocol_factory
+    # asyncio's private name, which typeshed does not declare (found above by missing_internals).
+    factory = getattr(server.server, "_protocol_factory")  # noqa: B009
     send_lock = threading.Lock()
 
     def closed() -> None:

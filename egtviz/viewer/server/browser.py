@@ -10,7 +10,12 @@ import os
 import shutil
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, Literal, Sequence, TypeVar
+
+if TYPE_CHECKING:  # playwright is a test extra: imported where a browser is launched
+    from playwright.sync_api import Browser, BrowserContext, Frame, JSHandle, Locator, Page, Playwright
+
+    _Target = TypeVar("_Target", "Page", "BrowserContext")
 
 CHROMIUM = os.environ.get("EGTVIZ_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_ARGS = [
@@ -72,36 +77,37 @@ class PatientBrowser:
     Everything else is the browser's own (attribute access is passed through).
     """
 
-    def __init__(self, browser: Any, timeout_ms: float, *, quiet: bool = False) -> None:
+    def __init__(self, browser: Browser, timeout_ms: float, *, quiet: bool = False) -> None:
         self._browser = browser
         #: The default timeout of every page and context made here (ms); :func:`open_viewer` reads it too.
         self.timeout_ms = timeout_ms
         self.quiet = quiet
 
-    def _patient(self, target: Any) -> Any:
+    def _patient(self, target: _Target) -> _Target:
         target.set_default_timeout(self.timeout_ms)
         target.set_default_navigation_timeout(self.timeout_ms)
         return target
 
-    def _context(self, context: Any) -> Any:
+    def _context(self, context: BrowserContext) -> BrowserContext:
         if self.quiet:
             context.add_init_script(HIDE_SOFTWARE_WEBGL_NOTICE_JS)
         return self._patient(context)
 
-    def new_context(self, **kwargs: Any) -> Any:
+    # The keywords are playwright's own (``viewport``, ``locale``, ...), passed on unread.
+    def new_context(self, **kwargs: Any) -> BrowserContext:
         return self._context(self._browser.new_context(**kwargs))
 
-    def new_page(self, **kwargs: Any) -> Any:
+    def new_page(self, **kwargs: Any) -> Page:
         page = self._browser.new_page(**kwargs)
         self._context(page.context)
         return self._patient(page)
 
-    def __getattr__(self, name: str) -> Any:
+    def __getattr__(self, name: str) -> object:
         return getattr(self._browser, name)
 
 
 @contextmanager
-def chromium(*, timeout_ms: float | None = None, args: Sequence[str] = ()) -> Iterator[Any]:
+def chromium(*, timeout_ms: float | None = None, args: Sequence[str] = ()) -> Iterator[Browser | PatientBrowser]:
     """A launched headless Chromium (playwright ``Browser``).
 
     Args:
@@ -119,8 +125,15 @@ def chromium(*, timeout_ms: float | None = None, args: Sequence[str] = ()) -> It
             browser.close()
 
 
-#: The process's shared playwright instance and its browsers by their extra switches (:func:`shared_chromium`).
-_SHARED: dict[str, Any] = {}
+class _Shared:
+    """The process's shared playwright instance (None: not started) and its browsers by their extra switches
+    (:func:`shared_chromium`)."""
+
+    playwright: Playwright | None = None
+    browsers: dict[tuple[str, ...], Browser] = {}
+
+
+_SHARED = _Shared()
 
 
 def shared_chromium(*, timeout_ms: float, args: Sequence[str] = (), quiet: bool = False) -> PatientBrowser:
@@ -134,23 +147,24 @@ def shared_chromium(*, timeout_ms: float, args: Sequence[str] = (), quiet: bool 
     """
     from playwright.sync_api import sync_playwright
 
-    if "playwright" not in _SHARED:
-        _SHARED["playwright"] = sync_playwright().start()
-        _SHARED["browsers"] = {}
+    playwright = _SHARED.playwright
+    if playwright is None:
+        playwright = _SHARED.playwright = sync_playwright().start()
+        _SHARED.browsers = {}
         import atexit
 
         atexit.register(close_shared_chromium)
-    browsers: dict[tuple[str, ...], Any] = _SHARED["browsers"]
+    browsers = _SHARED.browsers
     key = tuple(args)
     if key not in browsers or not browsers[key].is_connected():
-        browsers[key] = _SHARED["playwright"].chromium.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *key])
+        browsers[key] = playwright.chromium.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *key])
     return PatientBrowser(browsers[key], timeout_ms, quiet=quiet)
 
 
 def close_shared_chromium() -> None:
     """Close the browsers of :func:`shared_chromium` and stop its playwright (nothing if none was started)."""
-    playwright = _SHARED.pop("playwright", None)
-    browsers = _SHARED.pop("browsers", {})
+    playwright, browsers = _SHARED.playwright, _SHARED.browsers
+    _SHARED.playwright, _SHARED.browsers = None, {}
     for browser in browsers.values():
         try:
             browser.close()
@@ -160,8 +174,8 @@ def close_shared_chromium() -> None:
         playwright.stop()
 
 
-def wait_for_js(page: Any, expression: str, what: str, *, arg: Any = None, timeout_ms: float | None = None,
-                polling: float | str = "raf") -> Any:
+def wait_for_js(page: Page | Frame, expression: str, what: str, *, arg: object = None,
+                timeout_ms: float | None = None, polling: float | Literal["raf"] = "raf") -> JSHandle:
     """Wait until ``expression`` (a JS function of ``arg``) returns a truthy value in ``page`` (or a frame); that
     value's handle.
 
@@ -170,18 +184,15 @@ def wait_for_js(page: Any, expression: str, what: str, *, arg: Any = None, timeo
     """
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
-    options: dict[str, Any] = {"polling": polling}
-    if timeout_ms is not None:
-        options["timeout"] = timeout_ms
-    try:
-        return page.wait_for_function(expression, arg=arg, **options)
+    try:  # playwright takes a timeout of None as none given: the page's default
+        return page.wait_for_function(expression, arg=arg, polling=polling, timeout=timeout_ms)
     except PlaywrightTimeout as exc:
         first = str(exc).splitlines()[0] if str(exc) else "timed out"
         raise TimeoutError(f"waited for {what}: {first}") from exc
 
 
-def open_viewer(browser: Any, url: str, *, width: int = 1600, height: int = 900, n_panels: int = 2,
-                timeout_ms: float | None = None) -> Any:
+def open_viewer(browser: Browser | PatientBrowser, url: str, *, width: int = 1600, height: int = 900,
+                n_panels: int = 2, timeout_ms: float | None = None) -> Page:
     """A new page on ``url``, returned once ``n_panels`` image-plane panels are in the DOM.
 
     ``timeout_ms``: how long that may take (None: the browser's default if it is a :class:`PatientBrowser`,
@@ -209,7 +220,7 @@ SOFTWARE_WEBGL_JS = """() => {
 }"""
 
 
-def close_notifications(page: Any, *, timeout_ms: float | None = None) -> None:
+def close_notifications(page: Page, *, timeout_ms: float | None = None) -> None:
     """Dismiss Chromium's "software WebGL" toast (before a screenshot, or so that it covers nothing).
 
     The toast comes when the page's WebGL is drawn in software (:data:`SOFTWARE_WEBGL_JS`): then this waits for it
@@ -254,14 +265,14 @@ DRAWN_3D_JS = """(minColours) => {
 }"""
 
 
-def wait_for_3d_view(page: Any, *, min_colours: int = 8, timeout_ms: float | None = None) -> None:
+def wait_for_3d_view(page: Page | Frame, *, min_colours: int = 8, timeout_ms: float | None = None) -> None:
     """Wait until the page's 3D view has drawn and stopped changing (:data:`DRAWN_3D_JS`), polled every 0.25 s;
     the event a screenshot of it waits for, instead of a fixed sleep that a slow machine outlasts."""
     wait_for_js(page, DRAWN_3D_JS, "the 3D view drawn and still", arg=min_colours, timeout_ms=timeout_ms,
                 polling=250)
 
 
-def folder_field(page: Any, folder: str, label: str) -> Any:
+def folder_field(page: Page, folder: str, label: str) -> Locator:
     """The text box of field ``label`` inside the GUI folder titled ``folder``, opening the folder if it is closed
     (the first two cameras' folders start open, the others closed)."""
     title = page.get_by_text(folder).first

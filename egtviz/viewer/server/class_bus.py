@@ -26,11 +26,17 @@ import threading
 import time
 from collections.abc import Callable
 from multiprocessing.connection import Client, Connection, Listener
-from typing import Any
+from typing import TYPE_CHECKING
 
+from ...classroom import Classroom
 from .class_patch import (
-    apply_patch, diff, empty_patch, full_patch, global_tab, is_empty, merge_into, normal, parsed_patch,
+    JsonObject, apply_patch, diff, empty_patch, full_patch, global_tab, is_empty, merge_into, normal, parsed_patch,
 )
+
+if TYPE_CHECKING:
+    from ..classroom.follow_view import RoomFrame
+    from ..classroom.host import ClassroomHost
+    from ..classroom.room_sender import FrameSender
 
 __all__ = ["PERIOD_S", "SYNC_S", "ClassHub", "ClassroomBus", "frame_message"]
 
@@ -42,7 +48,7 @@ SYNC_S = 0.05
 PERIOD_S = 1.0
 
 
-def _send(conn: Connection, lock: threading.Lock, message: dict[str, Any]) -> None:
+def _send(conn: Connection, lock: threading.Lock, message: JsonObject) -> None:
     data = json.dumps(message, separators=(",", ":"), allow_nan=False).encode()
     with lock:
         conn.send_bytes(data)
@@ -54,13 +60,13 @@ class _Outbox:
     def __init__(self, conn: Connection) -> None:
         self.conn = conn
         self._cond = threading.Condition()
-        self._patches: collections.deque[dict[str, Any]] = collections.deque()
-        self._frame: dict[str, Any] | None = None
+        self._patches: collections.deque[JsonObject] = collections.deque()
+        self._frame: JsonObject | None = None
         self._closed = False
         self._lock = threading.Lock()
         threading.Thread(target=self._run, name="egtviz-hub-out", daemon=True).start()
 
-    def put(self, message: dict[str, Any]) -> None:
+    def put(self, message: JsonObject) -> None:
         with self._cond:
             if message["kind"] == "frame":
                 self._frame = message  # a worker behind on frames skips to the newest
@@ -80,7 +86,7 @@ class _Outbox:
                     self._cond.wait()
                 if self._closed:
                     return
-                message: dict[str, Any] | None
+                message: JsonObject | None
                 if self._patches:
                     message = self._patches.popleft()
                 else:
@@ -107,7 +113,7 @@ class ClassHub:
         self._state = normal(_empty_state_json())
         self._tabs: dict[int, dict[str, list]] = {}
         self._outboxes: dict[int, _Outbox] = {}
-        self._frame: dict[str, Any] | None = None
+        self._frame: JsonObject | None = None
         self._closed = False
         #: Messages relayed (patches and frames), for tests and benchmarks.
         self.relayed = 0
@@ -168,13 +174,13 @@ class ClassHub:
             patch["tabs"]["del"] = [str(global_tab(worker, int(t))) for t in gone]
             self._relay(worker, {"kind": "patch", "patch": patch})
 
-    def _relay(self, worker: int, message: dict[str, Any]) -> None:
+    def _relay(self, worker: int, message: JsonObject) -> None:
         for w, box in self._outboxes.items():
             if w != worker:
                 box.put(message)
         self.relayed += 1
 
-    def _handle(self, worker: int, message: dict[str, Any]) -> None:
+    def _handle(self, worker: int, message: JsonObject) -> None:
         kind = message.get("kind")
         with self._lock:
             if kind == "frame":
@@ -193,7 +199,7 @@ class ClassHub:
                                "del": [str(global_tab(worker, int(t))) for t in tabs.get("del", [])]}
                 self._relay(worker, {"kind": "patch", "patch": out})
 
-    def state(self) -> dict[str, Any]:
+    def state(self) -> JsonObject:
         """The merged class (:func:`~.class_patch.normal` form, without tabs)."""
         with self._lock:
             return dict(self._state)
@@ -225,7 +231,7 @@ def _empty_state_json() -> str:
     return ClassState().to_json()
 
 
-def frame_message(frame: Any) -> dict[str, Any]:
+def frame_message(frame: RoomFrame) -> JsonObject:
     """A :class:`~egtviz.viewer.classroom.follow_view.RoomFrame` as a bus message (its derived geometry is
     computed again where it arrives: it is the scene's)."""
     from ...scene.io import scene_to_dict
@@ -238,16 +244,26 @@ def frame_message(frame: Any) -> dict[str, Any]:
 class _RelaySender:
     """The host's room sender, which also hands every frame it is posted to the bus."""
 
-    def __init__(self, inner: Any, publish: Callable[[Any], None]) -> None:
+    def __init__(self, inner: FrameSender, publish: Callable[[RoomFrame], None]) -> None:
         self._inner = inner
         self._publish = publish
 
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._inner, name)
+    @property
+    def latest(self) -> RoomFrame | None:
+        return self._inner.latest
 
-    def post(self, frame: Any) -> None:
+    def next_number(self) -> int:
+        return self._inner.next_number()
+
+    def post(self, frame: RoomFrame) -> None:
         self._inner.post(frame)
         self._publish(frame)
+
+    def clear_pending(self) -> None:
+        self._inner.clear_pending()
+
+    def close(self) -> None:
+        self._inner.close()
 
 
 class ClassroomBus:
@@ -265,10 +281,10 @@ class ClassroomBus:
         self._sync_lock = threading.Lock()
         self._wake = threading.Event()
         self._closed = False
-        self._room: Any = None
-        self._last: dict[str, Any] | None = None
-        self._state_callbacks: list[Callable[[dict[str, Any]], None]] = []
-        self._frame_callbacks: list[Callable[[dict[str, Any]], None]] = []
+        self._room: Classroom | None = None
+        self._last: JsonObject | None = None
+        self._state_callbacks: list[Callable[[JsonObject], None]] = []
+        self._frame_callbacks: list[Callable[[JsonObject], None]] = []
         self._welcomed = threading.Event()
         #: Patches and frames received from the other workers.
         self.received = {"patch": 0, "frame": 0}
@@ -291,40 +307,40 @@ class ClassroomBus:
         if not is_empty(patch):
             _send(self._conn, self._send_lock, {"kind": "patch", "patch": patch})
 
-    def publish_frame(self, frame: Any) -> None:
+    def publish_frame(self, frame: RoomFrame) -> None:
         """Send a room frame drawn here to the other workers' followers."""
         try:
             _send(self._conn, self._send_lock, frame_message(frame))
         except (OSError, ValueError) as exc:
             _log.warning("egtviz worker %d: a room frame was not relayed (%s)", self.worker, exc)
 
-    def on_state(self, callback: Callable[[dict[str, Any]], None]) -> None:
+    def on_state(self, callback: Callable[[JsonObject], None]) -> None:
         """Call ``callback(patch)`` (in the bus's thread) with each change another worker made."""
         self._state_callbacks.append(callback)
 
-    def on_frame(self, callback: Callable[[dict[str, Any]], None]) -> None:
+    def on_frame(self, callback: Callable[[JsonObject], None]) -> None:
         """Call ``callback(message)`` (in the bus's thread) with each frame another worker drew."""
         self._frame_callbacks.append(callback)
 
     # -- wiring to a ClassroomHost ----------------------------------------------------------------------
 
-    def attach(self, host: Any) -> None:
+    def attach(self, host: ClassroomHost) -> None:
         """Share ``host``'s class with the other workers and show their frames to its followers."""
-        self._room = host.room
+        room = self._room = host.room
         self._host = host
         inner = host.sender
         host.sender = _RelaySender(inner, self.publish_frame)
         self._inner_sender = inner
         self.on_frame(self._show_frame)
-        self._unsubscribe = self._room.subscribe(lambda _event: self._wake.set())
-        threading.Thread(target=self._sync_loop, name="egtviz-bus-sync", daemon=True).start()
+        self._unsubscribe = room.subscribe(lambda _event: self._wake.set())
+        threading.Thread(target=self._sync_loop, args=(room,), name="egtviz-bus-sync", daemon=True).start()
         self.start()
 
     def wait_welcomed(self, timeout: float = 10.0) -> bool:
         """Wait until the hub has given this worker the class as it is; False if it did not in time."""
         return self._welcomed.wait(timeout)
 
-    def _sync_loop(self) -> None:
+    def _sync_loop(self, room: Classroom) -> None:
         while not self._closed:
             self._wake.wait(PERIOD_S)
             if self._closed:
@@ -332,13 +348,13 @@ class ClassroomBus:
             time.sleep(SYNC_S)  # let a burst of changes go together
             self._wake.clear()
             try:
-                self.publish(self._room.to_json)
+                self.publish(room.to_json)
             except (OSError, ValueError) as exc:
                 if not self._closed:
                     _log.warning("egtviz worker %d: the class could not be shared (%s)", self.worker, exc)
                 return
 
-    def _apply(self, patch: dict[str, Any]) -> None:
+    def _apply(self, patch: JsonObject) -> None:
         if self._room is None:
             return
         parsed = parsed_patch(patch)
@@ -346,7 +362,7 @@ class ClassroomBus:
             self._room.update(lambda old: merge_into(old, patch, parsed))
             self._last = apply_patch(self._last or normal(_empty_state_json()), patch)
 
-    def _show_frame(self, message: dict[str, Any]) -> None:
+    def _show_frame(self, message: JsonObject) -> None:
         from ...scene import SceneModel
         from ...scene.io import scene_from_dict
         from ..classroom.follow_view import RoomFrame

@@ -27,8 +27,12 @@ from ...classroom import ClassState, Mode
 from ...classroom.answers import AnswerBook
 from ...classroom.state import TabState
 
-__all__ = ["KEYED", "SCALARS", "TAB_SPAN", "apply_patch", "diff", "empty_patch", "full_patch", "global_tab",
-           "is_empty", "merge_into", "normal", "parsed_patch"]
+__all__ = ["KEYED", "SCALARS", "TAB_SPAN", "JsonObject", "apply_patch", "diff", "empty_patch", "full_patch",
+           "global_tab", "is_empty", "merge_into", "normal", "parsed_patch"]
+
+#: A JSON object as the bus carries it: a class state in :func:`normal` form, a patch, a message. Its values are
+#: what ``json`` makes, read by key and checked where they are used (a class state by :func:`parsed_patch`).
+JsonObject = dict[str, Any]
 
 #: Fields replaced whole.
 SCALARS = ("shared", "mode", "cameras_locked", "pause", "allowed", "snapshots_taken", "names_shown", "question",
@@ -44,7 +48,7 @@ def global_tab(worker: int, tab: int) -> int:
     return (worker + 1) * TAB_SPAN + tab
 
 
-def normal(state_json: str | dict) -> dict[str, Any]:
+def normal(state_json: str | dict) -> JsonObject:
     """A class state (:meth:`~egtviz.classroom.Classroom.to_json`) in the form patches address: students and
     tabs as dicts (tab ids as text, as JSON keeps them)."""
     d = json.loads(state_json) if isinstance(state_json, str) else state_json
@@ -57,16 +61,16 @@ def normal(state_json: str | dict) -> dict[str, Any]:
     return out
 
 
-def empty_patch() -> dict[str, Any]:
+def empty_patch() -> JsonObject:
     return {"set": {}, "keys": {}, "answers": {}, "tabs": {"set": {}, "del": []}}
 
 
-def is_empty(patch: dict[str, Any]) -> bool:
+def is_empty(patch: JsonObject) -> bool:
     tabs = patch.get("tabs", {})
     return not (patch.get("set") or patch.get("keys") or patch.get("answers") or tabs.get("set") or tabs.get("del"))
 
 
-def diff(last: dict[str, Any], cur: dict[str, Any], *, own_tabs: bool = True) -> dict[str, Any]:
+def diff(last: JsonObject, cur: JsonObject, *, own_tabs: bool = True) -> JsonObject:
     """What changed from ``last`` to ``cur`` (both :func:`normal`); ``own_tabs``: only tabs below
     :data:`TAB_SPAN` (a worker speaks for its own tabs only)."""
     patch = empty_patch()
@@ -93,7 +97,7 @@ def diff(last: dict[str, Any], cur: dict[str, Any], *, own_tabs: bool = True) ->
     return patch
 
 
-def full_patch(state: dict[str, Any], tabs: dict[str, list]) -> dict[str, Any]:
+def full_patch(state: JsonObject, tabs: dict[str, list]) -> JsonObject:
     """A patch that brings an empty class to ``state`` (:func:`normal`), with ``tabs`` as its tabs."""
     patch = empty_patch()
     patch["set"] = {f: state[f] for f in SCALARS}
@@ -103,7 +107,7 @@ def full_patch(state: dict[str, Any], tabs: dict[str, list]) -> dict[str, Any]:
     return patch
 
 
-def apply_patch(state: dict[str, Any], patch: dict[str, Any]) -> dict[str, Any]:
+def apply_patch(state: JsonObject, patch: JsonObject) -> JsonObject:
     """``state`` (:func:`normal`) with ``patch`` merged in, as a new dict (``state`` is left as it was)."""
     out = dict(state)
     out.update(patch.get("set", {}))
@@ -134,7 +138,7 @@ def apply_patch(state: dict[str, Any], patch: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def parsed_patch(patch: dict[str, Any]) -> ClassState:
+def parsed_patch(patch: JsonObject) -> ClassState:
     """The values ``patch`` sets, read and checked as a class state would be (done before taking the class's
     lock: scenes are parsed here).
 
@@ -151,7 +155,7 @@ def parsed_patch(patch: dict[str, Any]) -> ClassState:
     return ClassState.from_dict(template)
 
 
-def merge_into(old: ClassState, patch: dict[str, Any], parsed: ClassState) -> ClassState:
+def merge_into(old: ClassState, patch: JsonObject, parsed: ClassState) -> ClassState:
     """A new class state: ``old`` with ``patch`` (read as ``parsed``, :func:`parsed_patch`) merged in.
 
     ``old`` is not changed. A new mode sets every student tab's follow, as the instructor's

@@ -1,7 +1,7 @@
 """Server-side guards viser has no option for: the websocket's Origin, upload caps, event floods.
 
 :func:`install_guards` is called on a freshly made :class:`viser.ViserServer` (``egtviz serve`` does it
-in :func:`egtviz.viewer.server.cli.start`). It adds three things, all described in ``docs/server.md``:
+in :func:`egtviz.viewer.server.launch.start`). It adds three things, all described in ``docs/server.md``:
 
 * **Origin.** A websocket handshake whose ``Origin`` header is not the page's own origin is answered
   with HTTP 403: a page on another site (or a DNS-rebinding name) cannot drive the app. A handshake
@@ -35,12 +35,15 @@ import socket
 import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, Callable, TypeGuard
+from typing import Awaitable, Callable, ParamSpec, TypeGuard, TypeVar
 from urllib.parse import urlsplit
 
 import msgspec.msgpack
 import viser
 import websockets.asyncio.server
+from websockets.asyncio.server import ServerConnection
+from websockets.http11 import Request, Response
+from websockets.typing import Data
 
 from ...hosts import ALLOWED_HOSTS_ENV, allowed_host, allowed_hosts
 
@@ -60,6 +63,8 @@ __all__ = [
 ]
 
 _log = logging.getLogger(__name__)
+_P = ParamSpec("_P")
+_T = TypeVar("_T")
 
 #: The viser releases whose internals this module was written and tested against (``pyproject.toml`` pins them).
 TESTED_VISER_VERSIONS = ("1.1.1",)
@@ -187,7 +192,7 @@ def _websockets_server(server: viser.ViserServer) -> websockets.asyncio.server.S
     if loop is None:  # viser sets it when its server thread starts, before ViserServer() returns
         raise RuntimeError("egtviz's server guards: viser's event loop is not running")
 
-    async def find() -> Any:
+    async def find() -> object:
         for task in asyncio.all_tasks():
             coro = task.get_coro()
             frame = getattr(coro, "cr_frame", None)
@@ -288,7 +293,8 @@ def origin_allowed(origin: str | None, host_header: str | None, *, allowed_hosts
 def _origin_checker(original: Callable | None, limits: GuardLimits, stats: GuardStats) -> Callable:
     own = _own_names()
 
-    def process_request(connection: Any, request: Any) -> Any:
+    def process_request(connection: ServerConnection,
+                        request: Request) -> Awaitable[Response | None] | Response | None:
         headers = request.headers
         if headers.get("Upgrade", "").lower() == "websocket" and not origin_allowed(
             headers.get("Origin"), headers.get("Host"), allowed_hosts=limits.allowed_hosts, own_names=own
@@ -313,7 +319,7 @@ _STATE_MESSAGES = {
 _DRAG_BOUNDARIES = frozenset({"TransformControlsDragStartMessage", "TransformControlsDragEndMessage"})
 
 
-def _is_value_update(msg: Any) -> bool:
+def _is_value_update(msg: dict) -> bool:
     """A field's new value (not a button press, which sends ``True``, nor a checkbox, whose every
     toggle is kept): several of these for one field, buffered together, need only the last."""
     updates = msg.get("updates")
@@ -340,17 +346,18 @@ class _InboundFilter:
     part count, bytes and part indices received).
     """
 
-    def __init__(self, connection: Any, limits: GuardLimits, stats: GuardStats, notify: Callable[[Any, str], None]):
+    def __init__(self, connection: ServerConnection, limits: GuardLimits, stats: GuardStats,
+                 notify: Callable[[ServerConnection, str], None]):
         self._connection = connection
         self._recv = connection.recv
         self._frames = connection.recv_messages.frames
         self._limits = limits
         self._stats = stats
         self._notify = notify
-        self._ready: collections.deque[bytes] = collections.deque()
+        self._ready: collections.deque[Data] = collections.deque()
         self.transfers: dict[str, _Transfer] = {}
 
-    async def recv(self, decode: bool | None = None) -> Any:
+    async def recv(self, decode: bool | None = None) -> Data:
         if self._ready:
             # One event-loop turn per message: another tab's message, read by the loop meanwhile, is
             # dispatched after at most one of this tab's instead of after a whole buffered batch.
@@ -363,11 +370,11 @@ class _InboundFilter:
             self._ready.extend(self._thin(batch))
         return self._ready.popleft()
 
-    def _thin(self, batch: list[Any]) -> list[Any]:
+    def _thin(self, batch: list[Data]) -> list[Data]:
         decoded: list[dict | None] = []
         for raw in batch:
-            try:
-                msg = msgspec.msgpack.decode(raw)
+            try:  # a text frame is no msgpack: None, as msgspec's TypeError for it gave
+                msg = msgspec.msgpack.decode(raw) if not isinstance(raw, str) else None
             except (msgspec.DecodeError, TypeError):
                 msg = None  # viser's own decoder reports it
             decoded.append(msg if isinstance(msg, dict) else None)
@@ -386,7 +393,8 @@ class _InboundFilter:
         keep_state = set(last.values())
         out = []
         for i, (raw, msg, kind) in enumerate(zip(batch, decoded, kinds)):
-            if (kind in _STATE_MESSAGES or kind == "GuiUpdateMessage" and _is_value_update(msg)) and i not in keep_state:
+            if (kind in _STATE_MESSAGES or kind == "GuiUpdateMessage" and msg is not None and _is_value_update(msg)) \
+                    and i not in keep_state:
                 self._stats.coalesced_messages += 1
                 continue
             # A message with a kind decoded to a dict: msg is None only when kind is None.
@@ -552,7 +560,7 @@ class FairExecutor:
             self._timer = None
             self._start_lanes()
 
-    def submit(self, fn: Callable, /, *args: Any, **kwargs: Any) -> Future:
+    def submit(self, fn: Callable[_P, _T], /, *args: _P.args, **kwargs: _P.kwargs) -> Future[_T]:
         """Queue ``fn(*args, **kwargs)`` behind the other jobs of the tab ``args[0]`` belongs to.
 
         Returns:
@@ -670,7 +678,7 @@ def install_guards(server: viser.ViserServer, limits: GuardLimits | None = None)
     ws_server = _websockets_server(server)
     live = server._websock_server._live_connections
 
-    def notify(connection: Any, text: str) -> None:
+    def notify(connection: ServerConnection, text: str) -> None:
         cid = next((k for k, c in list(live.items()) if c is connection), None)
         client = server.get_clients().get(cid) if cid is not None else None
         if client is not None:
@@ -679,9 +687,12 @@ def install_guards(server: viser.ViserServer, limits: GuardLimits | None = None)
     ws_server.process_request = _origin_checker(ws_server.process_request, limits, stats)
     handler = ws_server.handler
 
-    async def guarded_handler(connection: Any) -> None:
+    async def guarded_handler(connection: ServerConnection) -> None:
         connection.protocol.max_message_size = limits.max_message_bytes
-        connection.recv = _InboundFilter(connection, limits, stats, notify).recv
+        # websockets reads through the attribute: the filter stands in for this connection's own recv (a method to
+        # mypy, and an overloaded one).
+        inbound = _InboundFilter(connection, limits, stats, notify)
+        connection.recv = inbound.recv  # type: ignore[method-assign,assignment]
         await handler(connection)
 
     ws_server.handler = guarded_handler
@@ -734,7 +745,8 @@ def serve_page_under(server: viser.ViserServer, prefix: str) -> None:
     ws_server = _websockets_server(server)
     original = ws_server.process_request
 
-    def process_request(connection: Any, request: Any) -> Any:
+    def process_request(connection: ServerConnection,
+                        request: Request) -> Awaitable[Response | None] | Response | None:
         path, sep, query = request.path.partition("?")
         if request.headers.get("Upgrade", "").lower() != "websocket" and path.startswith(prefix + "/"):
             rest = path[len(prefix) + 1:].split("/", 1)

@@ -16,15 +16,17 @@ assignment sends, so an upgrade of viser is noticed at once (then fall back to t
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
+import asyncio
+from collections.abc import Callable, Mapping
+from typing import Protocol, TypeVar
 
 import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import viser
 
-_props_setattr: Callable[[Any, str, Any], None] | None
+_props_setattr: Callable[[object, str, object], None] | None
 try:  # what a handle's public assignment runs
     from viser._assignable_props_api import props_setattr as _props_setattr
 except ImportError:  # pragma: no cover - another viser: the public path only
@@ -36,9 +38,35 @@ PRIVATE_NAMES = ("_impl", "_impl.props", "_impl.removed", "_queue_update", "_on_
 FAST_PATH = _props_setattr is not None
 
 _MISSING = object()
+_T = TypeVar("_T")
 
 
-def missing_internals(handle: Any) -> list[str]:
+class _HandleState(Protocol):
+    """A viser handle's private state (its ``_impl``), as this module reads it."""
+
+    @property
+    def props(self) -> object: ...
+
+    @property
+    def removed(self) -> bool: ...
+
+
+class PropsHandle(Protocol):
+    """A viser handle whose properties this module assigns by viser's private path: a scene node's
+    (:class:`viser.SceneNodeHandle`) or a GUI element's (its private names are :data:`PRIVATE_NAMES`)."""
+
+    @property
+    def _impl(self) -> _HandleState: ...
+
+    @property
+    def _prop_hints(self) -> Mapping[str, object]: ...
+
+    def _queue_update(self, name: str, value: object) -> None: ...
+
+    def _on_prop_assigned(self, name: str) -> None: ...
+
+
+def missing_internals(handle: object) -> list[str]:
     """The names of :data:`PRIVATE_NAMES` that ``handle`` (a viser scene-node handle) lacks; empty when all exist."""
     missing: list[str] = []
     if _props_setattr is None:
@@ -57,12 +85,12 @@ def missing_internals(handle: Any) -> list[str]:
     return missing
 
 
-def current_value(handle: Any, prop: str) -> Any:
+def current_value(handle: PropsHandle, prop: str) -> object:
     """What the node holds for ``prop`` (its stored value, without a copy)."""
     return getattr(handle._impl.props, prop)
 
 
-def assign_array(handle: Any, prop: str, value: np.ndarray) -> bool:
+def assign_array(handle: PropsHandle, prop: str, value: np.ndarray) -> bool:
     """Assign an array property (points, colours, vertices) unless the node holds the same bytes; True: sent.
 
     When ``value`` has the node's dtype (a float array is first given the node's float type, as viser would store
@@ -97,7 +125,7 @@ def assign_array(handle: Any, prop: str, value: np.ndarray) -> bool:
     return True
 
 
-def assign_text(handle: Any, prop: str, text: str) -> bool:
+def assign_text(handle: PropsHandle, prop: str, text: str) -> bool:
     """Assign a text property (an HTML element's ``content``) unless the handle holds the same text; True: sent.
 
     As :func:`assign_array` for arrays: a changed text is stored, queued and the handle's assignment hook run, as
@@ -127,14 +155,14 @@ def assign_text(handle: Any, prop: str, text: str) -> bool:
     return True
 
 
-def _same(a: Any, b: Any) -> bool:
+def _same(a: object, b: object) -> bool:
     if type(a) is np.ndarray or type(b) is np.ndarray:
         a, b = np.asarray(a), np.asarray(b)
         return a.shape == b.shape and bool(np.array_equal(a, b))
     return bool(a == b)
 
 
-def assign(handle: Any, prop: str, value: Any) -> None:
+def assign(handle: object, prop: str, value: object) -> None:
     """Assign a node property unless it already holds ``value`` (for small values: flags, colours, poses).
 
     viser would skip an equal value too, but only after casting it (tens of microseconds per property); a cache
@@ -161,7 +189,7 @@ GIZMO_PRIVATE_NAMES = ("_impl.position", "_impl_aux.last_updated")
 INPUT_PRIVATE_NAMES = ("_impl.value", "_impl.update_cb")
 
 
-def _missing(obj: Any, dotted_names: tuple[str, ...]) -> list[str]:
+def _missing(obj: object, dotted_names: tuple[str, ...]) -> list[str]:
     missing = []
     for dotted in dotted_names:
         target = obj
@@ -173,39 +201,46 @@ def _missing(obj: Any, dotted_names: tuple[str, ...]) -> list[str]:
     return missing
 
 
-def missing_server_internals(server: Any) -> list[str]:
+def missing_server_internals(server: object) -> list[str]:
     """The names of :data:`SERVER_PRIVATE_NAMES` that ``server`` lacks; empty when all exist."""
     return _missing(server, SERVER_PRIVATE_NAMES)
 
 
-def missing_gizmo_internals(gizmo: Any) -> list[str]:
+def missing_gizmo_internals(gizmo: object) -> list[str]:
     """The names of :data:`GIZMO_PRIVATE_NAMES` that ``gizmo`` lacks; empty when all exist."""
     return _missing(gizmo, GIZMO_PRIVATE_NAMES)
 
 
-def missing_input_internals(handle: Any) -> list[str]:
+def missing_input_internals(handle: object) -> list[str]:
     """The names of :data:`INPUT_PRIVATE_NAMES` that ``handle`` (a GUI input) lacks; empty when all exist."""
     return _missing(handle, INPUT_PRIVATE_NAMES)
 
 
-def event_loop(server: Any) -> Any:
-    """The asyncio event loop on which ``server`` receives and sends websocket messages."""
-    return server._websock_server._background_event_loop
+def event_loop(server: viser.ViserServer) -> asyncio.AbstractEventLoop:
+    """The asyncio event loop on which ``server`` receives and sends websocket messages.
+
+    Raises:
+        RuntimeError: the server has no loop (viser starts it before its constructor returns: never in practice).
+    """
+    loop = server._websock_server._background_event_loop
+    if loop is None:
+        raise RuntimeError("the viser server has no event loop: it was never started")
+    return loop
 
 
-def callback_pool(server: Any) -> ThreadPoolExecutor:
+def callback_pool(server: viser.ViserServer) -> ThreadPoolExecutor:
     """The executor ``server`` submits GUI and scene callbacks to (viser's thread pool, or egtviz's fair
     executor over it when the guards of :mod:`egtviz.viewer.server.guard` are on): each ``submit`` runs a callback."""
     return server._thread_executor
 
 
-def gizmo_moved_by_client(gizmo: Any, position: np.ndarray) -> None:
+def gizmo_moved_by_client(gizmo: viser.TransformControlsHandle, position: np.ndarray) -> None:
     """Put ``gizmo`` where a client's gizmo message would, before viser calls its callbacks (benchmarks, tests)."""
     gizmo._impl.position = np.asarray(position, float)
     gizmo._impl_aux.last_updated = time.time()
 
 
-def value_sent_by_client(handle: Any, value: Any) -> list[Callable[[Any], None]]:
+def value_sent_by_client(handle: viser.GuiInputHandle[_T], value: _T) -> list[Callable[[viser.GuiEvent], object]]:
     """Give GUI input ``handle`` the value a client's update message carries, as viser does before it submits the
     handle's callbacks to its pool; returns those callbacks (tests run them later, to order events across threads)."""
     handle._impl.value = value

@@ -25,7 +25,15 @@ import subprocess
 import sys
 import threading
 import time
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import viser
+
+    from ..classroom import ClassroomHost
+    from ..workbench.app import EgtvizApp
+    from .class_bus import ClassroomBus
+    from .class_patch import JsonObject
 
 __all__ = ["MAX_WORKERS", "REPLY", "Supervisor", "WorkerOptions", "enable_reuse_port", "reserve_port",
            "serve_workers", "start_worker", "worker_main", "worker_of_connection"]
@@ -64,7 +72,7 @@ def enable_reuse_port() -> None:
     class serve(base):  # type: ignore[valid-type,misc]  # noqa: N801 - it replaces websockets' ``serve``
         egtviz_reuse_port = True
 
-        def __init__(self, *args: Any, **kwargs: Any) -> None:
+        def __init__(self, *args: object, **kwargs: object) -> None:
             kwargs.setdefault("reuse_port", True)
             super().__init__(*args, **kwargs)
 
@@ -133,7 +141,7 @@ def reserve_port(host: str, port: int, *, tries: int = 100) -> tuple[int, list[s
 
 @dataclasses.dataclass(frozen=True)
 class WorkerOptions:
-    """What every worker serves (as for :func:`egtviz.viewer.server.cli.start`)."""
+    """What every worker serves (as for :func:`egtviz.viewer.server.launch.start`)."""
 
     host: str = "127.0.0.1"
     scene: str | None = None
@@ -181,9 +189,10 @@ def worker_of_connection(server_port: int, client_port: int, pids: list[int]) ->
 # -- a worker ----------------------------------------------------------------------------------------------
 
 
-def start_worker(config: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
+def start_worker(config: JsonObject) -> tuple[viser.ViserServer, EgtvizApp, ClassroomHost | None,
+                                                    ClassroomBus | None]:
     """Start the server in this process as ``config`` says; returns ``(server, app, host, bus)``."""
-    from .cli import start, student_url
+    from .launch import start, student_url
 
     o = config["options"]
     channel = config.get("channel")
@@ -445,20 +454,11 @@ def _options_problem(options: WorkerOptions) -> str | None:
     return None
 
 
-def _is_wildcard(host: str) -> bool:
-    import ipaddress
-
-    try:
-        return ipaddress.ip_address(host.strip("[]")).is_unspecified
-    except ValueError:
-        return False
-
-
 def serve_workers(workers: int, port: int, options: WorkerOptions, *,
                   stop_event: threading.Event | None = None) -> int:
     """``egtviz serve --workers N``: start the workers, print the URLs, supervise until Ctrl-C (or
     ``stop_event``); returns the exit status (1: the port or a worker could not be started)."""
-    from .cli import reachable_urls, student_url, terminate_as_interrupt
+    from .launch import is_wildcard, reachable_urls, student_url, terminate_as_interrupt
 
     problem = _options_problem(options)
     if problem is not None:
@@ -475,7 +475,7 @@ def serve_workers(workers: int, port: int, options: WorkerOptions, *,
     stop = stop_event or threading.Event()
     try:
         terminate_as_interrupt()
-        if _is_wildcard(options.host):
+        if is_wildcard(options.host):
             print(f"egtviz: warning: --host {options.host} opens the app to the network: anyone who can reach this "
                   "machine can use it (each tab has its own scene; see docs/server.md)", file=sys.stderr, flush=True)
         print(f"egtviz running at {' '.join(reachable_urls(options.host, sup.port))} ({workers} worker{'' if workers == 1 else 's'})", flush=True)

@@ -16,9 +16,12 @@ import threading
 import time
 import weakref
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING
 
 from egtviz.scene.limits import SERVO_SERVER_FRAMES
+
+if TYPE_CHECKING:
+    import viser
 
 __all__ = ["QUEUE_SECONDS", "SERVER_BUDGET", "ServoBudget", "ServoBusy", "notify_busy"]
 
@@ -44,9 +47,9 @@ class ServoBudget:
         self.frames = int(frames)
         self.queue_seconds = float(queue_seconds)
         self._cond = threading.Condition()
-        self._held: weakref.WeakKeyDictionary[Any, int] = weakref.WeakKeyDictionary()
+        self._held: weakref.WeakKeyDictionary[object, int] = weakref.WeakKeyDictionary()
 
-    def _busy(self, owner: Any, frames: int) -> str | None:
+    def _busy(self, owner: object, frames: int) -> str | None:
         """Why ``frames`` more for ``owner`` do not fit now (None: they do). Call holding the condition."""
         others = [n for o, n in self._held.items() if o is not owner and n > 0]
         used = sum(others)
@@ -56,7 +59,7 @@ class ServoBudget:
         return (f"The server is busy with {runs} other servo run{'s' if runs != 1 else ''} ({used:,} of its "
                 f"{self.frames:,} frames); this run needs up to {frames:,}")
 
-    def reserve(self, owner: Any, frames: int, *, cancelled: Callable[[], bool] | None = None,
+    def reserve(self, owner: object, frames: int, *, cancelled: Callable[[], bool] | None = None,
                 waiting: Callable[[str], None] | None = None) -> None:
         """Hold ``frames`` for ``owner`` in place of what it held (its run is replaced), waiting up to
         :attr:`queue_seconds` for them.
@@ -86,20 +89,20 @@ class ServoBudget:
             told = True
             waiting(f"{reason}; it waits up to {self.queue_seconds:g} s for them.")
 
-    def shrink(self, owner: Any, frames: int) -> None:
+    def shrink(self, owner: object, frames: int) -> None:
         """Lower ``owner``'s hold to ``frames`` (never raises it)."""
         with self._cond:
             if owner in self._held:
                 self._held[owner] = min(self._held[owner], int(frames))
                 self._cond.notify_all()
 
-    def release(self, owner: Any) -> None:
+    def release(self, owner: object) -> None:
         """Free what ``owner`` holds (nothing if it holds nothing)."""
         with self._cond:
             self._held.pop(owner, None)
             self._cond.notify_all()
 
-    def held(self, owner: Any | None = None) -> int:
+    def held(self, owner: object | None = None) -> int:
         """Frames ``owner`` holds; None: all owners together."""
         with self._cond:
             if owner is None:
@@ -111,7 +114,7 @@ SERVER_BUDGET = ServoBudget()
 """The budget every demo of this process (the server's tabs) shares."""
 
 
-def notify_busy(client: Any, exc: ServoBusy) -> None:
+def notify_busy(client: viser.ClientHandle, exc: ServoBusy) -> None:
     """Tell ``client``'s tab its run was refused (a yellow notification); a tab already gone is left alone."""
     try:
         client.add_notification("Server busy", str(exc), color="yellow", auto_close_seconds=8.0)

@@ -11,14 +11,13 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 import viser
 
 from egtviz.servo import ServoResult
 
-from ..workbench.fields import FieldError
+from ..workbench.fields import FieldError, on_event
 
 __all__ = ["FPS", "ServoClock"]
 
@@ -55,21 +54,26 @@ class ServoClock:
 
     # -- GUI ----------------------------------------------------------------------------
 
-    def build(self, gui: Any, on: Callable[[Any, Any], None], add_speed_field: Callable[[], None]) -> None:
+    def build(self, gui: viser.GuiApi, report: Callable[[BaseException], None],
+              add_speed_field: Callable[[], None]) -> None:
         """Add the *Playback* folder: Play/Pause, step back/forward, the speed field (``add_speed_field``) and the
-        time slider; ``on(register, callback)`` attaches each callback."""
+        time slider; whatever a callback raises goes to ``report`` (``fields.on_event``)."""
         self.folder = gui.add_folder("Playback", expand_by_default=True)
         with self.folder:
             self.btn_play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
-            on(self.btn_play.on_click, lambda _: self.toggle_play())
+            on_event(self.btn_play.on_click, lambda _: self.toggle_play(), report)
             self.btn_step_back = gui.add_button("Step back", icon=viser.Icon.PLAYER_TRACK_PREV)
-            on(self.btn_step_back.on_click, lambda _: self.step(-1))
+            on_event(self.btn_step_back.on_click, lambda _: self.step(-1), report)
             self.btn_step = gui.add_button("Step", icon=viser.Icon.PLAYER_TRACK_NEXT)
-            on(self.btn_step.on_click, lambda _: self.step(1))
+            on_event(self.btn_step.on_click, lambda _: self.step(1), report)
             add_speed_field()
             self.slider = gui.add_slider("time (s)", min=0.0, max=1.0, step=0.05, initial_value=0.0,
                                          hint="Drag to any time of the run.")
-            on(self.slider.on_update, self._slider_event)
+            on_event(self.slider.on_update, self._slider_event, report)
+
+    def remove(self) -> None:
+        """Take the *Playback* folder out of the tab (the player closes)."""
+        self.folder.remove()
 
     def _set_slider(self, **values: float) -> None:
         """Write the slider's attributes without taking the write for the user's scrubbing."""
@@ -196,7 +200,7 @@ class ServoClock:
                     self.btn_play.icon = viser.Icon.PLAYER_PLAY
                     return
 
-    def _slider_event(self, event: Any) -> None:
+    def _slider_event(self, event: viser.GuiEvent[viser.GuiSliderHandle[float]]) -> None:
         with self.lock:
             r = self._run()
             if self._syncing or self._closed.is_set() or r is None:

@@ -10,10 +10,10 @@ read-out line under the playback controls. It formats and sends what the run's
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 import viser
+from viser import uplot
 
 from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames, trail_indices
@@ -67,11 +67,11 @@ class ServoPanel:
         self.error_series: Series = (("rotation", "#D55E00", "e"), ("translation", "#0072B2", "e"),
                                      (feature_error_label, "#CC79A7", "e"))
         self.panel_width = PRESENT_PANEL_WIDTH if present else PANEL_WIDTH
-        self.panel: Any = None
-        self.image_html: Any = None
-        self.plot_controls: Any = None
-        self.plot_errors: Any = None
-        self.readout: Any = None
+        self.panel: viser.PanelHandle | None = None
+        self.image_html: viser.GuiHtmlHandle | None = None
+        self.plot_controls: viser.GuiUplotHandle | None = None
+        self.plot_errors: viser.GuiUplotHandle | None = None
+        self.readout: viser.GuiHtmlHandle | None = None
         #: The SVG of the image panel as last drawn.
         self.svg = ""
         self.revision = 0
@@ -93,9 +93,13 @@ class ServoPanel:
         """Add the frame's read-out line (in the side panel, where it is built)."""
         self.readout = self.client.gui.add_html("")
 
-    def _uplot(self, title: str, series: Series, *, dual: bool, t_end: float = 1.0) -> Any:
-        from viser import uplot
+    def remove(self) -> None:
+        """Take the read-out and the right-hand panel out of the tab (the player closes)."""
+        for h in (self.readout, self.panel):
+            if h is not None:
+                h.remove()
 
+    def _uplot(self, title: str, series: Series, *, dual: bool, t_end: float = 1.0) -> viser.GuiUplotHandle:
         ser = [uplot.Series(label="t (s)")]
         for label, colour, scale in series:
             s = uplot.Series(label=label, stroke=colour, width=1.6, scale=scale)
@@ -132,13 +136,13 @@ class ServoPanel:
             self.plot_errors.series = tuple(ser)
         for plot in (self.plot_controls, self.plot_errors):
             if plot is not None:
-                scales = dict(plot.scales)
+                scales = dict(plot.scales or {})  # set when the plot was added
                 scales["x"] = {"time": False, "auto": False, "range": (0.0, t_end)}
                 if plot is self.plot_controls:
                     scales.update(self.control_scales(r.controls[self.control_key]))
                 plot.scales = scales
 
-    def control_scales(self, u: np.ndarray) -> dict[str, dict[str, Any]]:
+    def control_scales(self, u: np.ndarray) -> dict[str, uplot.Scale]:
         """Fixed ranges of the two y-axes of the controls plot over the whole run, with 0 at the same height on
         both (``shared_zero_ranges``), so that the curves of the two axes can be compared against zero."""
         spans = []
@@ -180,7 +184,7 @@ class ServoPanel:
 
     def draw_plots(self, k: int, r: ServoResult) -> None:
         """Both charts revealed up to frame ``k``."""
-        if self.plot_controls is None:
+        if self.plot_controls is None or self.plot_errors is None:
             return
         idx = trail_indices(k, PLOT_SAMPLES)
         t = r.time[idx]
@@ -197,6 +201,8 @@ class ServoPanel:
 
     def show_readout(self, k: int, r: ServoResult) -> None:
         """Frame ``k``'s number, time and errors in words."""
+        if self.readout is None:
+            return
         e = r.errors
         self.readout.content = (
             f'<div style="font-size:0.82em" data-egtviz="servo-readout">frame {k + 1} / {r.n_samples}, '

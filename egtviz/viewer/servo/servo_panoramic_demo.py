@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, ClassVar, cast
+from typing import ClassVar, cast
 
 import numpy as np
+import viser
 
 from egtviz.servo import ServoResult, simulate_panoramic
 from egtviz.servo.frames import ServoFrames, panoramic_frames
@@ -25,7 +26,9 @@ from egtviz.servo.panoramic_robot import (
     mirror_pose,
 )
 
+from .servo_nodes import ServoNodes
 from .servo_player import ServoPlayer
+from .servo_run_form import SimulationKwargs
 
 __all__ = ["MIRROR_DRAW_SCALE", "PanoramicServoDemo"]
 
@@ -57,11 +60,10 @@ class PanoramicServoDemo(ServoPlayer):
         self.width, self.height = self.camera.width, self.camera.height
         self.rim = self.camera.rim_image()
 
-    def _build_scene(self) -> None:
+    def _build_scene(self) -> ServoNodes:
         import trimesh
 
         api = self.client.scene
-        n = self.nodes
         api.add_grid("/servo/grid", width=14.0, height=14.0, cell_size=0.5, section_size=1.0)
         body = trimesh.creation.cylinder(radius=0.28, height=0.22, sections=40)
         body.apply_translation((0, 0, 0.16))
@@ -76,7 +78,7 @@ class PanoramicServoDemo(ServoPlayer):
         mv, mf = self.camera.mirror.surface(n_radial=12, n_angular=48)
         mv = mv * MIRROR_DRAW_SCALE + np.array([0.0, 0.0, CAMERA_HEIGHT])
 
-        def robot(root: str, colour, opacity):
+        def robot(root: str, colour: tuple[int, int, int], opacity: float | None) -> viser.FrameHandle:
             node = api.add_frame(root, show_axes=False)
             api.add_mesh_simple(f"{root}/body", body.vertices, body.faces, color=colour, opacity=opacity)
             api.add_mesh_simple(f"{root}/heading", heading.vertices, heading.faces, color=(213, 94, 0),
@@ -85,17 +87,19 @@ class PanoramicServoDemo(ServoPlayer):
             api.add_mesh_simple(f"{root}/mirror", mv, mf, color=(200, 215, 230), opacity=opacity, side="double")
             return node
 
-        n["target"] = robot("/servo/target", (0, 158, 115), 0.35)
+        robot("/servo/target", (0, 158, 115), 0.35)
         # At the goal the robot stands on the target: their labels grow away from each other, never overlap.
         api.add_label("/servo/target/label", "target", position=(0.0, 0.0, 0.75), font_screen_scale=0.9,
                       anchor="bottom-right")
-        n["body"] = robot("/servo/robot", (86, 110, 140), None)
+        moving = robot("/servo/robot", (86, 110, 140), None)
         api.add_label("/servo/robot/label", "robot", position=(0.0, 0.0, 0.75), font_screen_scale=0.9,
                       anchor="bottom-left")
-        self._add_common_nodes(point_size=0.09, label_lift=0.12, label_scale=0.8, path_width=0.025, ray_width=0.008)
+        nodes = self._add_common_nodes(moving, point_size=0.09, label_lift=0.12, label_scale=0.8, path_width=0.025,
+                                       ray_width=0.008)
         self._view(np.array([0.0, 0.0, 0.3]), np.array([2.0, -8.0, 6.0]))
+        return nodes
 
-    def _simulate_run(self, kw: dict[str, Any], progress: Callable[[int, int], None]) -> ServoResult:
+    def _simulate_run(self, kw: SimulationKwargs, progress: Callable[[int, int], None]) -> ServoResult:
         return simulate_panoramic(**kw, camera=self.camera, progress=progress)
 
     def _derive_frames(self, result: ServoResult, stop: Callable[[], bool]) -> ServoFrames | None:

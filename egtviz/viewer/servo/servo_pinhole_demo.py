@@ -28,10 +28,11 @@ from egtviz.servo.pinhole_arm import (
 )
 
 from ..workbench.fields import NumberRule
-from .servo_nodes import pose_node
+from .servo_nodes import ServoNodes, pose_node
 from .servo_player import RUN_RULES, Choice, ServoPlayer
+from .servo_run_form import RunValue, SimulationKwargs
 
-__all__ = ["ESTIMATOR_CHOICES", "PinholeServoDemo", "puma_meshes"]
+__all__ = ["ESTIMATOR_CHOICES", "PinholeServoDemo", "PumaNodes", "puma_meshes"]
 
 #: The F estimator field's options and the simulation's ``f_algorithm`` of each.
 ESTIMATOR_CHOICES = {"true": None, "linear": 1, "normalized": 2, "sampson": 3}
@@ -64,6 +65,41 @@ def puma_meshes() -> list[tuple[np.ndarray, np.ndarray]] | None:
         return out
     except Exception:  # noqa: BLE001 - no meshes: the stick figure is drawn instead
         return None
+
+
+class PumaNodes:
+    """The Puma 560 in 3D: its link meshes, or (without them) a stick figure of its link frames.
+
+    Args:
+        api: the tab's scene, to add the nodes under ``/servo/arm`` to.
+    """
+
+    def __init__(self, api: viser.SceneApi) -> None:
+        meshes = puma_meshes()
+        #: One mesh per link frame (base, links 1-6); empty if the meshes are missing.
+        self.links: list[viser.MeshHandle] = []
+        #: The stick figure's links and joints (``None`` when the meshes are drawn).
+        self.sticks: viser.LineSegmentsHandle | None = None
+        self.joints: viser.PointCloudHandle | None = None
+        if meshes is not None:
+            tone = [(95, 95, 105)] + [(170, 178, 190)] * 6
+            self.links = [api.add_mesh_simple(f"/servo/arm/link{j}", v, f, color=tone[j], flat_shading=False)
+                          for j, (v, f) in enumerate(meshes)]
+        else:
+            self.sticks = api.add_line_segments("/servo/arm/sticks", np.zeros((1, 2, 3), np.float32),
+                                                (150, 150, 160), thickness=0.035)
+            self.joints = api.add_point_cloud("/servo/arm/joints", np.zeros((1, 3), np.float32), (60, 60, 70),
+                                              point_size=0.06, point_shape="circle")
+
+    def pose(self, links: np.ndarray) -> None:
+        """Place the link meshes (or the stick figure) at the link frames (J + 1, 4, 4)."""
+        if self.links:
+            for h, T in zip(self.links, links):
+                pose_node(h, T)
+        elif self.sticks is not None and self.joints is not None:
+            P = links[:, :3, 3].astype(np.float32)
+            self.sticks.points = np.stack([P[:-1], P[1:]], axis=1)
+            self.joints.points = P
 
 
 class PinholeServoDemo(ServoPlayer):
@@ -102,36 +138,27 @@ class PinholeServoDemo(ServoPlayer):
         self.points = default_scene(self.target_pose)
         self.width, self.height = self.intrinsics.width, self.intrinsics.height
 
-    def _build_scene(self) -> None:
+    def _build_scene(self) -> ServoNodes:
         api = self.client.scene
-        n = self.nodes
         api.add_grid("/servo/grid", width=3.0, height=3.0, cell_size=0.1, section_size=0.5, position=(0.5, 0.0, 0.0))
-        meshes = puma_meshes()
-        if meshes is not None:
-            tone = [(95, 95, 105)] + [(170, 178, 190)] * 6
-            n["links"] = [api.add_mesh_simple(f"/servo/arm/link{j}", v, f, color=tone[j], flat_shading=False)
-                          for j, (v, f) in enumerate(meshes)]
-        else:
-            n["sticks"] = api.add_line_segments("/servo/arm/sticks", np.zeros((1, 2, 3), np.float32),
-                                                (150, 150, 160), thickness=0.035)
-            n["joints"] = api.add_point_cloud("/servo/arm/joints", np.zeros((1, 3), np.float32), (60, 60, 70),
-                                              point_size=0.06, point_shape="circle")
+        #: The arm's nodes.
+        self.arm = PumaNodes(api)
         fov, aspect = self.intrinsics.fov_y, self.intrinsics.aspect
-        n["target"] = api.add_camera_frustum("/servo/target", fov=fov, aspect=aspect, scale=0.07, color=(0, 158, 115),
-                                             thickness=0.004, wxyz=self.target_pose.quat_wxyz,
-                                             position=self.target_pose.t)
+        api.add_camera_frustum("/servo/target", fov=fov, aspect=aspect, scale=0.07, color=(0, 158, 115),
+                               thickness=0.004, wxyz=self.target_pose.quat_wxyz, position=self.target_pose.t)
         # At the goal the camera sits on the target: their labels grow away from each other, never overlap.
         api.add_label("/servo/target/label", "target", position=(0.0, -0.06, 0.0), font_screen_scale=0.9,
                       anchor="bottom-right")
-        n["body"] = api.add_camera_frustum("/servo/camera", fov=fov, aspect=aspect, scale=0.07, color=(20, 20, 20),
-                                           thickness=0.005)
+        camera = api.add_camera_frustum("/servo/camera", fov=fov, aspect=aspect, scale=0.07, color=(20, 20, 20),
+                                        thickness=0.005)
         api.add_label("/servo/camera/label", "camera", position=(0.0, -0.06, 0.0), font_screen_scale=0.9,
                       anchor="bottom-left")
-        self._add_common_nodes(point_size=0.022, label_lift=0.02, label_scale=0.7, path_width=0.004,
-                               ray_width=0.0025)
-        self._pose_arm(puma_chain().link_poses(TARGET_Q)[0])
+        nodes = self._add_common_nodes(camera, point_size=0.022, label_lift=0.02, label_scale=0.7, path_width=0.004,
+                                       ray_width=0.0025)
+        self.arm.pose(puma_chain().link_poses(TARGET_Q)[0])
         centre = 0.5 * (self.points.mean(axis=0) + self.target_pose.t)
         self._view(centre, centre + np.array([0.9, -1.6, 0.9]))
+        return nodes
 
     def _add_run_fields(self) -> None:
         self.form.add_number_field("beta", "beta",
@@ -139,10 +166,10 @@ class PinholeServoDemo(ServoPlayer):
         self.form.add_choice_field("estimator", "F estimator",
                                    "F from the true poses, or estimated from the noisy features at every step.")
 
-    def _simulation_kwargs(self, values: dict[str, Any]) -> dict[str, Any]:
-        return {"beta": float(values["beta"]), "f_algorithm": ESTIMATOR_CHOICES[values["estimator"]]}
+    def _simulation_kwargs(self, values: dict[str, RunValue]) -> SimulationKwargs:
+        return {"beta": float(values["beta"]), "f_algorithm": ESTIMATOR_CHOICES[str(values["estimator"])]}
 
-    def _simulate_run(self, kw: dict[str, Any], progress: Callable[[int, int], None]) -> ServoResult:
+    def _simulate_run(self, kw: SimulationKwargs, progress: Callable[[int, int], None]) -> ServoResult:
         return simulate_pinhole(**kw, progress=progress)
 
     def _derive_frames(self, result: ServoResult, stop: Callable[[], bool]) -> ServoFrames | None:
@@ -153,14 +180,4 @@ class PinholeServoDemo(ServoPlayer):
     def _draw_body(self, k: int) -> None:
         super()._draw_body(k)
         if self.frames is not None and self.frames.links is not None:
-            self._pose_arm(self.frames.links[k])
-
-    def _pose_arm(self, links: np.ndarray) -> None:
-        """Place the link meshes (or the stick figure) at the link frames (J + 1, 4, 4)."""
-        if "links" in self.nodes:
-            for h, T in zip(self.nodes["links"], links):
-                pose_node(h, T)
-        else:
-            P = links[:, :3, 3].astype(np.float32)
-            self.nodes["sticks"].points = np.stack([P[:-1], P[1:]], axis=1)
-            self.nodes["joints"].points = P
+            self.arm.pose(self.frames.links[k])

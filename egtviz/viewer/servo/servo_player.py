@@ -17,9 +17,11 @@ coordinator (the tab's lock, the run shown, the 3D nodes) over three parts, each
   :mod:`egtviz.viewer.render.servo_svg`) and two uPlot charts (controls; errors) revealed up to the current time, and the
   frame's read-out.
 
-The player draws the 3D nodes under ``/servo/...`` (the scene points with their numbers, the viewing rays and the
-path) from the run's :class:`~egtviz.servo.frames.ServoFrames`, and each frame everywhere inside
-``client.atomic()``. :meth:`ServoPlayer.close` stops both threads and removes the demo's nodes and GUI.
+The player draws the 3D nodes under ``/servo/...`` (:class:`~egtviz.viewer.servo.servo_nodes.ServoNodes`: the
+moving body, the scene points with their numbers, the viewing rays and the path) from the run's
+:class:`~egtviz.servo.frames.ServoFrames`, and each frame everywhere inside ``client.atomic()``. The GUI handles
+belong to the part that adds them (``form.fields``, ``form.status``, ``clock.slider``, ``display.plot_controls``,
+...). :meth:`ServoPlayer.close` stops both threads and removes the demo's nodes and GUI.
 
 A subclass sets the class attributes (``kind``, titles, plots, ``DEFAULT_STEPS``, ``RULES`` and ``CHOICES`` for its
 extra run parameters) and implements ``_setup_model``, ``_build_scene``, ``_add_run_fields``, ``_simulate_run``,
@@ -32,7 +34,7 @@ import math
 import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 import viser
@@ -46,9 +48,9 @@ from ..render.palette import PRESENT_GUI_CSS
 from ..render.panels import CONTROL_PX
 from .servo_budget import SERVER_BUDGET, ServoBudget
 from .servo_clock import FPS, ServoClock
-from .servo_nodes import add_common_nodes, draw_path_and_rays, look_from, pose_node
+from .servo_nodes import ServoNodes, add_common_nodes, look_from, pose_node
 from .servo_panel import PANEL_WIDTH, PRESENT_PANEL_WIDTH, ServoPanel
-from .servo_run_form import Choice, ServoRunForm
+from .servo_run_form import Choice, RunField, RunHooks, RunValue, ServoRunForm, SimulationKwargs
 
 __all__ = ["FIELD_DELAY", "FPS", "PANEL_WIDTH", "PRESENT_PANEL_WIDTH", "RUN_RULES", "SPEEDS", "Choice",
            "ServoPlayer"]
@@ -68,8 +70,8 @@ FIELD_DELAY = 0.6
 class ServoPlayer(ABC):
     """One servo demo in one browser tab: its scene, its controls and its playback (the shared part).
 
-    The GUI handles of its parts are attributes of the player too (``btn_play``, ``slider``, ``fields``,
-    ``status``, ``plot_controls``, ...): lessons and tests drive a demo through the player alone.
+    Lessons and tests drive a demo through the player's methods; its GUI handles are its parts'
+    (:attr:`form`, :attr:`clock`, :attr:`display`), the run fields also :attr:`fields`.
 
     Args:
         client: the viser client (tab) to draw in.
@@ -129,7 +131,7 @@ class ServoPlayer(ABC):
         field_delay: float = FIELD_DELAY,
         budget: ServoBudget | None = None,
         present: bool = False,
-        **params: Any,
+        **params: object,
     ) -> None:
         given = {"seed": seed, "noise_px": noise_px, "steps": self.DEFAULT_STEPS if steps is None else steps,
                  "speed": speed, **params}
@@ -142,36 +144,33 @@ class ServoPlayer(ABC):
         self._on_back = on_back
         #: The server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo.servo_budget`).
         self.budget = SERVER_BUDGET if budget is None else budget
-        self.form = ServoRunForm(
-            self, client=client, kind=self.kind, rules=self.RULES, choices=self.CHOICES, given=given,
-            field_delay=field_delay, budget=self.budget, lock=self.lock, closed=self._closed, report=self.report,
-            kwargs=self._simulation_kwargs, simulate=self._simulate_run, derive=self._derive_frames,
-            land=self._land, finished=self._finished, before_run=self.pause)
+        hooks = RunHooks(report=self.report, kwargs=self._simulation_kwargs, simulate=self._simulate_run,
+                         derive=self._derive_frames, land=self._land, finished=self._finished, before_run=self.pause)
+        #: The run fields, their values and the Run action (:mod:`egtviz.viewer.servo.servo_run_form`).
+        self.form = ServoRunForm(self, client=client, kind=self.kind, rules=self.RULES, choices=self.CHOICES,
+                                 given=given, field_delay=field_delay, budget=self.budget, lock=self.lock,
+                                 closed=self._closed, hooks=hooks)
+        #: The frame shown and the *Playback* folder (:mod:`egtviz.viewer.servo.servo_clock`).
         self.clock = ServoClock(lock=self.lock, closed=self._closed, run=lambda: self.result, show=self._show,
-                                speed=lambda: float(self.form.values["speed"].rstrip("x")),
+                                speed=lambda: float(str(self.form.values["speed"]).rstrip("x")),
                                 name=f"servo-play-{self.kind}")
-        #: The run fields by parameter name (numbers and drop-downs; speed is in the Playback folder).
-        self.fields: dict[str, Any] = self.form.fields
         #: The last finished run (``None`` before the first one or after a failed one).
         self.result: ServoResult | None = None
         #: Its per-frame geometry.
         self.frames: ServoFrames | None = None
-        #: 3D node handles by name.
-        self.nodes: dict[str, Any] = {}
         self.rim: np.ndarray | None = None
         self._setup_model()
+        #: The image plane, the charts and the read-out (:mod:`egtviz.viewer.servo.servo_panel`).
         self.display = ServoPanel(client, demo=self.kind, size=(self.width, self.height), n_points=len(self.points),
                                   rim=self.rim, present=self.present, control_title=self.CONTROL_TITLE,
                                   control_key=self.CONTROL_KEY, control_series=self.CONTROL_SERIES,
                                   dashed_rates=self.DASHED_RATES, feature_error_label=self.FEATURE_ERROR_LABEL)
-        self.panel_width = self.display.panel_width
         with self.lock, client.atomic():
-            self._build_scene()
+            #: The 3D nodes posed at every frame.
+            self.nodes: ServoNodes = self._build_scene()
             self._build_gui()
             if show_panel:
                 self.display.build()
-            self.panel, self.image_html = self.display.panel, self.display.image_html
-            self.plot_controls, self.plot_errors = self.display.plot_controls, self.display.plot_errors
             self.display.idle("press Run to simulate")
         if autorun:
             self.run()
@@ -184,9 +183,9 @@ class ServoPlayer(ABC):
         raise NotImplementedError
 
     @abstractmethod
-    def _build_scene(self) -> None:
-        """Add the demo's 3D nodes (with ``_add_common_nodes``); ``nodes["body"]`` is posed at
-        ``frames.body_poses[k]``."""
+    def _build_scene(self) -> ServoNodes:
+        """Add the demo's 3D nodes; the shared ones last, with ``_add_common_nodes`` (its ``body`` is posed at
+        ``frames.body_poses[k]``)."""
         raise NotImplementedError
 
     def _add_run_fields(self) -> None:
@@ -194,7 +193,7 @@ class ServoPlayer(ABC):
         ``form.add_choice_field``."""
 
     @abstractmethod
-    def _simulate_run(self, kw: dict[str, Any], progress: Callable[[int, int], None]) -> ServoResult:
+    def _simulate_run(self, kw: SimulationKwargs, progress: Callable[[int, int], None]) -> ServoResult:
         """Run the simulation with the keyword arguments of :meth:`params`."""
         raise NotImplementedError
 
@@ -203,7 +202,7 @@ class ServoPlayer(ABC):
         """The run's per-frame geometry (None if ``stop()`` became True)."""
         raise NotImplementedError
 
-    def _simulation_kwargs(self, values: dict[str, Any]) -> dict[str, Any]:
+    def _simulation_kwargs(self, values: dict[str, RunValue]) -> SimulationKwargs:
         """The demo's own simulation keywords from its run values (beside seed, noise and steps)."""
         return {}
 
@@ -215,22 +214,19 @@ class ServoPlayer(ABC):
     def _draw_body(self, k: int) -> None:
         """Pose the moving body at frame ``k`` (a demo with an arm also poses the arm)."""
         assert self.frames is not None
-        pose_node(self.nodes["body"], self.frames.body_poses[k])
+        pose_node(self.nodes.body, self.frames.body_poses[k])
 
     # -- shared 3D nodes -------------------------------------------------------------------
 
-    def _add_common_nodes(self, **sizes: float) -> None:
-        """The numbered scene points, the path and the viewing rays (``servo_nodes.add_common_nodes``)."""
-        self.nodes.update(add_common_nodes(self.client.scene, self.points, **sizes))
+    def _add_common_nodes(self, body: viser.SceneNodeHandle, **sizes: float) -> ServoNodes:
+        """The numbered scene points, the path and the viewing rays; with ``body``, the nodes posed at every frame
+        (``servo_nodes.add_common_nodes``)."""
+        return add_common_nodes(self.client.scene, self.points, body, **sizes)
 
     def _view(self, look_at: np.ndarray, position: np.ndarray) -> None:
         look_from(self.client, look_at, position)
 
     # -- GUI ----------------------------------------------------------------------------
-
-    def _on(self, register: Any, callback: Any) -> None:
-        """Attach ``callback`` to a handle's event: whatever it raises reaches this tab (``fields.on_event``)."""
-        on_event(register, callback, self.report)
 
     def _build_gui(self) -> None:
         gui = self.client.gui
@@ -246,19 +242,13 @@ class ServoPlayer(ABC):
         self.btn_back: viser.GuiButtonHandle | None
         if self._on_back is not None:
             self.btn_back = gui.add_button("Back to the epipolar workbench", icon=viser.Icon.ARROW_LEFT)
-            self._on(self.btn_back.on_click, lambda _: self._back())
+            on_event(self.btn_back.on_click, lambda _: self._back(), self.report)
         else:
             self.btn_back = None
         self.form.build(self._add_run_fields)
-        self.folder_run, self.btn_run, self.progress, self.status = (
-            self.form.folder, self.form.btn_run, self.form.progress, self.form.status)
-        self.clock.build(gui, self._on,
+        self.clock.build(gui, self.report,
                          lambda: self.form.add_choice_field("speed", "speed", "Simulated seconds per real second."))
-        self.folder_play, self.slider = self.clock.folder, self.clock.slider
-        self.btn_play, self.btn_step_back, self.btn_step = (
-            self.clock.btn_play, self.clock.btn_step_back, self.clock.btn_step)
         self.display.build_readout()
-        self.readout = self.display.readout
 
     def report(self, exc: BaseException) -> None:
         """Tell this tab what went wrong and show the last valid value in every run field."""
@@ -275,7 +265,7 @@ class ServoPlayer(ABC):
         """Call ``callback(result)`` after every finished run (lessons check their tasks here)."""
         self._listeners.append(callback)
 
-    def set_params(self, **params: Any) -> None:
+    def set_params(self, **params: object) -> None:
         """Set run parameters (and their fields): ``seed``, ``noise_px``, ``steps``, ``speed`` and the demo's own.
 
         Raises:
@@ -286,7 +276,7 @@ class ServoPlayer(ABC):
             self.form.set_params(**params)
             self.clock.sync()
 
-    def params(self) -> dict[str, Any]:
+    def params(self) -> SimulationKwargs:
         """The run parameters the next run uses (the keyword arguments of the simulation)."""
         return self.form.params()
 
@@ -343,10 +333,12 @@ class ServoPlayer(ABC):
         try:
             with self.client.atomic():
                 self.client.scene.remove_by_name("/servo")
-                for h in (self.title_md, self.btn_back, self.folder_run, self.status, self.folder_play,
-                          self.readout, self.panel):
-                    if h is not None:
-                        h.remove()
+                self.title_md.remove()
+                if self.btn_back is not None:
+                    self.btn_back.remove()
+                self.form.remove()
+                self.clock.remove()
+                self.display.remove()
         except Exception:  # noqa: BLE001 - the client may be gone already
             pass
 
@@ -355,6 +347,11 @@ class ServoPlayer(ABC):
     @property
     def closed(self) -> bool:
         return self._closed.is_set()
+
+    @property
+    def fields(self) -> dict[str, RunField]:
+        """The run fields by parameter name (numbers and drop-downs; speed is in the Playback folder)."""
+        return self.form.fields
 
     @property
     def n_frames(self) -> int:
@@ -441,7 +438,7 @@ class ServoPlayer(ABC):
         r, frames = self.result, self.frames
         if r is None or frames is None or self._closed.is_set():
             return
-        self.frame = k
+        self.clock.frame = k
         with self.client.atomic():
             self.display.draw_image(k, r, frames, self._caption(k))
             self._draw_3d(k)
@@ -452,4 +449,4 @@ class ServoPlayer(ABC):
     def _draw_3d(self, k: int) -> None:
         assert self.frames is not None
         self._draw_body(k)
-        draw_path_and_rays(self.nodes, self.frames, k, self.points)
+        self.nodes.draw_path_and_rays(self.frames, k, self.points)

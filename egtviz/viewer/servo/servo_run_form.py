@@ -9,14 +9,15 @@ shows the last valid one.
 *Run* simulates in a background thread. The run first reserves its frames from the server-wide budget
 (:mod:`egtviz.viewer.servo.servo_budget`): it may wait in the queue (the status says so) or be refused (a notification);
 when it ends, the form hands the result or the error to its player (``land``) under the lock and, once the lock is
-released, tells it a good run is there (``finished``). A run started after another replaces it: the stale thread's
-outcome is dropped.
+released, tells it a good run is there (``finished``). What the form asks of its player comes in one
+:class:`RunHooks`. A run started after another replaces it: the stale thread's outcome is dropped.
 """
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Callable
+from dataclasses import dataclass
 from html import escape
 from typing import Any
 
@@ -28,12 +29,19 @@ from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames
 
 from ..workbench.fields import Debouncer, FieldError, NumberRule, format_number, on_event, parse_numbers
+from ..workbench.gui_text import set_value
 from .servo_budget import ServoBudget, ServoBusy, notify_busy
 
-__all__ = ["Choice", "ServoRunForm", "status_html"]
+__all__ = ["Choice", "RunField", "RunHooks", "RunValue", "ServoRunForm", "SimulationKwargs", "status_html"]
 
 #: A choice field: its label in messages and its options.
 Choice = tuple[str, tuple[str, ...]]
+#: A run parameter's last valid value: a number (whole for an integer rule) or one of a choice's options.
+RunValue = int | float | str
+#: A run field's handle: a number's text field or a choice's drop-down.
+RunField = viser.GuiTextHandle | viser.GuiDropdownHandle[str]
+#: The keyword arguments of a demo's simulation function; its own signature types them (they differ per demo).
+SimulationKwargs = dict[str, Any]
 
 _STATUS_COLOURS = {"ok": "#1a7f37", "warn": "#b35900", "error": "#b00020", "running": "#555"}
 
@@ -42,6 +50,30 @@ def status_html(level: str, text: str) -> str:
     """The status line's HTML: ``text`` in the colour of ``level`` (``ok``, ``warn``, ``error``, ``running``)."""
     return (f'<div data-egtviz="servo-status" data-level="{level}" style="font-size:0.85em;'
             f'color:{_STATUS_COLOURS[level]};padding:2px 0"><b>{escape(text)}</b></div>')
+
+
+@dataclass(frozen=True)
+class RunHooks:
+    """What a run form asks of its player.
+
+    Attributes:
+        report: tell the tab what went wrong (and show the last valid values).
+        kwargs: the demo's own simulation keywords from the run values (beside seed, noise and steps).
+        simulate: run the simulation with the keywords of :meth:`ServoRunForm.params` and a ``progress(step, steps)``.
+        derive: the run's per-frame geometry (``None`` if ``stop()`` became True).
+        land: the run ended (called with the lock held, inside ``client.atomic()``): ``(result, frames, "")``, or
+            ``(None, None, error)`` for a run that raised.
+        finished: a good run was drawn (called without the lock; listeners, autoplay).
+        before_run: called with the lock held as a run starts (the player pauses its playback).
+    """
+
+    report: Callable[[BaseException], None]
+    kwargs: Callable[[dict[str, RunValue]], SimulationKwargs]
+    simulate: Callable[[SimulationKwargs, Callable[[int, int], None]], ServoResult]
+    derive: Callable[[ServoResult, Callable[[], bool]], ServoFrames | None]
+    land: Callable[[ServoResult | None, ServoFrames | None, str], None]
+    finished: Callable[[ServoResult], None]
+    before_run: Callable[[], None]
 
 
 class ServoRunForm:
@@ -58,35 +90,21 @@ class ServoRunForm:
         budget: the server's frame budget the runs reserve from.
         lock: the player's lock.
         closed: set once the player closed.
-        report: tell the tab what went wrong (and show the last valid values).
-        kwargs: the demo's own simulation keywords from the run values (beside seed, noise and steps).
-        simulate: run the simulation with the keywords of :meth:`params` and a ``progress(step, steps)``.
-        derive: the run's per-frame geometry (``None`` if ``stop()`` became True).
-        land: the run ended (called with the lock held, inside ``client.atomic()``): ``(result, frames, "")``, or
-            ``(None, None, error)`` for a run that raised.
-        finished: a good run was drawn (called without the lock; listeners, autoplay).
-        before_run: called with the lock held as a run starts (the player pauses its playback).
+        hooks: what the form asks of its player (:class:`RunHooks`).
 
     Raises:
         ValueError: a parameter in ``given`` that ``rules`` and ``choices`` do not have, or a value they refuse.
     """
 
-    def __init__(self, owner: Any, *, client: viser.ClientHandle, kind: str, rules: dict[str, NumberRule],
-                 choices: dict[str, Choice], given: dict[str, Any], field_delay: float, budget: ServoBudget,
-                 lock: threading.RLock, closed: threading.Event, report: Callable[[BaseException], None],
-                 kwargs: Callable[[dict[str, Any]], dict[str, Any]],
-                 simulate: Callable[[dict[str, Any], Callable[[int, int], None]], ServoResult],
-                 derive: Callable[[ServoResult, Callable[[], bool]], ServoFrames | None],
-                 land: Callable[[ServoResult | None, ServoFrames | None, str], None],
-                 finished: Callable[[ServoResult], None], before_run: Callable[[], None]) -> None:
+    def __init__(self, owner: object, *, client: viser.ClientHandle, kind: str, rules: dict[str, NumberRule],
+                 choices: dict[str, Choice], given: dict[str, object], field_delay: float, budget: ServoBudget,
+                 lock: threading.RLock, closed: threading.Event, hooks: RunHooks) -> None:
         self.kind, self.rules, self.choices = kind, rules, choices
         #: The last valid value of each run field (what Run uses), in the fields' units.
-        self.values: dict[str, Any] = {key: self.checked(key, value) for key, value in given.items()}
+        self.values: dict[str, RunValue] = {key: self.checked(key, value) for key, value in given.items()}
         self._typing = Debouncer(field_delay)
         self._owner, self.client, self.budget, self.lock, self._closed = owner, client, budget, lock, closed
-        self._report, self._kwargs = report, kwargs
-        self._simulate_run, self._derive, self._land, self._finished = simulate, derive, land, finished
-        self._before_run = before_run
+        self._hooks = hooks
         self._syncing = False
         self._gen = 0
         self._thread: threading.Thread | None = None
@@ -94,18 +112,18 @@ class ServoRunForm:
         #: The last error message of a run that raised (bad parameters), else "".
         self.error = ""
         #: The run fields by parameter name (numbers and drop-downs).
-        self.fields: dict[str, Any] = {}
+        self.fields: dict[str, RunField] = {}
 
     # -- GUI ----------------------------------------------------------------------------
 
     def add_number_field(self, key: str, label: str, hint: str) -> None:
-        handle = self.client.gui.add_text(label, format_number(self.values[key]), hint=hint)
-        on_event(handle.on_update, lambda e: self._text_event(key, e.target.value), self._report)
+        handle = self.client.gui.add_text(label, self._shown(key), hint=hint)
+        on_event(handle.on_update, lambda e: self._text_event(key, e.target.value), self._hooks.report)
         self.fields[key] = handle
 
     def add_choice_field(self, key: str, label: str, hint: str) -> None:
-        handle = self.client.gui.add_dropdown(label, self.choices[key][1], initial_value=self.values[key], hint=hint)
-        on_event(handle.on_update, lambda e: self._choice_event(key, e.target.value), self._report)
+        handle = self.client.gui.add_dropdown(label, self.choices[key][1], initial_value=self._shown(key), hint=hint)
+        on_event(handle.on_update, lambda e: self._choice_event(key, e.target.value), self._hooks.report)
         self.fields[key] = handle
 
     def build(self, add_demo_fields: Callable[[], None]) -> None:
@@ -120,9 +138,14 @@ class ServoRunForm:
                                   f"{SERVO_DEMO_STEPS.low:g} to {SERVO_DEMO_STEPS.high:g}; the run stops earlier "
                                   "once the features reach their goal.")
             self.btn_run = gui.add_button("Run", icon=viser.Icon.PLAYER_PLAY)
-            on_event(self.btn_run.on_click, lambda _: self.run(), self._report)
+            on_event(self.btn_run.on_click, lambda _: self.run(), self._hooks.report)
             self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
         self.status = gui.add_html("")
+
+    def remove(self) -> None:
+        """Take the *Run* folder and the status line out of the tab (the player closes)."""
+        self.folder.remove()
+        self.status.remove()
 
     def say(self, level: str, text: str) -> None:
         """Show ``text`` in the status line (see :func:`status_html`)."""
@@ -130,11 +153,11 @@ class ServoRunForm:
 
     # -- values -------------------------------------------------------------------------
 
-    def checked(self, key: str, value: Any) -> Any:
+    def checked(self, key: str, value: object) -> RunValue:
         """A run parameter given in code (a number or a field's text, or a choice), checked by its rule."""
         if key in self.choices:
             label, options = self.choices[key]
-            if value not in options:
+            if not isinstance(value, str) or value not in options:
                 shown = "".join(c if c.isprintable() else "?" for c in repr(value))[:40]
                 raise FieldError(f"{label}: expected one of {', '.join(options)}, got {shown}")
             return value
@@ -149,7 +172,7 @@ class ServoRunForm:
             number = rule.check(float(value))
         return int(number) if rule.integer else float(number)
 
-    def _text_event(self, key: str, text: Any) -> None:
+    def _text_event(self, key: str, text: str) -> None:
         """A run field changed: judge its text once the user stopped typing (latest text wins)."""
         if self._syncing or self._closed.is_set():
             return
@@ -162,28 +185,31 @@ class ServoRunForm:
                     (value,) = parse_numbers(text, (self.rules[key],))
                     self.values[key] = int(value) if self.rules[key].integer else value
             except Exception as exc:  # noqa: BLE001 - from a timer thread: no callback wrapper above us
-                self._report(exc)
+                self._hooks.report(exc)
 
         self._typing.submit(key, judge)
 
-    def _choice_event(self, key: str, value: Any) -> None:
+    def _choice_event(self, key: str, value: str) -> None:
         with self.lock:
             if self._syncing or self._closed.is_set():
                 return
             self.values[key] = self.checked(key, value)  # a raw client can send any string
+
+    def _shown(self, key: str) -> str:
+        """The last valid value of ``key`` as its field shows it."""
+        value = self.values[key]
+        return value if isinstance(value, str) else format_number(value)
 
     def sync(self) -> None:
         """Write the last valid run parameters into the fields (not user edits)."""
         self._syncing = True
         try:
             for key, handle in self.fields.items():
-                shown = format_number(self.values[key]) if key in self.rules else self.values[key]
-                if handle.value != shown:
-                    handle.value = shown
+                set_value(handle, self._shown(key))
         finally:
             self._syncing = False
 
-    def set_params(self, **params: Any) -> None:
+    def set_params(self, **params: object) -> None:
         """Check every value first, then take them all (nothing changes if one is refused)."""
         new = dict(self.values)
         for key, value in params.items():
@@ -192,11 +218,11 @@ class ServoRunForm:
             self.values = new
             self.sync()
 
-    def params(self) -> dict[str, Any]:
+    def params(self) -> SimulationKwargs:
         """The run parameters the next run uses (the keyword arguments of the simulation)."""
         v = self.values
         return {"seed": int(v["seed"]), "noise_px": float(v["noise_px"]), "steps": int(v["steps"]),
-                **self._kwargs(v)}
+                **self._hooks.kwargs(v)}
 
     # -- the run ------------------------------------------------------------------------
 
@@ -206,7 +232,7 @@ class ServoRunForm:
         with self.lock:
             if self._closed.is_set() or self.running:
                 return False
-            self._before_run()
+            self._hooks.before_run()
             self.running = True
             self._gen += 1
             gen = self._gen
@@ -237,7 +263,7 @@ class ServoRunForm:
             self._gen += 1
         return self._thread
 
-    def _simulate(self, gen: int, kw: dict[str, Any]) -> None:
+    def _simulate(self, gen: int, kw: SimulationKwargs) -> None:
         stale = lambda: self._closed.is_set() or gen != self._gen
 
         def progress(step: int, steps: int) -> None:
@@ -261,29 +287,29 @@ class ServoRunForm:
             with self.client.atomic():
                 self.btn_run.disabled = False
                 self.progress.visible = False
-                if error:
+                if result is None:
                     self.budget.release(self._owner)
                     self.error = error
                     self.say("error", error)
-                    self._land(None, None, error)
+                    self._hooks.land(None, None, error)
                 else:
                     self.error = ""
                     self.budget.shrink(self._owner, result.n_samples)
-                    self._land(result, frames, "")
-            if error:
+                    self._hooks.land(result, frames, "")
+            if result is None:
                 try:
                     self.client.add_notification("Servo run failed", error, color="red", auto_close_seconds=8.0)
                 except Exception:  # noqa: BLE001 - the client may be gone
                     pass
                 return
-        self._finished(result)
+        self._hooks.finished(result)
 
-    def _compute(self, kw: dict[str, Any], progress: Callable[[int, int], None], stale: Callable[[], bool]
-                 ) -> tuple[Any, Any, str]:
+    def _compute(self, kw: SimulationKwargs, progress: Callable[[int, int], None], stale: Callable[[], bool]
+                 ) -> tuple[ServoResult | None, ServoFrames | None, str]:
         """``(result, frames, "")`` of the run, or ``(None, None, message)`` if it raised (said in words)."""
         try:
-            result = self._simulate_run(kw, progress)
-            return result, self._derive(result, stale), ""
+            result = self._hooks.simulate(kw, progress)
+            return result, self._hooks.derive(result, stale), ""
         except (ValueError, TypeError) as exc:
             return None, None, f"Bad parameters: {exc}"
         except Exception as exc:  # noqa: BLE001 - shown in the UI, never a traceback

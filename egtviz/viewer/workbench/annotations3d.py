@@ -20,11 +20,17 @@ Scene tree::
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ..render.palette import hex_to_rgb
+
+if TYPE_CHECKING:
+    import viser
+
+    from ...scene.annotations import Annotations
 
 __all__ = ["Annotations3D"]
 
@@ -34,7 +40,7 @@ FRAME_PX = 3.0
 MIRROR_RGB = (150, 190, 230)
 
 
-def _segments(polyline_points: Any) -> np.ndarray:
+def _segments(polyline_points: npt.ArrayLike) -> np.ndarray:
     P = np.asarray(polyline_points, np.float32)
     return np.stack([P[:-1], P[1:]], axis=1)
 
@@ -42,10 +48,10 @@ def _segments(polyline_points: Any) -> np.ndarray:
 class Annotations3D:
     """Owns one client's annotation nodes; :meth:`draw` shows a scene's :class:`Annotations`."""
 
-    def __init__(self, api: Any) -> None:
+    def __init__(self, api: viser.SceneApi) -> None:
         self.api = api
-        self._drawn: Any = None
-        self._nodes: list[Any] = []
+        self._drawn: tuple[Annotations | None, bool] | None = None
+        self._nodes: list[viser.SceneNodeHandle] = []
         #: Nodes drawn per kind (``frames``, ``frame_labels``, ``segments``, ``labels``, ``point_sets``, ``meshes``,
         #: ``mirrors``): what the tests count.
         self.counts: dict[str, int] = {}
@@ -57,7 +63,7 @@ class Annotations3D:
         self.counts = {}
         self._drawn = None
 
-    def draw(self, annotations: Any, *, show_labels: bool = True) -> None:
+    def draw(self, annotations: Annotations | None, *, show_labels: bool = True) -> None:
         """Bring the nodes up to date with ``annotations`` (nothing happens if they did not change)."""
         key = (annotations, show_labels)
         if self._drawn is not None and (self._drawn[0] is annotations or self._drawn == key):

@@ -37,9 +37,9 @@ import gc
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import viser
 
@@ -54,7 +54,7 @@ from ...scene.extent import scene_extent
 from .camera_settings import CameraSettings
 from .drag_input import DragInput
 from .fields import Debouncer, describe_error, notify_error, on_event
-from .lesson_policy import ALLOW_ALL, LessonPolicy
+from .lesson_policy import ALLOW_ALL, LessonPolicy, PanelFilter
 from .panel_dock import PRESENT_LABEL_SCALE, PanelDock, plot_key
 from ..render.panels import DEFAULT_WINDOW, PanelGrid, WindowSize, framed_camera, plan_grid
 from .readout import PairReadout, pair_html
@@ -66,7 +66,12 @@ from .workbench_controls import WorkbenchControls
 from ..server.viser_adapter import assign_text
 
 if TYPE_CHECKING:
+    from ...lessons import ProgressStore
     from ...scene.derived import Derived
+    from ...scene.model import Change
+    from ..course.start_page import Course
+    from ..render.png_worker import PngDownloads
+    from ..servo.servo_player import ServoPlayer
 
 __all__ = ["EgtvizApp", "ClientView", "PRESENT_LABEL_SCALE", "UpdateTiming", "pair_html"]
 
@@ -74,6 +79,18 @@ __all__ = ["EgtvizApp", "ClientView", "PRESENT_LABEL_SCALE", "UpdateTiming", "pa
 REFRAME_CHANGES = frozenset({"add_camera", "load"})
 #: Seconds a text field must stay unchanged before its value is judged (see :class:`Debouncer`).
 FIELD_DELAY = 0.6
+
+#: The event a viser handle passes its callbacks.
+E = TypeVar("E")
+#: What a text field sent.
+T = TypeVar("T")
+
+
+class OpenDemo(Protocol):
+    """``open_demo(kind, **run_fields)``: the tab replaced by a visual-servoing demo."""
+
+    def __call__(self, kind: str, /, **options: object) -> object:
+        ...
 
 
 @dataclass(frozen=True)
@@ -122,7 +139,7 @@ class ClientView:
         window: the tab's window and device pixel ratio as a previous workbench measured them (None: ask the tab).
     """
 
-    def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: Any = None,
+    def __init__(self, client: viser.ClientHandle, model: SceneModel, *, open_demo: OpenDemo | None = None,
                  field_delay: float = FIELD_DELAY, present: bool = False,
                  window: tuple[WindowSize, float] | None = None) -> None:
         self.client = client
@@ -190,22 +207,22 @@ class ClientView:
         return self.dock.grid
 
     @property
-    def panel_buttons(self) -> dict[str, dict[str, Any]]:
+    def panel_buttons(self) -> dict[str, dict[str, viser.GuiButtonGroupHandle]]:
         """Each camera's panel buttons (button groups by label)."""
         return self.dock.buttons
 
     @property
-    def present_checkbox(self) -> Any:
+    def present_checkbox(self) -> viser.GuiCheckboxHandle:
         """The "presentation mode" checkbox."""
         return self.dock.present_checkbox
 
     @property
-    def png(self) -> Any:
+    def png(self) -> PngDownloads:
         """The panels' PNG downloads (:class:`~egtviz.viewer.render.png_worker.PngDownloads`)."""
         return self.dock.png
 
     @png.setter
-    def png(self, downloads: Any) -> None:
+    def png(self, downloads: PngDownloads) -> None:
         self.dock.png = downloads
 
     @property
@@ -214,13 +231,13 @@ class ClientView:
         return self.pair_readout.text
 
     @property
-    def panel_filter(self) -> Any:
+    def panel_filter(self) -> PanelFilter | None:
         """The lesson policy's panel filter (None: the panels draw the model's geometry)."""
         return self.policy.panel_filter
 
     # -- user events ----------------------------------------------------------------
 
-    def _on(self, register: Any, callback: Any) -> None:
+    def _on(self, register: Callable[[Callable[[E], None]], object], callback: Callable[[E], object]) -> None:
         """Attach ``callback`` to a handle's event (``handle.on_update`` ...): errors reach this tab."""
         on_event(register, callback, self.report)
 
@@ -228,7 +245,7 @@ class ClientView:
         """Mark the start of a user event (wall ``t0``, thread CPU ``c0``); its update's timing counts from it."""
         self._event_start = (t0, c0)
 
-    def user_event(self, action: Any) -> None:
+    def user_event(self, action: Callable[[], object]) -> None:
         """Run a user's action under the lock (ignored while fields are written back or after the tab left).
 
         Errors propagate to :meth:`report` through the callback wrapper.
@@ -240,7 +257,7 @@ class ClientView:
             self.event_started(t0, c0)
             action()
 
-    def text_event(self, key: Any, apply: Any, text: Any = None) -> None:
+    def text_event(self, key: Hashable, apply: Callable[[T], object], text: T) -> None:
         """A text field changed: judge its text once the user stopped typing (latest text wins)."""
         with self.lock:
             if self.closed or self._syncing:
@@ -276,14 +293,14 @@ class ClientView:
             except Exception:  # noqa: BLE001 - a half-built tab: draw it all again, or show why not
                 self._render(scene, None, force_fields=True)
 
-    def _on_canvas(self, camera: Any) -> None:
+    def _on_canvas(self, camera: viser.CameraHandle) -> None:
         with self.lock:
             if not self.closed:
                 self.dock.on_canvas(camera)
 
     # -- rendering ----------------------------------------------------------------
 
-    def _on_change(self, scene: Scene, change: Any) -> None:
+    def _on_change(self, scene: Scene, change: Change) -> None:
         with self.lock:
             if self.closed:
                 return
@@ -303,7 +320,7 @@ class ClientView:
         """Draw the model's scene again; the caller holds the lock (a part's action: a view button, a layout)."""
         self._render(self.model.scene, None)
 
-    def _render(self, scene: Scene, change: Any, *, force_fields: bool = False) -> None:
+    def _render(self, scene: Scene, change: Change | None, *, force_fields: bool = False) -> None:
         """Draw ``scene`` (the model's current one) with the model's derived quantities, in one atomic update."""
         t0, c0 = time.perf_counter(), time.thread_time()
         try:
@@ -371,7 +388,7 @@ class ClientView:
             parts["event"] = cpu[-1] - start[1] if start is not None else 0.0
             self.on_update_timed(UpdateTiming(self.revision, dict(self.breakdown), parts))
 
-    def _filtered(self, scene: Scene, derived: Derived) -> tuple[Any, frozenset[int]]:
+    def _filtered(self, scene: Scene, derived: Derived) -> tuple[Derived, frozenset[int]]:
         """What the panels draw: ``derived``, or what the lesson policy makes of it (its failure is reported)."""
         try:
             return self.policy.panels(scene, derived)
@@ -463,7 +480,7 @@ class EgtvizApp:
 
     def __init__(self, server: viser.ViserServer, scene: Scene | None = None, *, demo: str | None = None,
                  field_delay: float = FIELD_DELAY, present: bool = False, course: bool = False,
-                 lesson: str | None = None, progress: Any = None) -> None:
+                 lesson: str | None = None, progress: ProgressStore | None = None) -> None:
         if demo not in (None, "pinhole", "panoramic"):
             raise ValueError(f"demo: expected None, 'pinhole' or 'panoramic', got {demo!r}")
         Debouncer(field_delay)  # checks the value now rather than in every tab
@@ -476,16 +493,18 @@ class EgtvizApp:
         self.present = bool(present)
         self.views: dict[int, ClientView] = {}
         #: The servo demo shown in a tab (``egtviz.viewer.servo.servo_demo.ServoDemo``), by client id.
-        self.demos: dict[int, Any] = {}
+        self.demos: dict[int, ServoPlayer] = {}
         self._models: dict[int, SceneModel] = {}
         #: Each tab's window as its last workbench estimated it (a servo demo narrows the canvas it reports).
         self._windows: dict[int, tuple[WindowSize, float]] = {}
         self._lock = threading.Lock()
         self._gone: set[int] = set()
         #: The course (start page, lessons) that new tabs open in; None: the workbench or ``demo``.
-        self.course: Any = None
+        self.course: Course | None = None
         #: A class being taught (:class:`egtviz.viewer.classroom.ClassroomHost`): it is asked first what a new tab
         #: shows, told when a tab leaves or is cleared; None: no class.
+        # Untyped, not a protocol: the server's command line hands it on as a ClassroomHost, and naming that class here
+        # would close a circle of imports (the host names this module).
         self.classroom: Any = None
         if course or lesson is not None:
             from ..course.start_page import Course
@@ -555,7 +574,9 @@ class EgtvizApp:
         If that fails (a scene that cannot be drawn), the tab is cleared and
         gets the default scene, with a notification giving the reason.
         """
-        open_demo = lambda kind, c=client, **options: self.open_demo(c, kind, **options)  # noqa: E731
+        def open_demo(kind: str, /, **options: object) -> ServoPlayer | None:
+            return self.open_demo(client, kind, **options)
+
         window = self._windows.get(client.client_id)
         try:
             view = ClientView(client, model or SceneModel(self.initial_scene), open_demo=open_demo,
@@ -595,7 +616,7 @@ class EgtvizApp:
 
     # -- visual-servoing demos (egtviz.viewer.servo.servo_demo) ---------------------------------
 
-    def open_demo(self, client: viser.ClientHandle, kind: str, **options: Any) -> Any:
+    def open_demo(self, client: viser.ClientHandle, kind: str, **options: object) -> ServoPlayer | None:
         """Replace the tab's workbench by a servo demo (its scene is kept for the way back); ``options``: the
         demo's run fields (``seed``, ``beta``, ...: ``make_servo_demo``)."""
         from ..servo.servo_demo import make_servo_demo
@@ -698,7 +719,7 @@ class EgtvizApp:
             time.sleep(0.02)
         raise TimeoutError(f"fewer than {count} viewer tabs connected after {timeout} s")
 
-    def wait_for_demo(self, timeout: float = 10.0, count: int = 1) -> list[Any]:
+    def wait_for_demo(self, timeout: float = 10.0, count: int = 1) -> list[ServoPlayer]:
         """Block until at least ``count`` tabs show a servo demo (tests)."""
         deadline = time.time() + timeout
         while time.time() < deadline:

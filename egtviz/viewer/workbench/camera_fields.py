@@ -9,8 +9,7 @@ what the model accepts.
 
 from __future__ import annotations
 
-from typing import Any
-
+from ...scene import CameraSpec
 from ...scene.camera_entry import AXES, CameraField
 from ...scene.cameras import camera_entry
 from .fields import NumberRule
@@ -34,7 +33,7 @@ _POSE = {"position": CameraField("position", "position", "m", ("position",)),
          "ypr_deg": CameraField("ypr", "angle", "deg", ("ypr_deg",))}
 
 
-def field_of_spec(spec: Any, field: str) -> CameraField:
+def field_of_spec(spec: CameraSpec, field: str) -> CameraField:
     """How the GUI shows a camera spec's field ``field`` (e.g. ``focal_length``: focal length in mm), so a message
     about a stored value can use the words and unit of the field the user types in.
 

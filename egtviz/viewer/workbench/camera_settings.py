@@ -7,11 +7,11 @@ Every field is judged on the server in the field's own units (:mod:`egtviz.viewe
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, TypeAlias
 
-from ...scene import SceneError, limits
+from ...scene import CameraSpec, SceneError, limits
 from ...scene.cameras import camera_entry, model_choices
 from ...scene.specs import OutOfRangeError
 from .camera_fields import CameraField, camera_fields, field_rules as _field_rules
@@ -20,7 +20,12 @@ from .models import SHORT_LABELS
 from .gui_text import plain, set_value
 
 if TYPE_CHECKING:
+    import viser
+
     from .tab_context import TabContext
+
+    #: A camera folder's field: a text field (the pose, a model parameter), a model choice or a slider.
+    FieldHandle: TypeAlias = viser.GuiTextHandle | viser.GuiDropdownHandle[str] | viser.GuiSliderHandle[float]
 
 __all__ = ["FIELD_RULES", "CameraSettings", "field_rules", "spec_values"]
 
@@ -61,7 +66,7 @@ def _model_fields(model_kind: str) -> dict[str, CameraField]:
     return {f.key: f for f in camera_fields(model_kind)}
 
 
-def spec_values(spec: Any) -> dict[str, tuple[float, ...]]:
+def spec_values(spec: CameraSpec) -> dict[str, tuple[float, ...]]:
     """A camera spec's values as its fields show them (model parameters -> the fields' units)."""
     values: dict[str, tuple[float, ...]] = {"position": tuple(spec.position), "ypr": tuple(spec.ypr_deg)}
     params = spec.model_values()
@@ -70,7 +75,7 @@ def spec_values(spec: Any) -> dict[str, tuple[float, ...]]:
     return values
 
 
-def field_rules(spec: Any, key: str) -> tuple[NumberRule, ...]:
+def field_rules(spec: CameraSpec, key: str) -> tuple[NumberRule, ...]:
     """What field ``key`` of this camera accepts (its parameters' ranges in the field's units)."""
     if key in FIELD_RULES:
         return FIELD_RULES[key]
@@ -80,7 +85,7 @@ def field_rules(spec: Any, key: str) -> tuple[NumberRule, ...]:
     return _field_rules(fields[key], spec.model_kind)
 
 
-def _spec_fields(spec: Any, key: str, v: tuple[float, ...]) -> dict[str, Any]:
+def _spec_fields(spec: CameraSpec, key: str, v: tuple[float, ...]) -> dict[str, object]:
     """Parsed field values as spec fields (the fields' units -> model parameters -> spec fields)."""
     if key == "position":
         return {"position": v}
@@ -102,65 +107,78 @@ class CameraSettings:
         expand: whether the folder starts open.
     """
 
-    def __init__(self, tab: TabContext, spec: Any, parent: Any, *, expand: bool) -> None:
+    def __init__(self, tab: TabContext, spec: CameraSpec, parent: viser.GuiFolderHandle, *, expand: bool) -> None:
         self.tab = tab
         self.name = spec.name
         gui = tab.client.gui
         with parent:
             self.folder = gui.add_folder(f"{spec.name} ({SHORT_LABELS[spec.model_kind]})", expand_by_default=expand)
+        # The same fields by kind, typed for their write-back: text fields, model choices, sliders.
+        self._texts: dict[str, viser.GuiTextHandle] = {}
+        self._choices: dict[str, viser.GuiDropdownHandle[str]] = {}
+        self._sliders: dict[str, viser.GuiSliderHandle[float]] = {}
         #: The folder's GUI fields by key (``position``, ``ypr``, a model choice, a model parameter).
         self.fields = self._build(spec)
-        self._synced: Any = None
-        self._attach(spec)
+        self._synced: CameraSpec | None = None
+        self._attach()
 
-    def _build(self, spec: Any) -> dict[str, Any]:
+    def _build(self, spec: CameraSpec) -> dict[str, FieldHandle]:
         """The pose fields, the model choices and one field per model parameter (or pair), units in the labels."""
         gui = self.tab.client.gui
         values = spec_values(spec)
         fields = _model_fields(spec.model_kind)
-        f: dict[str, Any] = {}
+        f: dict[str, FieldHandle] = {}
+        texts, choices, sliders = self._texts, self._choices, self._sliders
         with self.folder:
-            f["position"] = gui.add_text("position x, y, z (m)", format_numbers(values["position"]),
-                                         hint="Camera centre (single viewpoint) in world coordinates: x, y, z.")
+            f["position"] = texts["position"] = gui.add_text(
+                "position x, y, z (m)", format_numbers(values["position"]),
+                hint="Camera centre (single viewpoint) in world coordinates: x, y, z.")
             hint = spec.ANGLE_CONVENTION
-            f["ypr"] = gui.add_text("yaw, pitch, roll (deg)", format_numbers(values["ypr"]), hint=hint)
+            f["ypr"] = texts["ypr"] = gui.add_text("yaw, pitch, roll (deg)", format_numbers(values["ypr"]), hint=hint)
             gui.add_markdown(f"<small>{hint}</small>")
             for key, options in model_choices(type(spec)).items():
-                f[key] = gui.add_dropdown(key, options, initial_value=getattr(spec, key))
+                f[key] = choices[key] = gui.add_dropdown(key, options, initial_value=getattr(spec, key))
             for key, field in fields.items():
                 if field.slider:
                     (p,) = _field_rules(field, spec.model_kind)
-                    f[key] = gui.add_slider(field.title, min=p.lo, max=p.hi, step=0.01, initial_value=values[key][0],
-                                            hint=field.hint or None)
+                    if p.lo is None or p.hi is None:  # viser compares a slider's bounds: neither may be open
+                        raise TypeError(f"{spec.name}: the slider {field.title!r} needs both bounds")
+                    f[key] = sliders[key] = gui.add_slider(field.title, min=p.lo, max=p.hi, step=0.01,
+                                                           initial_value=values[key][0], hint=field.hint or None)
                 else:
-                    f[key] = gui.add_text(field.title, format_numbers(values[key]), hint=field.hint or None)
+                    f[key] = texts[key] = gui.add_text(field.title, format_numbers(values[key]),
+                                                       hint=field.hint or None)
             remove = gui.add_button(f"Remove {spec.name}", color="red")
         tab, name = self.tab, self.name
         tab.on(remove.on_click, lambda _: tab.user_event(lambda: tab.model.remove_camera(name)))
         return f
 
-    def _attach(self, spec: Any) -> None:
+    def _attach(self) -> None:
         tab = self.tab
-        choices = model_choices(type(spec))
-        fields = _model_fields(spec.model_kind)
-        for key, handle in self.fields.items():
-            if key in choices:
-                tab.on(handle.on_update,
-                       lambda e, k=key: tab.user_event(lambda: self.set_choice(k, e.target.value)))
-            elif key in fields and fields[key].slider:
-                # A slider acts at once (the image morphs as it moves); one slide is one undo step.
-                tab.on(handle.on_update,
-                       lambda e, k=key: tab.user_event(lambda: self.apply_slider(k, e.target.value)))
-            else:
-                tab.on(handle.on_update, lambda e, k=key: tab.text_event(
-                    (self.name, k), lambda text, k=k: self.apply_field(k, text), e.target.value))
+        for key in self.fields:
+            if key in self._choices:
+                def chosen(e: viser.GuiEvent[viser.GuiDropdownHandle[str]], k: str = key) -> None:
+                    tab.user_event(lambda: self.set_choice(k, e.target.value))
 
-    def _spec(self) -> Any:
+                tab.on(self._choices[key].on_update, chosen)
+            elif key in self._sliders:
+                # A slider acts at once (the image morphs as it moves); one slide is one undo step.
+                def slid(e: viser.GuiEvent[viser.GuiSliderHandle[float]], k: str = key) -> None:
+                    tab.user_event(lambda: self.apply_slider(k, e.target.value))
+
+                tab.on(self._sliders[key].on_update, slid)
+            else:
+                def typed(e: viser.GuiEvent[viser.GuiTextHandle], k: str = key) -> None:
+                    tab.text_event((self.name, k), lambda text: self.apply_field(k, text), e.target.value)
+
+                tab.on(self._texts[key].on_update, typed)
+
+    def _spec(self) -> CameraSpec | None:
         """The camera's current spec, or None once it was removed (the user may still be typing)."""
         scene = self.tab.model.scene
         return scene.camera(self.name) if self.name in scene.camera_names else None
 
-    def apply_field(self, key: str, text: Any) -> None:
+    def apply_field(self, key: str, text: object) -> None:
         """Judge a text field's text and commit it (a number left as shown keeps the model's full precision)."""
         spec = self._spec()
         if spec is None:
@@ -174,7 +192,7 @@ class CameraSettings:
             return  # nothing edited (e.g. our own write-back, or the same text again)
         self._update(spec, _spec_fields(spec, key, values))
 
-    def apply_slider(self, key: str, value: Any) -> None:
+    def apply_slider(self, key: str, value: object) -> None:
         """Commit a slider's value (one slide merges into one undo step)."""
         spec = self._spec()
         if spec is None:
@@ -187,7 +205,7 @@ class CameraSettings:
             return
         self._update(spec, _spec_fields(spec, key, x), merge_key=("slider", self.name, key))
 
-    def _update(self, spec: Any, fields: dict[str, Any], merge_key: Any = None) -> None:
+    def _update(self, spec: CameraSpec, fields: dict[str, object], merge_key: Hashable = None) -> None:
         name = spec.name
         if all(getattr(spec, k) == v for k, v in fields.items()):
             return
@@ -203,7 +221,7 @@ class CameraSettings:
                 raise
             raise SceneError(f"{name}: {exc}") from exc
 
-    def set_choice(self, key: str, value: Any) -> None:
+    def set_choice(self, key: str, value: object) -> None:
         """Switch the camera among the models its spec builds (a mirror's shape); the spec adapts its parameters."""
         spec = self._spec()
         if spec is None:
@@ -214,17 +232,18 @@ class CameraSettings:
         if getattr(spec, key) != value:
             self.tab.model.update_camera(self.name, **{key: value})
 
-    def sync(self, spec: Any, *, force: bool) -> None:
+    def sync(self, spec: CameraSpec, *, force: bool) -> None:
         """Write ``spec``'s values into the fields (``force=False``: skipped when ``spec`` is the one last written)."""
         if not force and self._synced is spec:
             return
         self._synced = spec
-        sliders = {k for k, fld in _model_fields(spec.model_kind).items() if fld.slider}
-        f = self.fields
         for key, values in spec_values(spec).items():
-            set_value(f[key], values[0] if key in sliders else format_numbers(values))
+            if key in self._sliders:
+                set_value(self._sliders[key], values[0])
+            else:
+                set_value(self._texts[key], format_numbers(values))
         for key in model_choices(type(spec)):
-            set_value(f[key], getattr(spec, key))
+            set_value(self._choices[key], getattr(spec, key))
 
     def remove(self) -> None:
         """Take the folder off the page."""

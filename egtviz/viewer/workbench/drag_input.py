@@ -9,7 +9,7 @@ where the camera goes, once (:mod:`egtviz.scene.constraints`).
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +18,8 @@ from ...geometry.poses import Pose, matrix_from_quat_wxyz
 from ...scene import SceneError
 
 if TYPE_CHECKING:
+    import viser
+
     from .tab_context import TabContext
 
 __all__ = ["DragInput"]
@@ -33,7 +35,7 @@ def _unmoved(current: Pose, allowed: Pose) -> bool:
     return _allclose(current.t, allowed.t, 1e-9) and _allclose(current.R, allowed.R, 1e-9)
 
 
-def _position(target: Any, who: str) -> np.ndarray:
+def _position(target: viser.TransformControlsHandle, who: str) -> np.ndarray:
     position = np.asarray(target.position, float)
     if position.shape != (3,) or not np.isfinite(position).all():
         raise SceneError(f"{who}: the gizmo sent a position that is not 3 finite numbers")
@@ -56,7 +58,7 @@ class DragInput:
         self._stamp: dict[str, float] = {}
         self._seq: dict[str, int] = {}
 
-    def _fresh(self, key: str, target: Any) -> bool:
+    def _fresh(self, key: str, target: viser.TransformControlsHandle) -> bool:
         """Whether this event is not older than one already applied (and remember its stamp)."""
         stamp = float(getattr(target, "update_timestamp", 0.0))
         if stamp < self._stamp.get(key, -1.0):
@@ -64,7 +66,7 @@ class DragInput:
         self._stamp[key] = stamp
         return True
 
-    def camera_event(self, name: str, event: Any) -> None:
+    def camera_event(self, name: str, event: viser.TransformControlsEvent) -> None:
         """A camera gizmo moved (``phase``: start, update or end of a drag)."""
         tab = self.tab
         t0, c0 = time.perf_counter(), time.thread_time()
@@ -84,7 +86,7 @@ class DragInput:
                 self.moving = None
                 self.step = False
 
-    def _move_camera(self, name: str, target: Any, phase: str) -> None:
+    def _move_camera(self, name: str, target: viser.TransformControlsHandle, phase: str) -> None:
         model = self.tab.model
         if name not in model.scene.camera_names:
             return
@@ -102,7 +104,7 @@ class DragInput:
         if not moved and phase == "end":  # put the gizmo (perhaps past a range's stop) and the fields on the camera
             self.tab.redraw_now()
 
-    def point_event(self, index: int, event: Any) -> None:
+    def point_event(self, index: int, event: viser.TransformControlsEvent) -> None:
         """A point gizmo moved; its drag's start selects the point."""
         tab = self.tab
         t0, c0 = time.perf_counter(), time.thread_time()

@@ -22,12 +22,15 @@ import re
 import sys
 import threading
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
 
 from ...scene import SceneError
 from ...scene.shown_numbers import shown_components
+
+if TYPE_CHECKING:
+    import viser
 
 __all__ = [
     "FieldError",
@@ -40,6 +43,9 @@ __all__ = [
     "on_event",
     "describe_error",
 ]
+
+#: The event a viser handle passes its callbacks (a ``GuiEvent``, a ``TransformControlsEvent``, a camera).
+E = TypeVar("E")
 
 #: Longest field text the server reads (anything longer is refused unread).
 MAX_FIELD_CHARS = 200
@@ -107,7 +113,7 @@ def format_number(value: float) -> str:
     return f"{value + 0.0:.6g}"
 
 
-def format_numbers(values: Any) -> str:
+def format_numbers(values: Iterable[float]) -> str:
     """A vector as a field shows it: ``"1.5, -4, 1.2"``. A component below ``ZERO_FRACTION`` of the vector's
     largest is rounding and is shown as 0, as in the read-out (a gizmo's turn gives a roll of 4e-15 degrees)."""
     return ", ".join(format_number(v) for v in shown_components(values))
@@ -119,7 +125,7 @@ def _show(text: str) -> str:
     return repr(clean if len(clean) <= 40 else clean[:40] + "...")
 
 
-def parse_numbers(text: Any, rules: tuple[NumberRule, ...], owner: str = "") -> tuple[float, ...]:
+def parse_numbers(text: object, rules: tuple[NumberRule, ...], owner: str = "") -> tuple[float, ...]:
     """Parse a field's raw text into ``len(rules)`` numbers, each checked by its rule.
 
     Args:
@@ -170,10 +176,10 @@ class Debouncer:
             raise ValueError(f"delay: expected a finite number of seconds >= 0, got {delay!r}")
         self.delay = float(delay)
         self._lock = threading.Lock()
-        self._timers: dict[Any, threading.Timer] = {}
+        self._timers: dict[Hashable, threading.Timer] = {}
         self._closed = False
 
-    def submit(self, key: Any, action: Callable[[], None]) -> None:
+    def submit(self, key: Hashable, action: Callable[[], None]) -> None:
         """Schedule ``action`` for ``key``, replacing the one not yet run."""
         if self.delay == 0:
             action()
@@ -189,7 +195,7 @@ class Debouncer:
             old.cancel()
         timer.start()
 
-    def _fire(self, key: Any, action: Callable[[], None]) -> None:
+    def _fire(self, key: Hashable, action: Callable[[], None]) -> None:
         with self._lock:
             if self._timers.get(key) is not threading.current_thread():
                 return  # replaced by a newer action after this timer had already started
@@ -226,7 +232,7 @@ def describe_error(exc: BaseException) -> tuple[str, str]:
     return "Something went wrong", f"{type(exc).__name__} (the details are in the server's log); the tab carries on."
 
 
-def notify_error(client: Any, exc: BaseException, *, title: str | None = None) -> None:
+def notify_error(client: viser.ClientHandle, exc: BaseException, *, title: str | None = None) -> None:
     """Show ``exc`` in ``client``'s tab as a red notification (:func:`describe_error`; ``title`` replaces its
     title). A tab that is already gone is left alone."""
     default_title, body = describe_error(exc)
@@ -241,10 +247,10 @@ def _short(message: str, limit: int = 500) -> str:
     return clean if len(clean) <= limit else clean[:limit] + " ..."
 
 
-def safe_callback(callback: Callable[[Any], object], report: Callable[[BaseException], None]) -> Callable[[Any], None]:
+def safe_callback(callback: Callable[[E], object], report: Callable[[BaseException], None]) -> Callable[[E], None]:
     """``callback`` wrapped so that any exception it raises goes to ``report`` instead of viser's thread pool."""
 
-    def run(event: Any) -> None:
+    def run(event: E) -> None:
         try:
             callback(event)
         except Exception as exc:  # noqa: BLE001 - every failure must reach the tab, none may escape
@@ -258,7 +264,7 @@ def safe_callback(callback: Callable[[Any], object], report: Callable[[BaseExcep
     return run
 
 
-def on_event(register: Callable[[Callable[[Any], None]], Any], callback: Callable[[Any], object],
+def on_event(register: Callable[[Callable[[E], None]], object], callback: Callable[[E], object],
              report: Callable[[BaseException], None]) -> None:
     """Register ``callback`` through ``register`` (``handle.on_update``, ``on_click``, ``on_upload``) safely.
 

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:
+    import viser
 
 __all__ = ["plain", "set_value"]
 
@@ -13,7 +16,10 @@ def plain(text: str, limit: int = 80) -> str:
     return clean if len(clean) <= limit else clean[:limit] + "..."
 
 
-def set_value(handle: Any, value: Any) -> None:
+T = TypeVar("T")
+
+
+def set_value(handle: viser.GuiInputHandle[T], value: T) -> None:
     """Assign a GUI value only if it differs (viser also fires callbacks on assignment)."""
     current = handle.value
     if isinstance(value, tuple) and isinstance(current, tuple):
@@ -24,4 +30,5 @@ def set_value(handle: Any, value: Any) -> None:
             return
     elif current == value:
         return
-    handle.value = value
+    # viser declares the value's setter apart from its getter, which mypy reads as a read-only property.
+    handle.value = value  # type: ignore[misc]

@@ -11,22 +11,19 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
 
 from ...lessons.display import PanelDisplay, thin_lines
 from ...scene import Scene
+from ...scene.derived import Derived
 from ..render.panel_view import ViewBox
 from ..render.panels import PanelView
-
-if TYPE_CHECKING:
-    from ...scene.derived import Derived
 
 __all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter"]
 
 #: ``panel_filter(scene, derived) -> (derived for the panels, point indices to ring)``.
-PanelFilter = Callable[[Scene, Any], tuple[Any, frozenset[int]]]
+PanelFilter = Callable[[Scene, Derived], tuple[Derived, frozenset[int]]]
 #: ``field_guard(camera, spec_fields) -> refusal message or None``.
-FieldGuard = Callable[[str, dict[str, Any]], str | None]
+FieldGuard = Callable[[str, dict[str, object]], str | None]
 
 
 @dataclass(frozen=True)
@@ -47,7 +44,7 @@ class LessonPolicy:
     #: ``display() -> PanelDisplay``: what the current step lets the panels show (lines, numbers, views).
     display: Callable[[], PanelDisplay] | None = None
 
-    def panels(self, scene: Scene, derived: Derived) -> tuple[Any, frozenset[int]]:
+    def panels(self, scene: Scene, derived: Derived) -> tuple[Derived, frozenset[int]]:
         """What the panels draw, and the points they ring (the model's geometry and none without a filter); the
         step's ``max_lines`` thins each panel's epipolar lines. The filter's rings are drawn without numbers unless
         the panel numbers every point."""
@@ -75,7 +72,7 @@ class LessonPolicy:
         u0, u1, v0, v1 = view
         return id(shown), PanelView("custom", ViewBox(u0, v0, u1 - u0, v1 - v0))
 
-    def refusal(self, camera: str, fields: dict[str, Any]) -> str | None:
+    def refusal(self, camera: str, fields: dict[str, object]) -> str | None:
         """Why ``camera`` may not take ``fields`` now, or None when it may."""
         return None if self.field_guard is None else self.field_guard(camera, fields)
 

@@ -6,9 +6,11 @@ pan, fit: :class:`~egtviz.viewer.render.panels.PanelView`), and an SVG whose inp
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
-from ...scene import Scene, SceneError
+from ...scene import CameraSpec, Scene, SceneError
+from ...scene.annotations import Plot
 from ...scene.extent import scene_extent
 from .fields import FieldError
 from ..render.figure_export import panel_svg_of
@@ -29,10 +31,14 @@ from ..render.panels import (
 )
 from ..render.plot_svg import plot_svg
 from ..render.png_worker import PngDownloads
-from ..render.svg import NORMAL, PRESENT, empty_svg, image_plane_svg
+from ..render.panel_view import ViewBox
+from ..render.svg import NORMAL, PRESENT, PanelStyle, empty_svg, image_plane_svg
 
 if TYPE_CHECKING:
+    import viser
+
     from ...scene.derived import ImagePlane
+    from .camera_settings import FieldHandle
     from .scene3d import Scene3D
     from .tab_context import TabContext
 
@@ -81,24 +87,24 @@ class PanelDock:
         self.grid: PanelGrid | None = None
         self._grid_key: tuple | None = None
         self._width_pending: PanelGrid | None = None
-        self._panel_handles: list[Any] = []
+        self._panel_handles: list[viser.PanelHandle] = []
         #: Each panel's HTML element, by camera name or plot key.
-        self.html: dict[str, Any] = {}
+        self.html: dict[str, viser.GuiHtmlHandle] = {}
         #: What each panel shows, with the image size it was chosen for: ``name -> ((width, height), PanelView)``.
         self._views: dict[str, tuple[tuple[int, int], PanelView]] = {}
         #: Per panel, the lesson step's view last applied (a step applies its view once: the buttons then move it).
-        self._step_views: dict[str, Any] = {}
+        self._step_views: dict[str, tuple[int, PanelView]] = {}
         #: Each panel's view as last drawn (a fitted panel's steady view during a drag).
-        self._shown_views: dict[str, Any] = {}
+        self._shown_views: dict[str, ViewBox | None] = {}
         #: Per panel, the image plane and the other inputs its SVG was last drawn from, and that SVG.
-        self._drawn: dict[str, tuple[Any, tuple, str]] = {}
+        self._drawn: dict[str, tuple[ImagePlane | Plot, tuple, str]] = {}
         #: Each camera's panel buttons (button groups by label: ``panel view``, ``panel pan``, ``download panel``).
-        self.buttons: dict[str, dict[str, Any]] = {}
+        self.buttons: dict[str, dict[str, viser.GuiButtonGroupHandle]] = {}
         #: The panels' PNG downloads: rendered in a worker process, one waiting per tab, refused above the limits.
         self.png = PngDownloads(tab.client)
 
     @property
-    def style(self) -> Any:
+    def style(self) -> PanelStyle:
         """The panels' style (:data:`~egtviz.viewer.render.svg.PRESENT` in presentation mode)."""
         return PRESENT if self.present else NORMAL
 
@@ -119,25 +125,28 @@ class PanelDock:
                 "Fit panels to the window", hint="Lay the panels out again for this window's present size.")
             tab.on(self.btn_relayout.on_click, lambda _: tab.user_event(self.relayout))
 
-    def build_buttons(self, name: str, folder: Any, fields: dict[str, Any]) -> None:
+    def build_buttons(self, name: str, folder: viser.GuiFolderHandle, fields: Mapping[str, FieldHandle]) -> None:
         """Zoom, pan, fit and download buttons for camera ``name``'s panel, in the camera's ``folder``."""
         tab, gui = self.tab, self.client.gui
-        groups: dict[str, Any] = {}
+        groups: dict[str, viser.GuiButtonGroupHandle] = {}
         # After the camera's last field, before its Remove button (viser's default orders are whole numbers).
         last = max((float(h.order) for h in fields.values()), default=None)
         order = (lambda k: None) if last is None else (lambda k: last + 0.1 * (k + 1))
         with folder:
             for k, (label, actions) in enumerate(VIEW_BUTTONS.items()):
                 groups[label] = gui.add_button_group(label, tuple(actions), order=order(k))
-                tab.on(groups[label].on_click, lambda e, a=actions: tab.user_event(
-                    lambda: self.view_action(name, a.get(e.target.value, e.target.value))))
+
+                def clicked(e: viser.GuiEvent[viser.GuiButtonGroupHandle], a: dict[str, str] = actions) -> None:
+                    tab.user_event(lambda: self.view_action(name, a.get(e.target.value, e.target.value)))
+
+                tab.on(groups[label].on_click, clicked)
             groups["download panel"] = gui.add_button_group("download panel", DOWNLOAD_FORMATS,
                                                             order=order(len(VIEW_BUTTONS)))
             tab.on(groups["download panel"].on_click,
                    lambda e: tab.user_event(lambda: self.download(name, e.target.value)))
         self.buttons[name] = groups
 
-    def view_action(self, name: str, action: Any) -> None:
+    def view_action(self, name: str, action: str) -> None:
         """Apply a view button (one of :data:`~egtviz.viewer.render.panels.VIEW_ACTIONS`) to panel ``name`` and redraw it."""
         if action not in VIEW_ACTIONS:  # a raw client can send any string
             raise FieldError(f"{name}: no view button {plain(repr(action), 40)}")
@@ -148,7 +157,7 @@ class PanelDock:
         self._views[name] = ((int(plane.width), int(plane.height)), view)
         self.tab.redraw_now()
 
-    def download(self, name: str, fmt: Any) -> None:
+    def download(self, name: str, fmt: str) -> None:
         """Send panel ``name`` as it is shown (its view, the tab's style) as an SVG or PNG file."""
         if fmt not in DOWNLOAD_FORMATS:
             raise FieldError(f"{name}: no download format {plain(repr(fmt), 40)}")
@@ -165,7 +174,7 @@ class PanelDock:
             return
         self.client.send_file_download(f"{stem}-image-plane.svg", svg.encode("utf-8"), save_immediately=True)
 
-    def set_present(self, value: Any) -> None:
+    def set_present(self, value: object) -> None:
         """Presentation mode on or off: the panels' style, the GUI's type and the layout follow."""
         if not isinstance(value, bool):
             raise FieldError(f"presentation mode: expected true or false, got {plain(repr(value), 40)}")
@@ -188,37 +197,39 @@ class PanelDock:
             return  # a drag: nothing the layout depends on has changed
         grid = plan_grid(cameras, self.window, style=self.style)
         if grid != self.grid:
-            self._apply_grid(grid, {c.name: c for c in scene.cameras} | plots)
+            self._apply_grid(grid, {c.name: c for c in scene.cameras}, plots)
         self._grid_key = key
 
-    def _apply_grid(self, grid: PanelGrid, specs: dict[str, Any]) -> None:
+    def _apply_grid(self, grid: PanelGrid, cameras: Mapping[str, CameraSpec], plots: Mapping[str, Plot]) -> None:
         """Dock the panels as ``grid`` says: rebuilt if its cells changed, else only resized."""
-        if self.grid is None or grid.columns != self.grid.columns or set(self.html) != set(specs):
+        if self.grid is None or grid.columns != self.grid.columns or set(self.html) != set(cameras) | set(plots):
             for panel in self._panel_handles:
                 panel.remove()
             self._panel_handles = []
             self.html = {}
             # viser puts each new right-hand column outside the ones docked before: the first is nearest the 3D view.
             for col in grid.columns:
-                self._dock_column(col, specs)
+                self._dock_column(col, cameras, plots)
         self.grid = grid
         self._set_widths(grid)
         # viser applies a new column's dock and a width sent with it in one step, which gives the new column
         # its default width: the widths are sent again once the tab reports its canvas shrunk by the docks.
         self._width_pending = grid if len(grid.columns) > 1 else None
 
-    def _dock_column(self, col: Any, specs: dict[str, Any]) -> None:
+    def _dock_column(self, col: tuple[tuple[str, ...], ...], cameras: Mapping[str, CameraSpec],
+                     plots: Mapping[str, Plot]) -> None:
         gui = self.client.gui
         steps, _ = dock_plan(len(col))
-        handles: dict[int, Any] = {}
+        handles: dict[int, viser.PanelHandle] = {}
         for cell, anchor in steps:
             panel = gui.add_panel()
             for name in col[cell]:
-                spec = specs[name]
                 if name.startswith(PLOT_KEY):
-                    with panel.add_tab(spec.title):
-                        self.html[name] = gui.add_html(empty_svg(spec.title))
+                    plot = plots[name]
+                    with panel.add_tab(plot.title):
+                        self.html[name] = gui.add_html(empty_svg(plot.title))
                     continue
+                spec = cameras[name]
                 with panel.add_tab(f"{name}: image plane"):
                     self.html[name] = gui.add_html(empty_svg(name, spec.width, spec.height))
             if anchor is None:
@@ -241,7 +252,7 @@ class PanelDock:
         except Exception:  # noqa: BLE001 - placement is cosmetic
             pass
 
-    def on_canvas(self, camera: Any) -> None:
+    def on_canvas(self, camera: viser.CameraHandle) -> None:
         """The tab reported its camera and canvas: once the docks took their room, send the panel widths again."""
         grid = self._width_pending
         if grid is None or grid is not self.grid:
@@ -364,7 +375,7 @@ class PanelDock:
             return False
         return "marked" if labels == "selected" else True
 
-    def plot_panel_svg(self, key: str, plot: Any, *, revision: int) -> str:
+    def plot_panel_svg(self, key: str, plot: Plot, *, revision: int) -> str:
         """A figure's plot panel (:func:`egtviz.viewer.render.plot_svg.plot_svg`), drawn again only when the plot, the
         style or the panel's size changed (a drag leaves a plot alone)."""
         panel_px, max_height = self._sizes(key)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from html import escape
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,6 +13,8 @@ from ..server.viser_adapter import assign_text
 from .models import SHORT_LABELS
 
 if TYPE_CHECKING:
+    import viser
+
     from ...scene.derived import Derived
 
 __all__ = ["PairReadout", "pair_html"]
@@ -77,7 +79,7 @@ class PairReadout:
         handle: the GUI HTML element the read-out is written into.
     """
 
-    def __init__(self, handle: Any) -> None:
+    def __init__(self, handle: viser.GuiHtmlHandle) -> None:
         self.handle = handle
         #: The HTML last shown.
         self.text = ""

@@ -25,7 +25,8 @@ What is drawn, and what is skipped, to keep a frame cheap:
 
 Each camera's body is drawn by its model's drawing module (``egtviz.viewer.workbench.models``: a frustum, a mirror over its
 CCD, a sphere); this module knows no camera kind. Writes to viser's private handle internals are all in
-``viser_adapter``.
+``viser_adapter``. A camera's nodes, and the scene-wide ones drawn from the derived geometry, are grouped in
+``scene3d_nodes``.
 
 Scene tree (per client)::
 
@@ -44,26 +45,28 @@ Scene tree (per client)::
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+import numpy.typing as npt
 import viser
 
 from .fields import on_event
-from .models import CameraDrawing, DrawContext, drawing_class
+from .models import DrawContext, drawing_class
 from .models.common import EMPTY_PTS as _EMPTY_PTS
 from .models.common import EMPTY_SEG as _EMPTY_SEG
 from .models.common import colours as _colours
 from .models.common import pair_colours as _pair_colours
 from .models.common import segments as _segments
 from .models.shared import SHARED, frozen
-from ..render.palette import BASELINE_COLOUR, CAMERA_COLOURS, hex_to_rgb, point_rgb
+from ..render.palette import CAMERA_COLOURS, hex_to_rgb, point_rgb
 from ..render.svg import MAX_NUMBERED_POINTS
 from ..server.viser_adapter import assign as _put
 from ..server.viser_adapter import assign_array as _put_array
+from .scene3d_nodes import CameraNodes, WorldNodes
 
 if TYPE_CHECKING:
+    from ...scene import CameraSpec, Scene
     from ...scene.derived import Derived
 
 #: Above this many points only the selected point gets a gizmo (200 gizmos hide the scene).
@@ -79,12 +82,12 @@ def point_colours(n: int) -> np.ndarray:
     return _colours(n).copy()
 
 
-def _moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
+def _moved(current: npt.ArrayLike, new: npt.ArrayLike, tol: float = 1e-9) -> bool:
     """Any coordinate differs by more than ``tol`` (plain floats: this runs for every camera on every frame)."""
     return any(abs(a - b) > tol for a, b in zip(np.asarray(current, float).tolist(), np.asarray(new, float).tolist()))
 
 
-def _quat_moved(current: Any, new: Any, tol: float = 1e-9) -> bool:
+def _quat_moved(current: npt.ArrayLike, new: npt.ArrayLike, tol: float = 1e-9) -> bool:
     """The orientation differs (``q`` and ``-q`` are the same rotation)."""
     c = np.asarray(current, float).tolist()
     n = np.asarray(new, float).tolist()
@@ -98,22 +101,10 @@ def _slug(k: int) -> str:
     return f"/egt/cam_{k}"
 
 
-@lru_cache(maxsize=8)
-def _fan(k: int) -> np.ndarray:
-    """Faces (k - 2, 3) uint32 of a convex polygon of ``k`` vertices, fanned from vertex 0."""
-    out = np.array([[0, i, i + 1] for i in range(1, k - 1)], np.uint32).reshape(-1, 3)
-    out.setflags(write=False)
-    return out
-
-
 def _ray_segments(rays: np.ndarray, rows: tuple[int, ...] | None, n: int) -> tuple[np.ndarray, np.ndarray] | None:
     """Read-only float32 (S, 2, 3) segments and colours of the drawn rows of a camera's rays; None: none."""
     seg, point = _segments(rays, rows)
     return (frozen(seg), frozen(_pair_colours(n)[point])) if len(seg) else None
-
-
-def _baseline_segment(baseline: Any) -> np.ndarray:
-    return frozen(np.array(baseline, np.float32)[None])
 
 
 class Scene3D:
@@ -122,8 +113,8 @@ class Scene3D:
     def __init__(
         self,
         api: viser.SceneApi,
-        on_camera_gizmo: Callable[[str, Any], None],
-        on_point_gizmo: Callable[[int, Any], None],
+        on_camera_gizmo: Callable[[str, viser.TransformControlsEvent], None],
+        on_point_gizmo: Callable[[int, viser.TransformControlsEvent], None],
         *,
         report: Callable[[BaseException], None] | None = None,
     ) -> None:
@@ -136,41 +127,43 @@ class Scene3D:
         self._on_point_gizmo = on_point_gizmo
         self._cam_ids: dict[str, int] = {}
         self._next_id = 0
-        self._cams: dict[str, dict[str, Any]] = {}
-        self._cam_sig: dict[str, tuple] = {}
-        self._point_gizmos: dict[int, Any] = {}
-        self._point_labels: list[Any] = []
+        self._cams: dict[str, CameraNodes] = {}
+        self._rays: dict[str, viser.LineSegmentsHandle] = {}
+        self._point_gizmos: dict[int, viser.TransformControlsHandle] = {}
+        self._point_labels: list[viser.LabelHandle] = []
         #: Every label's handle and its size at scale 1 (presentation mode multiplies them: :meth:`set_label_scale`).
-        self._labels: dict[str, tuple[Any, float]] = {}
+        self._labels: dict[str, tuple[viser.LabelHandle, float]] = {}
         self.label_scale = 1.0
         #: The length gizmos, axes and point marks are drawn at (metres: the scene's size, :meth:`set_glyph`).
         self.glyph = 1.0
-        self._rays: dict[str, Any] = {}
-        self._surf_key: Any = None
-        self._points_key: Any = None
+        #: What the point nodes were last drawn for (None: draw them all again, labels included).
+        self._points_key: tuple[bool, int | None, frozenset[str], frozenset[str]] | None = None
         self._points_prev = np.zeros((0, 3))
-        self._surf_pts = np.zeros((0, 3))
-        #: The derived baseline and epipolar polygon last assigned (the same objects: nothing to send).
-        self._baseline_src: Any = None
-        self._epiplane_src: Any = None
         self._static()
         self.points = api.add_point_cloud(
             "/egt/points", _EMPTY_PTS, (0, 0, 0), point_size=0.12, point_shape="circle", visible=False
         )
         self.selected = api.add_icosphere("/egt/selected", radius=0.16, color=(0, 0, 0), opacity=0.35, visible=False)
-        self.baseline = api.add_line_segments(
-            "/egt/baseline", _EMPTY_SEG, hex_to_rgb(BASELINE_COLOUR), thickness=0.035, visible=False
-        )
-        self.epiplane = api.add_mesh_simple(
-            "/egt/epiplane", np.zeros((3, 3), np.float32), np.array([[0, 1, 2]], np.uint32),
-            color=(120, 120, 120), opacity=0.25, side="double", visible=False, cast_shadow=False, receive_shadow=False,
-        )
-        self.surfaces = api.add_point_cloud(
-            "/egt/surfaces", _EMPTY_PTS, (150, 150, 150), point_size=0.05, point_shape="circle", visible=False
-        )
+        #: The drawn pair's baseline, the epipolar plane and the surfaces, with what each last showed.
+        self._scene_wide = WorldNodes(api)
         from .annotations3d import Annotations3D
 
         self.annotations = Annotations3D(api)
+
+    @property
+    def baseline(self) -> viser.LineSegmentsHandle:
+        """The drawn pair's baseline."""
+        return self._scene_wide.baseline
+
+    @property
+    def epiplane(self) -> viser.MeshHandle:
+        """The selected point's epipolar plane."""
+        return self._scene_wide.epiplane
+
+    @property
+    def surfaces(self) -> viser.PointCloudHandle:
+        """The sampled surfaces."""
+        return self._scene_wide.surfaces
 
     # -- static scaffolding ------------------------------------------------------
 
@@ -185,9 +178,11 @@ class Scene3D:
         self._label("/egt/world/z", "z", 0.9, position=(0.0, 0.0, 1.15))
         self._label("/egt/grid_units", "grid: 1 m squares (world frame, z up)", 0.8, position=(-4.0, -3.0, 0.0))
 
-    def _label(self, path: str, text: str, size: float, **kwargs: Any) -> Any:
-        """A screen-sized label whose size follows :attr:`label_scale`."""
-        handle = self.api.add_label(path, text, font_screen_scale=size * self.label_scale, **kwargs)
+    def _label(self, path: str, text: str, size: float, *, position: tuple[float, float, float] | np.ndarray,
+               anchor: Literal["top-left", "bottom-left", "bottom-center"] = "top-left") -> viser.LabelHandle:
+        """A screen-sized label whose size follows :attr:`label_scale` (``anchor``: viser's default unless given)."""
+        handle = self.api.add_label(path, text, font_screen_scale=size * self.label_scale, position=position,
+                                    anchor=anchor)
         self._labels[path] = (handle, size)
         return handle
 
@@ -203,19 +198,20 @@ class Scene3D:
         for axis, k in (("x", 0), ("y", 1), ("z", 2)):
             _put(self._labels[f"/egt/world/{axis}"][0], "position", tuple(1.15 * g * (np.arange(3) == k)))
         for nodes in self._cams.values():
-            self._size_camera(nodes)
+            self._size_camera(nodes.gizmo, nodes.axes, nodes.label)
         _put(self.points, "point_size", 0.12 * g)
         _put(self.selected, "radius", 0.16 * g)
         for gizmo in self._point_gizmos.values():
             _put(gizmo, "scale", 0.35 * g)
         self._points_key = None  # the next draw moves the point labels to the new offset
 
-    def _size_camera(self, nodes: dict[str, Any]) -> None:
+    def _size_camera(self, gizmo: viser.TransformControlsHandle, axes: viser.FrameHandle,
+                     label: viser.LabelHandle) -> None:
         g = self.glyph
-        _put(nodes["gizmo"], "scale", g)
+        _put(gizmo, "scale", g)
         for key, value in (("axes_length", 0.5 * g), ("axes_radius", 0.015 * g), ("origin_radius", 0.03 * g)):
-            _put(nodes["axes"], key, value)
-        _put(nodes["label"], "position", (0.0, -0.35 * g, 0.0))
+            _put(axes, key, value)
+        _put(label, "position", (0.0, -0.35 * g, 0.0))
 
     def set_label_scale(self, scale: float) -> None:
         """Every label at ``scale`` times its size (presentation mode: larger, to read from the back of a room)."""
@@ -227,9 +223,18 @@ class Scene3D:
 
     # -- cameras ---------------------------------------------------------------
 
-    def gizmo(self, name: str) -> Any:
+    def gizmo(self, name: str) -> viser.TransformControlsHandle:
         """Camera ``name``'s gizmo handle (benchmarks drive a drag through it). KeyError: no such camera."""
-        return self._cams[name]["gizmo"]
+        return self._cams[name].gizmo
+
+    def every_camera_nodes(self) -> dict[str, CameraNodes]:
+        """Each camera's nodes by camera name (a copy of the registry)."""
+        return dict(self._cams)
+
+    def camera_nodes(self, name: str) -> CameraNodes:
+        """Camera ``name``'s nodes in the 3D view (``camera_nodes(name)["frustum"]``: one by name). KeyError: no
+        such camera."""
+        return self._cams[name]
 
     def _cam_id(self, name: str) -> int:
         if name not in self._cam_ids:
@@ -237,7 +242,7 @@ class Scene3D:
             self._next_id += 1
         return self._cam_ids[name]
 
-    def _build_camera(self, spec: Any, k: int, colour: tuple[int, int, int]) -> dict[str, Any]:
+    def _build_camera(self, spec: CameraSpec, k: int, colour: tuple[int, int, int]) -> CameraNodes:
         api = self.api
         root = _slug(k)
         gizmo = api.add_transform_controls(root, scale=1.0, line_width=2.0, depth_test=False, opacity=0.85)
@@ -247,49 +252,40 @@ class Scene3D:
             self._on_camera_gizmo(name, event)
 
         on_event(gizmo.on_update, _cb, self._report)
-        nodes: dict[str, Any] = {"gizmo": gizmo}
-        nodes["axes"] = api.add_frame(f"{root}/axes", axes_length=0.5, axes_radius=0.015, origin_radius=0.03)
-        nodes["label"] = self._label(f"{root}/label", name, 1.1, position=(0.0, -0.35, 0.0), anchor="bottom-center")
+        axes = api.add_frame(f"{root}/axes", axes_length=0.5, axes_radius=0.015, origin_radius=0.03)
+        label = self._label(f"{root}/label", name, 1.1, position=(0.0, -0.35, 0.0), anchor="bottom-center")
         drawing = drawing_class(spec.model_kind)(api, root, k, colour)
-        nodes["drawing"] = drawing
-        nodes.update(drawing.named_nodes())
         if self.glyph != 1.0:
-            self._size_camera(nodes)
+            self._size_camera(gizmo, axes, label)
         self._rays[name] = api.add_line_segments(f"/egt/rays_{k}", _EMPTY_SEG, (0, 0, 0), thickness=0.008,
                                                  visible=False)
-        return nodes
+        return CameraNodes((spec.model_kind,), colour, gizmo, axes, label, drawing)
 
-    def _sync_cameras(self, scene: Any) -> None:
+    def _sync_cameras(self, scene: Scene) -> None:
         wanted = {spec.name: spec for spec in scene.cameras}
         for name in list(self._cams):
-            if name not in wanted or self._cam_sig.get(name) != (wanted[name].model_kind,):
+            if name not in wanted or self._cams[name].signature != (wanted[name].model_kind,):
                 self._drop_camera(name)
         for i, spec in enumerate(scene.cameras):
             if spec.name not in self._cams:
                 k = self._cam_id(spec.name)
                 colour = hex_to_rgb(CAMERA_COLOURS[k % len(CAMERA_COLOURS)])
                 self._cams[spec.name] = self._build_camera(spec, k, colour)
-                self._cams[spec.name]["colour"] = colour
-                self._cam_sig[spec.name] = (spec.model_kind,)
 
     def _drop_camera(self, name: str) -> None:
-        nodes = self._cams.pop(name, {})
-        drawing: CameraDrawing | None = nodes.get("drawing")
-        if drawing is not None:
-            drawing.remove()
-        if "gizmo" in nodes:
-            nodes["gizmo"].remove()  # removes its children
-        if "label" in nodes:
-            self._labels.pop(nodes["label"].name, None)
+        nodes = self._cams.pop(name, None)
+        if nodes is not None:
+            nodes.drawing.remove()
+            nodes.gizmo.remove()  # removes its children
+            self._labels.pop(nodes.label.name, None)
         ray = self._rays.pop(name, None)
         if ray is not None:
             ray.remove()
-        self._cam_sig.pop(name, None)
         self._cam_ids.pop(name, None)
 
     # -- points ------------------------------------------------------------------
 
-    def _sync_points(self, scene: Any) -> None:
+    def _sync_points(self, scene: Scene) -> None:
         X = scene.points_array()
         n = len(X)
         opts = scene.options
@@ -353,7 +349,7 @@ class Scene3D:
 
     # -- everything ---------------------------------------------------------------
 
-    def draw(self, scene: Any, derived: Derived, moving: str | None = None, *, force: bool = False) -> None:
+    def draw(self, scene: Scene, derived: Derived, moving: str | None = None, *, force: bool = False) -> None:
         """Bring every node up to date. ``moving``: the camera whose gizmo the user is dragging (not re-posed).
 
         ``force``: put every gizmo back where the scene has it, even if its live pose cannot be compared (a
@@ -367,7 +363,7 @@ class Scene3D:
         finally:
             self._force = False
 
-    def _draw(self, scene: Any, derived: Derived, moving: str | None) -> None:
+    def _draw(self, scene: Scene, derived: Derived, moving: str | None) -> None:
         opts = scene.options
         self.annotations.draw(scene.annotations, show_labels=opts.show_labels)  # frames, lines, mirrors (figures)
         self._sync_cameras(scene)
@@ -380,25 +376,25 @@ class Scene3D:
             name = spec.name
             nodes = self._cams[name]
             wxyz, position = derived.poses[name]
-            gizmo = nodes["gizmo"]
+            gizmo = nodes.gizmo
             if name != moving:
                 # Compare with the gizmo's live pose (a drag changes it), never with a cache.
                 if self._force or _moved(gizmo.position, position):
                     gizmo.position = position
                 if self._force or _quat_moved(gizmo.wxyz, wxyz):
                     gizmo.wxyz = wxyz
-            drawing: CameraDrawing = nodes["drawing"]
+            drawing = nodes.drawing
             look = (name in scene.locked, opts.show_frames, opts.show_labels, name in scene.highlighted)
-            if nodes.get("_look") != look:
+            if nodes.look != look:
                 locked, show_frames, show_labels, highlighted = look
                 _put(gizmo, "disable_axes", locked)
                 _put(gizmo, "disable_sliders", locked)
                 _put(gizmo, "disable_rotations", locked)
-                _put(nodes["axes"], "visible", show_frames)
-                _put(nodes["label"], "visible", show_labels)
+                _put(nodes.axes, "visible", show_frames)
+                _put(nodes.label, "visible", show_labels)
                 # A camera a lesson highlights is drawn in orange.
-                _put(drawing.body, "color", HIGHLIGHT_RGB if highlighted else nodes["colour"])
-                nodes["_look"] = look
+                _put(drawing.body, "color", HIGHLIGHT_RGB if highlighted else nodes.colour)
+                nodes.look = look
             plane = derived.image_planes[name]
             drawing.update(derived.cameras[name], plane, DrawContext(
                 points=X, line_rows=ray_rows, selected_point=sel, selected_normal=derived.selected_normal,
@@ -409,44 +405,15 @@ class Scene3D:
             # An unchanged camera brings the same array, hence the same prepared segments: the node is not touched.
             seg = None if src is None else SHARED.get("scene3d.rays", (src,), (ray_rows, n),
                                                       lambda: _ray_segments(src, ray_rows, n))
-            if "_rays_seg" not in nodes or nodes["_rays_seg"] is not seg:
+            if nodes.rays_seg is not seg:  # NOT_SENT before the first draw
                 if seg is not None:
                     _put_array(rays, "points", seg[0])
                     _put_array(rays, "colors", seg[1])
-                nodes["_rays_seg"] = seg
+                nodes.rays_seg = seg
             _put(rays, "visible", opts.show_rays and seg is not None)
 
         self._sync_points(scene)
-
-        if derived.baseline is not None:
-            if self._baseline_src is not derived.baseline:
-                _put_array(self.baseline, "points", SHARED.get("scene3d.baseline", (derived.baseline,), None,
-                                                               lambda: _baseline_segment(derived.baseline)))
-                self._baseline_src = derived.baseline
-            _put(self.baseline, "visible", True)
-        else:
-            _put(self.baseline, "visible", False)
-
-        polygon = derived.epipolar_plane
-        if polygon is not None and opts.show_planes:
-            if self._epiplane_src is not polygon:
-                V = SHARED.get("scene3d.epiplane", (polygon,), None,
-                               lambda: frozen(np.asarray(polygon, np.float32)))
-                _put_array(self.epiplane, "vertices", V)
-                _put_array(self.epiplane, "faces", _fan(len(V)))
-                self._epiplane_src = polygon
-            _put(self.epiplane, "color", point_rgb(sel) if sel is not None else (120, 120, 120))
-            _put(self.epiplane, "visible", True)
-        else:
-            _put(self.epiplane, "visible", False)
-
-        if scene.surfaces and opts.show_surfaces:
-            if self._surf_key is not scene.surfaces:
-                self._surf_key, self._surf_pts = scene.surfaces, scene.surface_points()[0]
-                _put_array(self.surfaces, "points", np.asarray(self._surf_pts, np.float32))
-            _put(self.surfaces, "visible", len(self._surf_pts) > 0)
-        else:
-            _put(self.surfaces, "visible", False)
+        self._scene_wide.draw(scene, derived)
 
     def remove_all(self) -> None:
         """Remove every node (client teardown)."""

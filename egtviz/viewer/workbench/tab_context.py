@@ -8,9 +8,9 @@ few services, not the view, and a part that imported the view would close a circ
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Protocol, TypeVar
 
 if TYPE_CHECKING:
     import threading
@@ -20,7 +20,26 @@ if TYPE_CHECKING:
     from ...scene import SceneModel
     from .lesson_policy import LessonPolicy
 
-__all__ = ["TabContext"]
+__all__ = ["Attach", "TabContext", "TextEvent"]
+
+#: The event a viser handle passes its callbacks (a ``GuiEvent``, a ``TransformControlsEvent``, a camera).
+E = TypeVar("E")
+#: What a text field sends (its text; a raw client may send another type).
+T = TypeVar("T")
+
+
+class Attach(Protocol):
+    """``on(handle.on_update, callback)``: ``callback`` attached to a handle's event, whatever it raises reported."""
+
+    def __call__(self, register: Callable[[Callable[[E], None]], object], callback: Callable[[E], object], /) -> None:
+        ...
+
+
+class TextEvent(Protocol):
+    """``text_event(key, apply, text)``: ``apply(text)`` once the user stopped typing (latest text per ``key``)."""
+
+    def __call__(self, key: Hashable, apply: Callable[[T], object], text: T, /) -> None:
+        ...
 
 
 @dataclass(frozen=True)
@@ -48,9 +67,9 @@ class TabContext:
     model: SceneModel
     lock: threading.RLock
     report: Callable[[BaseException], None]
-    on: Callable[[Any, Callable[..., Any]], None]
-    user_event: Callable[[Callable[[], Any]], None]
-    text_event: Callable[[Any, Callable[..., Any], Any], None]
+    on: Attach
+    user_event: Callable[[Callable[[], object]], None]
+    text_event: TextEvent
     event_started: Callable[[float, float], None]
     is_closed: Callable[[], bool]
     redraw_now: Callable[[], None]

@@ -7,9 +7,11 @@ checked against the options offered, since a hand-written client can send any st
 
 from __future__ import annotations
 
+import functools
 import itertools
+from collections.abc import Callable
 from html import escape
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal
 
 from ...geometry.camera_model import CAMERA_MODELS
 from ...scene import (
@@ -28,6 +30,8 @@ from .gui_text import plain, set_value
 from ..render.panels import CONTROL_PX
 
 if TYPE_CHECKING:
+    import viser
+
     from .tab_context import TabContext
 
 __all__ = ["POINTS_RULE", "SERVO_DEMOS", "SURFACE_KINDS", "WorkbenchControls"]
@@ -64,17 +68,17 @@ class WorkbenchControls:
         open_demo: ``open_demo(kind)`` replaces the tab by a visual-servoing demo; None: no such folder.
     """
 
-    def __init__(self, tab: TabContext, *, open_demo: Any = None) -> None:
+    def __init__(self, tab: TabContext, *, open_demo: Callable[[str], object] | None = None) -> None:
         self.tab = tab
         self.open_demo = open_demo
         self._synced_rest: tuple | None = None
         self._surface_options: dict[str, tuple[Literal["plane", "sphere", "mesh"], str]] = {}
         self._n_points_text = "8"
 
-    def _button(self, label: str, action: Any, **kwargs: Any) -> Any:
+    def _button(self, label: str, action: Callable[[], object], *, hint: str | None = None) -> viser.GuiButtonHandle:
         """A button whose click runs ``action`` as a user event."""
         tab = self.tab
-        button = tab.client.gui.add_button(label, **kwargs)
+        button = tab.client.gui.add_button(label, hint=hint)
         tab.on(button.on_click, lambda _: tab.user_event(action))
         return button
 
@@ -101,21 +105,30 @@ class WorkbenchControls:
             self.add_buttons = {}
             for kind, info in CAMERA_MODELS.items():
                 self.add_buttons[kind] = self._button(f"Add {info.label[0].lower()}{info.label[1:]}",
-                                                      lambda k=kind: tab.model.add_camera(k))
+                                                      functools.partial(tab.model.add_camera, kind))
             self.cameras_folder = gui.add_folder("Camera settings", expand_by_default=True)
         with gui.add_folder("Show", expand_by_default=False):
             self.toggles = {}
             for opt, label in _TOGGLES:
                 cb = gui.add_checkbox(label, getattr(tab.model.scene.options, opt))
-                tab.on(cb.on_update, lambda e, opt=opt: tab.user_event(lambda: self._toggle(opt, e.target.value)))
+
+                def toggled(e: viser.GuiEvent[viser.GuiCheckboxHandle], opt: str = opt) -> None:
+                    tab.user_event(lambda: self._toggle(opt, e.target.value))
+
+                tab.on(cb.on_update, toggled)
                 self.toggles[opt] = cb
         #: The visual-servoing demos' buttons by demo kind (``pinhole``, ``panoramic``); empty: no demos here.
-        self.servo_buttons: dict[str, Any] = {}
-        if self.open_demo is not None:
+        self.servo_buttons: dict[str, viser.GuiButtonHandle] = {}
+        open_demo = self.open_demo
+        if open_demo is not None:
             with gui.add_folder("Visual servoing", expand_by_default=False):
                 for kind, label in SERVO_DEMOS.items():
                     button = self.servo_buttons[kind] = gui.add_button(label)
-                    tab.on(button.on_click, lambda _, k=kind: self.open_demo(k))
+
+                    def clicked(_: viser.GuiEvent[viser.GuiButtonHandle], k: str = kind) -> None:
+                        open_demo(k)
+
+                    tab.on(button.on_click, clicked)
         with gui.add_folder("Scene", expand_by_default=False):
             self._build_scene_actions()
 
@@ -168,7 +181,7 @@ class WorkbenchControls:
             self.tab.client.add_notification("Nothing to undo", model.undo_barrier_note, color="yellow",
                                               auto_close_seconds=8.0)
 
-    def _check_n_points(self, text: Any) -> None:
+    def _check_n_points(self, text: str) -> None:
         parse_numbers(text, POINTS_RULE)
         self._n_points_text = text  # the last valid count: a refused one reverts to it
 
@@ -191,7 +204,7 @@ class WorkbenchControls:
         if idx != self.tab.model.scene.selected_point:
             self.tab.model.select_point(idx)
 
-    def _toggle(self, opt: str, value: Any) -> None:
+    def _toggle(self, opt: str, value: object) -> None:
         if not isinstance(value, bool):
             raise FieldError(f"{opt}: expected true or false, got {plain(repr(value), 40)}")
         if getattr(self.tab.model.scene.options, opt) != value:

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from typing import Any
+
+import viser
 
 from ....lessons.tasks import AnswerNeeds
 from .registry import SKINS, AnswerSkin, AnswerWidget
@@ -22,7 +23,7 @@ for _module in pkgutil.iter_modules(__path__):
     importlib.import_module(f"{__name__}.{_module.name}")
 
 
-def answer_widget(gui: Any, label: str, needs: AnswerNeeds) -> AnswerWidget:
+def answer_widget(gui: viser.GuiApi, label: str, needs: AnswerNeeds) -> AnswerWidget:
     """The widget ``needs`` asks for, built under ``label`` in ``gui``.
 
     Raises:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+import viser
 
 from ....lessons.tasks import CHOICE, AnswerNeeds
 from ...workbench.fields import FieldError
@@ -18,7 +18,7 @@ CHOOSE = "(choose an answer)"
 class ChoiceAnswer:
     """The options in a drop-down that opens on :data:`CHOOSE`, which sends an empty answer."""
 
-    def __init__(self, gui: Any, label: str, needs: AnswerNeeds) -> None:
+    def __init__(self, gui: viser.GuiApi, label: str, needs: AnswerNeeds) -> None:
         self.label = label
         self.options = needs.options
         self.field = gui.add_dropdown(label, (CHOOSE, *self.options), initial_value=CHOOSE)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+import viser
 
 from ....lessons.tasks import NO_ANSWER, AnswerNeeds
 from .registry import skin
@@ -14,9 +14,9 @@ __all__ = ["NoAnswer"]
 class NoAnswer:
     """Nothing to type: the check reads the scene."""
 
-    field: Any = None
+    field: None = None
 
-    def __init__(self, gui: Any, label: str, needs: AnswerNeeds) -> None:
+    def __init__(self, gui: viser.GuiApi, label: str, needs: AnswerNeeds) -> None:
         pass
 
     def text(self) -> str | None:

@@ -4,7 +4,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol, TypeVar
+from typing import Protocol, TypeVar
+
+import viser
 
 from ....lessons.tasks import AnswerNeeds
 from ...workbench.fields import MAX_FIELD_CHARS, FieldError
@@ -16,7 +18,7 @@ class AnswerWidget(Protocol):
     """A task's answer widget in the lesson panel."""
 
     @property
-    def field(self) -> Any:
+    def field(self) -> viser.GuiInputHandle[str] | None:
         """The GUI handle the learner answers in (None: nothing to type)."""
 
     def text(self) -> str | None:
@@ -27,7 +29,7 @@ class AnswerWidget(Protocol):
         """
 
 
-AnswerSkin = Callable[[Any, str, AnswerNeeds], AnswerWidget]
+AnswerSkin = Callable[[viser.GuiApi, str, AnswerNeeds], AnswerWidget]
 """``skin(gui, label, needs)`` builds the widget under ``label`` (e.g. ``"answer 2"``) in the tab's ``gui``."""
 SKINS: dict[str, AnswerSkin] = {}
 """The skin of each answer widget, by the widget's name."""
@@ -51,7 +53,7 @@ def skin(widget: str) -> Callable[[_Skin], _Skin]:
     return register
 
 
-def sent_text(label: str, value: Any) -> str:
+def sent_text(label: str, value: object) -> str:
     """``value`` as the page's field ``label`` sent it, refused unless it is text such a field holds."""
     if not isinstance(value, str):
         raise FieldError(f"{label}: expected text, got {type(value).__name__}")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+import viser
 
 from ....lessons.tasks import TEXT, AnswerNeeds
 from .registry import sent_text, skin
@@ -14,7 +14,7 @@ __all__ = ["TextAnswer"]
 class TextAnswer:
     """A text field; the task reads what was typed."""
 
-    def __init__(self, gui: Any, label: str, needs: AnswerNeeds) -> None:
+    def __init__(self, gui: viser.GuiApi, label: str, needs: AnswerNeeds) -> None:
         self.label = label
         self.field = gui.add_text(label + (f" ({needs.unit})" if needs.unit else ""), "", hint=needs.hint)
 

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import functools
 import importlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
@@ -26,6 +26,8 @@ from ....scene.camera_entry import MeshBody
 from ....scene.cameras import CAMERA_ENTRIES
 
 if TYPE_CHECKING:
+    import viser
+
     from ....geometry.camera_model import CameraModel
     from ....scene.derived import ImagePlane
 
@@ -61,18 +63,18 @@ class CameraDrawing(Generic[ModelT]):
         colour: the camera's colour (RGB).
     """
 
-    def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
+    def __init__(self, api: viser.SceneApi, root: str, k: int, colour: tuple[int, int, int]) -> None:
         self.api = api
         self.root = root
         self.k = k
         self.colour = colour
 
     @property
-    def body(self) -> Any:
+    def body(self) -> viser.SceneNodeHandle:
         """The node that takes the camera's colour (orange when a lesson highlights it)."""
         raise NotImplementedError
 
-    def named_nodes(self) -> dict[str, Any]:
+    def named_nodes(self) -> dict[str, viser.SceneNodeHandle]:
         """The nodes made when the drawing was built, by name (``frustum``, ``ccd``, ``sphere``, ...)."""
         return {}
 
@@ -84,38 +86,43 @@ class CameraDrawing(Generic[ModelT]):
         """Remove the world-level nodes (the children of ``root`` go with the gizmo)."""
 
 
-class MeshDrawing(CameraDrawing[Any]):
+class MeshDrawing(CameraDrawing["CameraModel"]):
     """A body given by its model's entry as a translucent mesh in the model frame (:class:`MeshBody`): built at
     the model's default parameters, sent again only when the camera's parameters give another mesh."""
 
-    def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int], *, kind: str,
+    def __init__(self, api: viser.SceneApi, root: str, k: int, colour: tuple[int, int, int], *, kind: str,
                  body: MeshBody) -> None:
         super().__init__(api, root, k, colour)
         self._body = body
-        self._key: Any = None
-        self.mesh: Any = None
-        self._draw({p.name: p.default for p in CAMERA_ENTRIES[kind].parameters}, colour)
+        values = {p.name: p.default for p in CAMERA_ENTRIES[kind].parameters}
+        self.mesh = self._add_mesh(values, colour, None)
+        self._key = tuple(values.items())
 
-    def _draw(self, values: dict[str, Any], colour: Any) -> None:
+    def _add_mesh(self, values: Mapping[str, float], colour: tuple[int, int, int],
+                  old: viser.MeshHandle | None) -> viser.MeshHandle:
+        """The mesh of these parameter values, in place of ``old`` (removed only once the new mesh is made)."""
+        vertices, faces = self._body.mesh(values)
+        if old is not None:
+            old.remove()
+        return self.api.add_mesh_simple(f"{self.root}/{self._body.name}", vertices, faces, color=colour,
+                                        opacity=self._body.opacity, side="double", cast_shadow=False,
+                                        receive_shadow=False)
+
+    def _draw(self, values: Mapping[str, float], colour: tuple[int, int, int]) -> None:
         key = tuple(values.items())
         if key == self._key:
             return
-        vertices, faces = self._body.mesh(values)
-        if self.mesh is not None:
-            self.mesh.remove()
-        self.mesh = self.api.add_mesh_simple(f"{self.root}/{self._body.name}", vertices, faces, color=colour,
-                                             opacity=self._body.opacity, side="double", cast_shadow=False,
-                                             receive_shadow=False)
+        self.mesh = self._add_mesh(values, colour, self.mesh)
         self._key = key
 
-    def named_nodes(self) -> dict[str, Any]:
+    def named_nodes(self) -> dict[str, viser.SceneNodeHandle]:
         return {self._body.name: self.mesh}
 
     @property
-    def body(self) -> Any:
+    def body(self) -> viser.MeshHandle:
         return self.mesh
 
-    def update(self, camera: Any, plane: ImagePlane, ctx: DrawContext) -> None:
+    def update(self, camera: CameraModel, plane: ImagePlane, ctx: DrawContext) -> None:
         """The mesh of the camera's parameters (a new one keeps the colour the old one had: a highlight)."""
         self._draw(camera.parameters(), self.mesh.color)
 
@@ -126,7 +133,7 @@ SHORT_LABELS: dict[str, str] = {kind: entry.short_label for kind, entry in CAMER
 """A few words naming each model in the GUI (a camera's folder: ``cam1 (pin-hole)``), from its entry."""
 
 
-def drawing_class(kind: str) -> Callable[[Any, str, int, tuple[int, int, int]], CameraDrawing]:
+def drawing_class(kind: str) -> Callable[[viser.SceneApi, str, int, tuple[int, int, int]], CameraDrawing]:
     """What builds the drawing of the camera model ``kind``: ``factory(api, root, k, colour)``.
 
     Raises:

@@ -7,7 +7,7 @@ camera's gizmo: a drag moves the node, and the mesh is sent again only when the 
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import trimesh
@@ -16,7 +16,10 @@ from ...server.viser_adapter import assign
 from . import CameraDrawing, DrawContext
 
 if TYPE_CHECKING:
+    import viser
+
     from ....geometry.catadioptric import CatadioptricCamera
+    from ....geometry.mirrors import Mirror
     from ....scene.derived import ImagePlane
 
 #: Samples of the mirror mesh (radial, angular).
@@ -28,7 +31,7 @@ MIRROR_ROUGHNESS = 0.2
 
 
 @lru_cache(maxsize=32)
-def mirror_glb(mirror: Any) -> trimesh.Trimesh:
+def mirror_glb(mirror: Mirror) -> trimesh.Trimesh:
     """The mirror's surface as a trimesh with a reflective (metallic, smooth) material, in the mirror frame."""
     vertices, faces = mirror.surface(*MIRROR_MESH)
     material = trimesh.visual.material.PBRMaterial(
@@ -43,18 +46,18 @@ def mirror_glb(mirror: Any) -> trimesh.Trimesh:
 class CatadioptricDrawing(CameraDrawing["CatadioptricCamera"]):
     """The mirror (a reflective mesh about the focus, the frame's origin) and the CCD's frustum below it."""
 
-    def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
+    def __init__(self, api: viser.SceneApi, root: str, k: int, colour: tuple[int, int, int]) -> None:
         super().__init__(api, root, k, colour)
         self.ccd = api.add_camera_frustum(f"{root}/ccd", fov=0.5, aspect=4 / 3, scale=0.35, color=colour,
                                           thickness=0.015)
-        self.mirror: Any = None
-        self._mirror_src: Any = None
+        self.mirror: viser.GlbHandle | None = None
+        self._mirror_src: Mirror | None = None
 
-    def named_nodes(self) -> dict[str, Any]:
+    def named_nodes(self) -> dict[str, viser.SceneNodeHandle]:
         return {"ccd": self.ccd}
 
     @property
-    def body(self) -> Any:
+    def body(self) -> viser.CameraFrustumHandle:
         return self.ccd
 
     def update(self, camera: CatadioptricCamera, plane: ImagePlane, ctx: DrawContext) -> None:

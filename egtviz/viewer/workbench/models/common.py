@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import lru_cache
-from typing import Any
 
 import numpy as np
 
@@ -30,7 +30,7 @@ def pair_colours(n: int) -> np.ndarray:
     return out
 
 
-def segments(polylines: np.ndarray, rows: Any = None) -> tuple[np.ndarray, np.ndarray]:
+def segments(polylines: np.ndarray, rows: Sequence[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(N, k, 3) polylines (row i: point i) -> float32 (S, 2, 3) segments without NaN and the (S,) point of each.
 
     ``rows``: only these points (indices); None: all.

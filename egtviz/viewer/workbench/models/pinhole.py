@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,6 +13,8 @@ from .common import EMPTY_PTS, EMPTY_SEG, colours, pair_colours, segments
 from .shared import SHARED, frozen
 
 if TYPE_CHECKING:
+    import viser
+
     from ....geometry.pinhole import PinholeCamera
     from ....scene.derived import ImagePlane
 
@@ -23,7 +25,7 @@ IMAGE_PLANE_DEPTH = 0.6
 class PinholeDrawing(CameraDrawing["PinholeCamera"]):
     """A frustum whose image plane lies ``IMAGE_PLANE_DEPTH`` in front of the centre, with the image drawn on it."""
 
-    def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
+    def __init__(self, api: viser.SceneApi, root: str, k: int, colour: tuple[int, int, int]) -> None:
         super().__init__(api, root, k, colour)
         self.frustum = api.add_camera_frustum(f"{root}/frustum", fov=0.6, aspect=4 / 3, scale=0.3, color=colour,
                                               thickness=0.012)
@@ -32,14 +34,15 @@ class PinholeDrawing(CameraDrawing["PinholeCamera"]):
         self.img_lines = api.add_line_segments(f"/egt/img3d_{k}_lines", EMPTY_SEG, (0, 0, 0), thickness=0.006,
                                                visible=False)
         self._shape: tuple[float, float, float] | None = None
-        self._pts_src: Any = False  # the prepared arrays last assigned (None: nothing to draw)
-        self._lines_key: Any = False
+        # The prepared arrays last assigned, compared by identity (None: nothing to draw; False: none yet).
+        self._pts_src: object = False
+        self._lines_key: object = False
 
-    def named_nodes(self) -> dict[str, Any]:
+    def named_nodes(self) -> dict[str, viser.SceneNodeHandle]:
         return {"frustum": self.frustum, "img_pts": self.img_pts, "img_lines": self.img_lines}
 
     @property
-    def body(self) -> Any:
+    def body(self) -> viser.CameraFrustumHandle:
         return self.frustum
 
     def update(self, camera: PinholeCamera, plane: ImagePlane, ctx: DrawContext) -> None:

@@ -42,13 +42,14 @@ class SharedArrays:
 
     def __init__(self, capacity: int = CAPACITY) -> None:
         self._capacity = capacity
-        self._entries: OrderedDict[tuple, tuple[tuple[Any, ...], Any]] = OrderedDict()
+        # Each entry's value is whatever its ``make`` returned: ``get``'s type variable gives it back its type.
+        self._entries: OrderedDict[tuple, tuple[tuple[object, ...], Any]] = OrderedDict()
         self._lock = threading.Lock()
         #: Lookups answered from the store, and those that made their value (tests read these).
         self.hits = 0
         self.misses = 0
 
-    def get(self, kind: str, sources: tuple[Any, ...], key: Hashable, make: Callable[[], T]) -> T:
+    def get(self, kind: str, sources: tuple[object, ...], key: Hashable, make: Callable[[], T]) -> T:
         """The value made by ``make()`` for these very ``sources`` (by identity) and ``key``, made now if absent.
 
         ``kind`` names what is made (two drawings may prepare different things from the same sources).

@@ -7,7 +7,7 @@ centre is then :math:`(0, 0, -\\xi)` times that radius in the model frame (z for
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +17,8 @@ from .common import EMPTY_SEG
 from .shared import SHARED
 
 if TYPE_CHECKING:
+    import viser
+
     from ....geometry.unified import UnifiedCamera
     from ....scene.derived import ImagePlane
 
@@ -29,7 +31,7 @@ CIRCLE_SAMPLES = 96
 class UnifiedDrawing(CameraDrawing["UnifiedCamera"]):
     """A translucent sphere about the viewpoint, the projection centre on its axis, the selected point's ray."""
 
-    def __init__(self, api: Any, root: str, k: int, colour: tuple[int, int, int]) -> None:
+    def __init__(self, api: viser.SceneApi, root: str, k: int, colour: tuple[int, int, int]) -> None:
         super().__init__(api, root, k, colour)
         self.sphere = api.add_icosphere(f"{root}/sphere", radius=SPHERE_RADIUS, color=colour, opacity=0.25,
                                         subdivisions=3, side="double", cast_shadow=False, receive_shadow=False)
@@ -39,13 +41,13 @@ class UnifiedDrawing(CameraDrawing["UnifiedCamera"]):
                                            cast_shadow=False, receive_shadow=False)
         self.circle = api.add_line_segments(f"/egt/great_circle_{k}", EMPTY_SEG, colour, thickness=0.012,
                                             visible=False)
-        self._circle_key: Any = None
+        self._circle_key: tuple[UnifiedCamera, int, bytes, bytes] | None = None
 
-    def named_nodes(self) -> dict[str, Any]:
+    def named_nodes(self) -> dict[str, viser.SceneNodeHandle]:
         return {"sphere": self.sphere, "centre": self.centre, "on_sphere": self.on_sphere, "circle": self.circle}
 
     @property
-    def body(self) -> Any:
+    def body(self) -> viser.IcosphereHandle:
         return self.sphere
 
     def update(self, camera: UnifiedCamera, plane: ImagePlane, ctx: DrawContext) -> None:
