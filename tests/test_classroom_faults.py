@@ -173,7 +173,10 @@ def test_a_frame_sent_while_a_followers_tab_is_built_reaches_it(served, monkeypa
     monkeypatch.setattr(host_module, "FollowView", built_while_the_room_moves)
     cid, _ = served.student("Ada")
     wait_for(lambda: cid in host.followers, "Ada to follow")
-    assert host.followers[cid].frame.number == posted[0].number > first.number
+    assert posted[0].number > first.number
+    # At least that frame (the instructor's tab may draw again meanwhile on a busy machine: a newer one is shown).
+    wait_for(lambda: host.followers[cid].frame.number >= posted[0].number, "the frame posted while Ada's tab was "
+             "built to reach Ada")
 
 
 FLOOD = 3000

@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import pytest
 
+from egtviz.controllers.class_state import pacing_view
+from egtviz.controllers.class_text import ClassRefusal, paced_step
 from egtviz.viewer.classroom.instructor_panel import InstructorPanel
-from egtviz.viewer.classroom.pacing_form import pacing_html, paced_step
-from egtviz.viewer.workbench.fields import FieldError
+from egtviz.viewer.classroom.room_html import pacing_html
 
 from _waiting import wait_for
 from test_classroom_pacing_start import OPEN, classroom  # noqa: F401 - the fixture
@@ -33,13 +34,13 @@ def test_a_step_of_the_lesson_or_blank_is_taken(text, want):
     ("nan", "expected a step number or blank"),
 ])
 def test_anything_else_is_refused_naming_the_field(text, reason):
-    with pytest.raises(FieldError) as caught:
+    with pytest.raises(ClassRefusal) as caught:
         paced_step(text, "03-intrinsics", STEPS)
     assert str(caught.value).startswith("up to step: ") and reason in str(caught.value)
 
 
 def test_the_pacing_says_of_how_many_steps():
-    html = pacing_html(frozenset({"03-intrinsics"}), {"03-intrinsics": 1}, {"03-intrinsics": 6})
+    html = pacing_html(pacing_view(frozenset({"03-intrinsics"}), {"03-intrinsics": 1}, {"03-intrinsics": 6}))
     assert "03-intrinsics: up to step 2 of 6" in html and html.count("<br>") == 1
 
 

@@ -15,6 +15,7 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from egtviz.classroom import Histogram, RosterRow
+from egtviz.controllers.class_state import answers_view, roster_lines
 from egtviz.viewer.classroom.links import (
     INSTRUCTOR_PREFIX, instructor_url, qr_svg, qr_terminal, shown_url, token_from_path,
 )
@@ -63,12 +64,12 @@ def _cells(html: str) -> list[ET.Element]:
 def test_names_are_text_in_the_roster_and_the_bar():
     rows = [RosterRow("<b>Bob</b>", True, True, "01-frames", 2, 1, 4),
             RosterRow('x" onmouseover="alert(1)', False, False, None, None, 0, 0)]
-    html = roster_html(rows)
+    html = roster_html(roster_lines(rows))
     root = ET.fromstring(html)
     assert root.get("data-rows") == "2"
     assert [c.text for c in _cells(html)] == ["<b>Bob</b>", "1/4", "following · 01-frames · step 3",
                                               'x" onmouseover="alert(1)', "0", "away"]
-    assert [c.text for c in _cells(roster_html(rows, {"01-frames": 1}))][2] == "following · lesson 1 · step 3"
+    assert [c.text for c in _cells(roster_html(roster_lines(rows, {"01-frames": 1})))][2] == "following · lesson 1 · step 3"
     assert not list(root.iter("b")) and all(tr.get("onmouseover") is None for tr in root.iter("tr"))
     bar = ET.fromstring(student_status_html("<i>Eve</i>", True, "Is <F> rank 2?"))
     assert "".join(bar.itertext()).startswith("<i>Eve</i> ·") and "Is <F> rank 2?" in "".join(bar.itertext())
@@ -78,11 +79,11 @@ def test_names_are_text_in_the_roster_and_the_bar():
 
 def test_the_histogram_counts_and_hides_names_unless_asked():
     hist = Histogram("where is e1?", (100.0, 110.0, 120.0), (2, 1), (("left", 3),), 6, 4)
-    root = ET.fromstring(histogram_html(hist))
+    root = ET.fromstring(histogram_html(answers_view(hist)))
     bars = [int(b.get("data-count")) for b in root.iter("{http://www.w3.org/2000/svg}rect")]
     assert bars == [2, 1, 3] and root.get("data-n") == "6"
     assert "Bob" not in "".join(root.itertext())
-    named = ET.fromstring(histogram_html(hist, names={"<b>Bob</b>": 110.0, "Ann": "left"}))
+    named = ET.fromstring(histogram_html(answers_view(hist, {"<b>Bob</b>": 110.0, "Ann": "left"})))
     items = ["".join(li.itertext()) for li in named.iter("li")]
     assert items == ["<b>Bob</b>: 110", "Ann: left"]  # by name, case folded
 
@@ -139,17 +140,16 @@ def test_serve_classroom_prints_the_student_url_its_qr_code_and_the_instructor_u
                                               ("14_85", "14_85"), ("nan", "nan"), ("1e400", "1e400"),
                                               ("0x0E", "0x0E"), ("14.85.3", "14.85.3"), (".5", 0.5)])
 def test_an_answer_is_a_number_when_it_reads_as_one(typed, value):
-    from egtviz.viewer.classroom.student_bar import typed_answer
+    from egtviz.controllers.class_text import typed_answer
 
     assert typed_answer(typed) == value
 
 
 @pytest.mark.parametrize("typed", ["", "   ", None, 3])
 def test_an_empty_answer_is_refused(typed):
-    from egtviz.viewer.classroom.student_bar import typed_answer
-    from egtviz.viewer.workbench.fields import FieldError
+    from egtviz.controllers.class_text import ClassRefusal, typed_answer
 
-    with pytest.raises(FieldError, match="type it first"):
+    with pytest.raises(ClassRefusal, match="type it first"):
         typed_answer(typed)
 
 

@@ -27,7 +27,8 @@ def _imports(path: Path) -> list[str]:
 
 def test_no_controller_imports_viser_or_the_viewer():
     found = [f"{path.name}: {name}" for path in sorted(PACKAGE.rglob("*.py")) for name in _imports(path)
-             if name.split(".")[0] in ("viser", "trimesh", "playwright") or "viewer" in name or "bench" in name]
+             if name.split(".")[0] in ("viser", "trimesh", "playwright") or "viewer" in name
+             or "bench" in name.split(".")]  # egtviz.bench; the workbench's modules are controllers
     assert found == []
 
 

@@ -22,15 +22,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from egtviz.scene import SCENES, SceneError, default_scene, limits, scene_from_bytes
-from egtviz.viewer.workbench.fields import (
-    Debouncer,
-    FieldError,
-    NumberRule,
-    format_number,
-    format_numbers,
-    parse_numbers,
-    safe_callback,
-)
+from egtviz.controllers.workbench_fields import FieldError, NumberRule, format_number, format_numbers, parse_numbers
+from egtviz.viewer.workbench.fields import Debouncer, safe_callback
 from egtviz.viewer.server.headless import start_headless
 
 from _threads import joined  # noqa: E402
@@ -394,7 +387,7 @@ def upload(view, name: str, content) -> None:
 
 
 def test_an_oversized_upload_is_refused_before_parsing(tab, monkeypatch):
-    import egtviz.viewer.workbench.workbench_controls as app_module
+    import egtviz.controllers.workbench as app_module
 
     app, fake, view = tab
     parsed = []

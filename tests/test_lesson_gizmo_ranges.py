@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 from egtviz.geometry.poses import matrix_from_quat_wxyz
 from egtviz.lessons import LessonRun, parse_lesson
 from egtviz.viewer.server.headless import start_headless
-from egtviz.viewer.course.lesson_view import LessonPanel, pose_within_ranges, range_refusal
+from egtviz.controllers.lesson_rules import pose_within_ranges, range_refusal
+from egtviz.viewer.course.lesson_view import LessonPanel
 
 from _waiting import PATIENCE, PATIENCE_MS, wait_for, wait_until  # noqa: E402
 

@@ -10,7 +10,7 @@ import pytest
 from egtviz.bench.viewer import _drag_event
 from egtviz.scene import default_scene
 from egtviz.scene.constraints import CameraRanges
-from egtviz.viewer.workbench.fields import FieldError
+from egtviz.controllers.workbench_fields import FieldError
 from egtviz.viewer.server.headless import start_headless
 from egtviz.viewer.workbench.lesson_policy import ALLOW_ALL, LessonPolicy
 
@@ -34,7 +34,7 @@ def test_a_policys_field_guard_refuses_a_typed_value_and_the_model_keeps_its_own
     view.policy = LessonPolicy(field_guard=lambda camera, fields: f"{camera}: not in this lesson")
     before = view.model.scene.camera("cam1").position
     with view.lock, pytest.raises(FieldError, match="cam1: not in this lesson"):
-        view.cameras["cam1"].apply_field("position", "1, 2, 3")
+        view.controller.set_field("cam1", "position", "1, 2, 3")
     assert view.model.scene.camera("cam1").position == before
 
 

@@ -24,7 +24,7 @@ from egtviz.viewer.workbench.app import EgtvizApp
 from egtviz.scene.examples import SCENES
 from egtviz.viewer.server.headless import FakeTab, start_headless
 from egtviz.viewer.workbench.lesson_policy import LessonPolicy
-from egtviz.viewer.course.lab_view import MAX_RINGS
+from egtviz.controllers.lesson_instruments import MAX_RINGS
 from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.lessons.markup import PANEL_WIDTH_PX, displayed_formulas, formula_to_mathml, formula_width_px

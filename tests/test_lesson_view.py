@@ -17,13 +17,13 @@ from scipy.optimize import least_squares
 from egtviz.lessons import ProgressStore, load
 from egtviz.scene import SceneError
 from egtviz.viewer.workbench.app import EgtvizApp
-from egtviz.viewer.workbench.fields import format_number
+from egtviz.controllers.workbench_fields import format_number
 from egtviz.viewer.server.headless import FakeTab
+from egtviz.controllers.lesson_instruments import lesson_instruments
+from egtviz.controllers.lesson_rules import range_refusal
 from egtviz.viewer.course.lesson_view import (
     CHOOSE,
     LessonPanel,
-    lesson_instruments,
-    range_refusal,
 )
 from egtviz.viewer.course.start_page import StartPage
 
@@ -374,7 +374,7 @@ def test_a_task_whose_camera_was_removed_says_so_at_check(store):
 
 def test_a_mirrors_virtual_camera_follows_its_camera_without_breaking_its_lock():
     from egtviz.scene import SCENES, SceneModel
-    from egtviz.viewer.course.lesson_view import lock_refusal
+    from egtviz.controllers.lesson_rules import lock_refusal
 
     model = SceneModel(SCENES["mirror"]())  # cam_virtual: locked by the scene, the reflection of cam
     model.set_undo_barrier("Undo stops here.")

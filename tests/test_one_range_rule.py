@@ -14,10 +14,11 @@ from egtviz.lessons import LessonRun, parse_lesson
 from egtviz.scene import SceneModel
 from egtviz.scene.constraints import Breach, CameraRanges
 from egtviz.scene.examples import default_scene
-from egtviz.viewer.course.lesson_view import LessonPanel, range_refusal
+from egtviz.controllers.lesson_rules import range_refusal
+from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.server.headless import start_headless
 from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client
-from egtviz.viewer.workbench.fields import FieldError
+from egtviz.controllers.workbench_fields import FieldError
 
 from test_lesson_gizmo_ranges import LESSON
 
@@ -78,7 +79,7 @@ def test_every_route_asks_the_one_rule(panel, monkeypatch):
     view.drag.camera_event("cam1", gizmo_event(view, "start", None))
     view.drag.camera_event("cam1", gizmo_event(view, "update", (9.0, -11.0, 1.5)))
     assert view.model.scene.camera("cam1").position == (9.0, -11.0, 1.5)  # the drag
-    view.cameras["cam1"].apply_field("position", "12, -8, 1.5")
+    view.controller.set_field("cam1", "position", "12, -8, 1.5")
     assert view.model.scene.camera("cam1").position == (12.0, -8.0, 1.5)  # a typed value
     assert range_refusal(panel.run) is None  # the check at answer time
     panel.row("right").button.value = True
@@ -87,7 +88,7 @@ def test_every_route_asks_the_one_rule(panel, monkeypatch):
     monkeypatch.setattr(CameraRanges, "breaches", lambda self, camera, fields: [
         Breach(camera, f, v, self.ranges()[(camera, f)]) for f, v in fields.items() if (camera, f) in self.ranges()])
     with pytest.raises(FieldError, match=r"cam1's position must stay between -8 m and 2 m \(it is 1 m, -8 m, 1.5 m\)"):
-        view.cameras["cam1"].apply_field("position", "1, -8, 1.5")
+        view.controller.set_field("cam1", "position", "1, -8, 1.5")
     assert range_refusal(panel.run).startswith("In this step cam1's position must stay between -8 m and 2 m")
 
 

@@ -1,4 +1,4 @@
-"""The server's budget of servo-run frames (egtviz.viewer.servo.servo_budget) and the demos that reserve from it.
+"""The server's budget of servo-run frames (egtviz.controllers.servo_budget) and the demos that reserve from it.
 
 Demos run on a real viser server with websocket stand-ins (FakeTab) as tabs; a small budget stands for the
 server's (the same code, fewer frames), so runs of a few dozen steps fill it.
@@ -15,7 +15,7 @@ import viser
 
 from egtviz.scene.limits import SERVO_DEMO_STEPS, SERVO_SERVER_FRAMES
 from egtviz.viewer.server.headless import FakeTab
-from egtviz.viewer.servo.servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy
+from egtviz.controllers.servo_budget import SERVER_BUDGET, ServoBudget, ServoBusy
 from egtviz.viewer.servo.servo_demo import make_servo_demo
 
 from _threads import joined
@@ -139,7 +139,7 @@ def test_a_third_run_over_the_budget_is_refused_in_its_tab_and_runs_once_another
 
 
 def test_a_run_replaced_by_a_shorter_one_or_failing_frees_its_frames(clients, notes, monkeypatch):
-    from egtviz.viewer.servo import servo_pinhole_demo
+    from egtviz.controllers import servo_demos
 
     budget = ServoBudget(frames=STEPS + 1)
     demo = make_servo_demo(clients[0], "pinhole", steps=STEPS, autoplay=False, budget=budget)
@@ -151,7 +151,7 @@ def test_a_run_replaced_by_a_shorter_one_or_failing_frees_its_frames(clients, no
         def refuse(**kw):
             raise ValueError("the simulation refused it")
 
-        monkeypatch.setattr(servo_pinhole_demo, "simulate_pinhole", refuse)
+        monkeypatch.setattr(servo_demos, "simulate_pinhole", refuse)
         assert demo.run(wait=True, timeout=PATIENCE) and demo.result is None and budget.held(demo) == 0
     finally:
         demo.close()

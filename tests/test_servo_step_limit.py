@@ -11,8 +11,8 @@ from egtviz.cli import build_parser, main
 from egtviz.lessons.errors import EntryError
 from egtviz.lessons.servo_runs import parse_run_fields
 from egtviz.scene import limits
-from egtviz.viewer.workbench.fields import FieldError, parse_numbers
-from egtviz.viewer.servo.servo_player import RUN_RULES
+from egtviz.controllers.workbench_fields import FieldError, parse_numbers
+from egtviz.controllers.servo_demos import RUN_RULES
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "limits.md"
 

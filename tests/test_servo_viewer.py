@@ -221,12 +221,12 @@ def test_forged_drop_downs_and_slider_are_refused(client, notes):
 
 
 def test_a_failing_run_is_shown_not_raised(client, notes, monkeypatch):
-    from egtviz.viewer.servo import servo_pinhole_demo
+    from egtviz.controllers import servo_demos
 
     def refuse(**kw):
         raise ValueError("beta: the simulation refused it")
 
-    monkeypatch.setattr(servo_pinhole_demo, "simulate_pinhole", refuse)
+    monkeypatch.setattr(servo_demos, "simulate_pinhole", refuse)
     demo = make_servo_demo(client, "pinhole", steps=20, autorun=False, autoplay=False, field_delay=0)
     try:
         assert demo.run(wait=True, timeout=PATIENCE)
@@ -377,7 +377,7 @@ def test_the_viewer_draws_the_frames_geometry(client):
         joints = frames.links[17, :, :3, 3]  # the arm: link meshes, or the stick figure without rtb-data's meshes
         shown = [h.position for h in demo.arm.links] if demo.arm.links else demo.arm.joints.points
         assert np.allclose(np.asarray(shown, float), joints, atol=1e-6)
-        segs, _ = frames.ray_segments(17, demo.points)
+        segs, _ = frames.ray_segments(17, demo.model.points)
         assert np.allclose(demo.nodes.rays.points, segs, atol=1e-6)
     finally:
         demo.close()

@@ -16,7 +16,7 @@ from egtviz.scene import Epipole, ImagePlane
 from egtviz.scene.annotations import Plot
 from egtviz.scene.shown_numbers import format_value, format_vector, shown_components
 from egtviz.viewer.workbench.app import pair_html
-from egtviz.viewer.workbench.fields import format_numbers
+from egtviz.controllers.workbench_fields import format_numbers
 from egtviz.viewer.render.panel_view import ViewBox
 from egtviz.viewer.render.plot_svg import plot_svg
 from egtviz.viewer.render.svg import image_plane_svg

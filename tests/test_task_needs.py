@@ -30,7 +30,7 @@ from egtviz.viewer.course.answers import SKINS, answer_widget
 from egtviz.viewer.course.answers.choice import CHOOSE
 from egtviz.viewer.course.answers.registry import skin
 from egtviz.viewer.course.lesson_view import TaskRow
-from egtviz.viewer.workbench.fields import FieldError
+from egtviz.controllers.workbench_fields import FieldError
 
 VIEWER = Path(egtviz.viewer.__file__).parent
 #: Names the viewer must not use: every task class and the registry of kinds.

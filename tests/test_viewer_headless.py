@@ -273,7 +273,7 @@ def test_concurrent_events_end_in_the_latest_state(tabs):
     field = view.cameras["cam1"].fields["position"]
     # Events arriving from several threads (viser's thread pool): the final render shows the final model state.
     def edit(k):
-        view.user_event(lambda: view.cameras["cam1"].apply_field("position", f"{-3.0 + 0.01 * k:g}, -8, 1.5"))
+        view.user_event(lambda: view.controller.set_field("cam1", "position", f"{-3.0 + 0.01 * k:g}, -8, 1.5"))
 
     threads = [threading.Thread(target=edit, args=(k,)) for k in range(20)]
     for t in threads:

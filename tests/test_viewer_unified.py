@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from egtviz.scene import Scene, UnifiedSpec, default_scene
-from egtviz.viewer.workbench.fields import FieldError
+from egtviz.controllers.workbench_fields import FieldError
 from egtviz.viewer.server.headless import start_headless
 from egtviz.viewer.workbench.models.unified import SPHERE_RADIUS
 from egtviz.viewer.workbench.scene3d import MAX_LABELLED_POINTS
@@ -71,7 +71,7 @@ def test_the_xi_slider_morphs_the_conics_and_the_horizon(view):
 def test_a_raw_client_cannot_push_xi_out_of_range(view):
     for bad in (1.5, -0.1, float("nan"), "0.5", True):
         with pytest.raises(FieldError, match="uni: xi"):
-            view.cameras["uni"].apply_slider("xi", bad)
+            view.controller.slide("uni", "xi", bad)
     assert view.model.scene.camera("uni").xi == 0.8
 
 

@@ -226,7 +226,7 @@ bound (10,001 frames each; two non-converging panoramic runs raised a server's m
 or dozens of the demos' default runs, which converge in a few hundred steps. A run reserves ``steps + 1`` frames
 when it starts and keeps the frames it has once drawn; a run that does not fit waits for up to half a minute, then
 is refused in its tab with a notification naming how many other runs hold the budget
-(``egtviz.viewer.servo.servo_budget``)."""
+(``egtviz.controllers.servo_budget``)."""
 
 # -- lesson files (egtviz.lessons) --------------------------------------------------------------------
 

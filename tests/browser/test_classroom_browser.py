@@ -467,7 +467,7 @@ def test_released_to_tasks_students_open_the_instructors_step_and_pacing_holds_n
     try:
         # Following, the student sees the instructor's step: its titles and text above the room's scene.
         page.wait_for_selector(f'[data-egtviz="room-step"][data-lesson="{lesson}"][data-step="1"]')
-        host.release(Mode.TASKS)
+        host.room.set_mode(Mode.TASKS)
         cid = _wait(lambda: host.student_tabs().get("Hal"), what="Hal's tab")
         student = _wait(lambda: getattr(app.course.tabs.get(cid), "run", None) and app.course.tabs[cid],
                         what="Hal's lesson")

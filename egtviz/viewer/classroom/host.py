@@ -27,13 +27,14 @@ from ...classroom import (
     AnswersChanged, CamerasLocked, Classroom, Event, FollowChanged, Mode, ModeChanged, NamesShown, PacingChanged,
     PauseChanged, QuestionAsked, RosterChanged, SharedChanged, SnapshotShown,
 )
+from ...controllers.class_member import StudentController
+from ...controllers.class_text import lesson_steps, typed_name
 from ...scene import SceneModel
 from ..server.guard import handshake_of, serve_page_under
-from ..workbench.fields import FieldError, notify_error, on_event
+from ..workbench.fields import notify_error, on_event
 from .camera_lock import CameraLock
 from .follow_view import FollowView
 from .links import INSTRUCTOR_PREFIX, token_from_path
-from .pacing_form import lesson_steps
 from .course_gate import CourseGate
 from .room_html import step_caption
 from .room_sender import FrameSender, RoomSender, frame_from_scene, frame_of
@@ -200,21 +201,20 @@ class ClassroomHost:
 
     def join(self, client: viser.ClientHandle, name: object) -> None:
         """The student on ``client`` joins the class as ``name`` (refused names raise, and the tab says why)."""
-        if not isinstance(name, str) or not name.strip():
-            raise FieldError("your name: type it to join the class")
+        typed = typed_name(name)  # refused before the tab is taken for a student's
         cid = client.client_id
         with self._lock:
             if self._roles.get(cid) not in ("joining", "student"):
                 return
             self._roles[cid] = "student"
         try:
-            self.room.join(cid, name)  # FollowChanged routes the tab
+            StudentController(self.room, cid).join(typed)  # FollowChanged routes the tab
         except Exception:
             with self._lock:
                 self._roles[cid] = "joining"
             raise
         try:
-            client.local_storage.set_item(NAME_KEY, name)
+            client.local_storage.set_item(NAME_KEY, typed)
         except Exception:  # noqa: BLE001 - storage refused: the student types their name again next time
             pass
 
@@ -315,18 +315,17 @@ class ClassroomHost:
 
     def _build_bar(self, client: viser.ClientHandle) -> None:
         cid = client.client_id
-        name = self.room.name_of(cid) or ""
-        bar = StudentBar(client, name, on_follow=lambda on: self.room.follow(cid, on),
-                         on_answer=lambda question, value: self.room.record_answer(cid, question, value), report=lambda exc: notify_refusal(client, exc))
+        bar = StudentBar(client, StudentController(self.room, cid), report=lambda exc: notify_refusal(client, exc))
         with self._lock:
             self.bars[cid] = bar
-        self._sync_bar(cid)
-        bar.set_paused(self.room.paused())
+        state = bar.student.state()
+        bar.show(state)
+        bar.set_paused(state.paused)
 
     def _sync_bar(self, cid: int) -> None:
         bar = self.bars.get(cid)
         if bar is not None:
-            bar.show(self.room.is_following(cid), self.room.asked())
+            bar.show(bar.student.state())
 
     # -- the instructor ---------------------------------------------------------------------------------
 
@@ -354,25 +353,16 @@ class ClassroomHost:
         run = getattr(tab, "run", None)
         return run if run is not None and getattr(run, "model", None) is view.model else None
 
-    def set_follow_me(self, client: viser.ClientHandle, on: bool) -> None:
-        """Follow me (every student shows this tab's scene) or release them to explore."""
-        if not on:
-            if self.room.mode is Mode.FOLLOW:  # already released (to the tasks, say): stays so
-                self.release(Mode.EXPLORE)
-            return
-        self.room.set_mode(Mode.FOLLOW)
+    def publish(self, client: viser.ClientHandle) -> None:
+        """The room follows the instructor's tab on ``client`` now: its scene becomes the room's."""
         view = self.app.views.get(client.client_id)
         if view is not None:
             with view.lock:
                 self._instructor_rendered(view)
 
-    def release(self, mode: Mode) -> None:
-        """Release the students to their own scenes (``EXPLORE``) or to the lesson step's tasks (``TASKS``)."""
-        self.room.set_mode(mode)
-
     def lesson_steps(self) -> dict[str, int]:
         """The course's lessons, in its order, and how many steps each has (``{}``: no course)."""
-        return lesson_steps(self.app.course)
+        return lesson_steps(self.app.course.lessons if self.app.course is not None else None)
 
     def student_tabs(self) -> dict[str, int]:
         """Connected students' names and one tab of each (the snapshot's choices)."""

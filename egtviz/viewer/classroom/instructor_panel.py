@@ -2,7 +2,8 @@
 pacing, the roster, the question and its live histogram, snapshots, the roster as CSV and the student URL's QR
 code.
 
-The panel only reads the classroom and calls it; what each control does to the students' tabs is the
+The panel is a skin over an :class:`~egtviz.controllers.class_member.InstructorController`: its widgets become the
+controller's intents and it draws the controller's state. What each control does to the students' tabs is the
 :class:`~egtviz.viewer.classroom.host.ClassroomHost`'s job (the panel knows it as a :class:`PanelHost`: the host
 builds the panels, so the panel cannot name the host's class). Names, questions and messages are shown as text.
 """
@@ -17,19 +18,18 @@ from typing import Protocol
 import viser
 
 from ...classroom import Classroom, Mode
-from ..workbench.fields import FieldError, on_event
+from ...controllers.class_member import RELEASE_TO, InstructorController
+from ...controllers.class_text import ClassRefusal
+from ..workbench.fields import on_event
 from .links import qr_svg
-from .pacing_form import pacing_html, paced_step
-from .room_html import histogram_html, roster_html, status_html
+from .room_html import histogram_html, pacing_html, roster_html, status_html
 
-__all__ = ["ALL_STEPS", "InstructorPanel", "PanelHost", "RELEASE_TO", "SnapshotPicker"]
+__all__ = ["ALL_STEPS", "InstructorPanel", "PanelHost", "SnapshotPicker"]
 
-#: The release buttons: label -> the mode students are released to.
-RELEASE_TO = {"explore": Mode.EXPLORE, "tasks": Mode.TASKS}
 #: The pacing field's text for "every step".
 ALL_STEPS = ""
-#: Bins of the answers' histogram.
-HISTOGRAM_BINS = 8
+#: The snapshot buttons' choices.
+SHOW_SNAPSHOT, HIDE_SNAPSHOT = "show to the room", "hide"
 _NO_STUDENT = "(nobody)"
 
 
@@ -47,9 +47,7 @@ class PanelHost(Protocol):
 
     def student_tabs(self) -> dict[str, int]: ...
 
-    def set_follow_me(self, client: viser.ClientHandle, on: bool) -> None: ...
-
-    def release(self, mode: Mode) -> None: ...
+    def publish(self, client: viser.ClientHandle) -> None: ...
 
 
 class SnapshotPicker:
@@ -63,7 +61,7 @@ class SnapshotPicker:
         self._tabs: dict[str, int] = {}
         with gui.add_folder("Snapshot", expand_by_default=False):
             self.student = gui.add_dropdown("student", (_NO_STUDENT,), initial_value=_NO_STUDENT)
-            self.buttons = gui.add_button_group("snapshot", ("show to the room", "hide"))
+            self.buttons = gui.add_button_group("snapshot", (SHOW_SNAPSHOT, HIDE_SNAPSHOT))
 
     def offer(self, tabs: dict[str, int]) -> None:
         """The students to choose from now: their names and one tab of each."""
@@ -82,7 +80,7 @@ class InstructorPanel:
 
     Args:
         client: the instructor's tab.
-        host: the class's host (the classroom, the student URL, the question, the actions).
+        host: the class's host (the classroom, the student URL, the course's lessons, the students' tabs).
         report: shows an exception in the tab.
     """
 
@@ -90,7 +88,8 @@ class InstructorPanel:
                  report: Callable[[BaseException], None]) -> None:
         self.client = client
         self.host = host
-        self.room = host.room
+        #: What the controls do and what the panel shows (its class, ``control.room``, is the host's).
+        self.control = InstructorController(host.room, host.lesson_steps)
         self._report = report
         # Per thread: a value written back by refresh() calls its callbacks at once, in the refreshing thread.
         self._syncing = threading.local()
@@ -98,10 +97,10 @@ class InstructorPanel:
         gui = client.gui
         with client.atomic(), gui.add_folder("Classroom", order=-1000.0, expand_by_default=True):
             self.status = gui.add_html("")
-            self.follow_me = gui.add_checkbox("follow me", self.room.mode is Mode.FOLLOW,
+            self.follow_me = gui.add_checkbox("follow me", self.control.room.mode is Mode.FOLLOW,
                                               hint="Every student's tab shows your scene, live.")
             self.release = gui.add_button_group("release to", tuple(RELEASE_TO))
-            self.lock = gui.add_checkbox("lock students' cameras", self.room.cameras_locked,
+            self.lock = gui.add_checkbox("lock students' cameras", self.control.room.cameras_locked,
                                          hint="Followers see the scene from your viewpoint and cannot turn it.")
             self.pause_text = gui.add_text("pause message", "Eyes on the projector, please.")
             self.pause = gui.add_button("Pause every screen", icon=viser.Icon.PLAYER_PAUSE)
@@ -130,7 +129,7 @@ class InstructorPanel:
         with gui.add_folder("Question", expand_by_default=True):
             self.question = gui.add_text("question", "")
             self.ask = gui.add_button_group("ask the room", ("ask", "clear"))
-            self.show_names = gui.add_checkbox("show names", self.room.names_shown(),
+            self.show_names = gui.add_checkbox("show names", self.control.room.names_shown(),
                                                hint="Off on a projector: only counts are shown.")
             self.histogram = gui.add_html("")
 
@@ -144,21 +143,22 @@ class InstructorPanel:
             self.pacing = gui.add_html("")
 
     def _wire(self) -> None:
-        host, rep = self.host, self._report
+        control, rep = self.control, self._report
         on_event(self.follow_me.on_update, lambda e: self._unless_syncing(
-            lambda: host.set_follow_me(self.client, bool(e.target.value))), rep)
-        on_event(self.release.on_click, lambda e: host.release(self._release_mode(e.target.value)), rep)
+            lambda: self._follow_me(bool(e.target.value))), rep)
+        on_event(self.release.on_click, lambda e: control.release(e.target.value), rep)
         on_event(self.lock.on_update, lambda e: self._unless_syncing(
-            lambda: self.room.lock_cameras(bool(e.target.value))), rep)
-        on_event(self.pause.on_click, lambda _: self._toggle_pause(), rep)
+            lambda: control.lock_cameras(bool(e.target.value))), rep)
+        on_event(self.pause.on_click, lambda _: control.toggle_pause(self.pause_text.value), rep)
         on_event(self.csv.on_click, lambda _: self.client.send_file_download(
-            "egtviz-roster.csv", self.room.roster_csv().encode("utf-8"), save_immediately=True), rep)
-        on_event(self.ask.on_click,
-                 lambda e: self.room.ask(self.question.value if e.target.value == "ask" else None), rep)
+            "egtviz-roster.csv", control.roster_csv(), save_immediately=True), rep)
+        on_event(self.ask.on_click, lambda e: control.ask(self.question.value) if e.target.value == "ask"
+                 else control.clear_question(), rep)
         on_event(self.show_names.on_update, lambda e: self._unless_syncing(
-            lambda: self.room.show_names(bool(e.target.value))), rep)
+            lambda: control.show_names(bool(e.target.value))), rep)
         on_event(self.snapshot.buttons.on_click, lambda e: self._snapshot(e.target.value), rep)
-        on_event(self.apply_pacing.on_click, lambda _: self._apply_pacing(), rep)
+        on_event(self.apply_pacing.on_click, lambda _: control.pace(self.lesson.value, self.max_step.value,
+                                                                    self.only.value), rep)
 
     # -- actions ---------------------------------------------------------------------------------------
 
@@ -167,59 +167,33 @@ class InstructorPanel:
         if not getattr(self._syncing, "on", False):
             action()
 
-    @staticmethod
-    def _release_mode(label: object) -> Mode:
-        mode = RELEASE_TO.get(label) if isinstance(label, str) else None
-        if mode is None:
-            raise FieldError(f"release to: expected one of {sorted(RELEASE_TO)}")
-        return mode
-
-    def _toggle_pause(self) -> None:
-        if self.room.paused() is None:
-            self.room.pause(self.pause_text.value)
-        else:
-            self.room.pause(None)
+    def _follow_me(self, on: bool) -> None:
+        if self.control.follow_me(on):
+            self.host.publish(self.client)  # the students follow this tab: its scene is the room's now
 
     def _snapshot(self, action: str) -> None:
-        if action == "hide":
-            self.room.show_snapshot(None)
-            return
-        if action != "show to the room":
-            raise FieldError("snapshot: no such action")
-        tab = self.snapshot.chosen_tab()
-        if tab is None:
-            raise FieldError("snapshot: choose a connected student first")
-        self.room.show_snapshot(self.room.snapshot(tab))
-
-    def _apply_pacing(self) -> None:
-        lesson, steps = self.lesson.value, self.host.lesson_steps()
-        if lesson not in steps:
-            raise FieldError("pacing: no lesson to pace")
-        last = paced_step(self.max_step.value, lesson, steps.get(lesson, 0))
-        self.room.pace(lesson, last)
-        self.room.allow_lessons([lesson] if self.only.value else None)
+        if action == HIDE_SNAPSHOT:
+            self.control.hide_snapshot()
+        elif action == SHOW_SNAPSHOT:
+            self.control.show_snapshot(self.snapshot.chosen_tab())
+        else:
+            raise ClassRefusal("snapshot: no such action")
 
     # -- what the panel shows -----------------------------------------------------------------------------
 
     def refresh(self) -> None:
         """Show the room as it is now: status, roster, students to snapshot, the histogram, the pacing."""
-        rows = self.room.roster()
-        connected = [r for r in rows if r.connected]
-        paused = self.room.paused()
-        mode = self.room.mode
-        steps = self.host.lesson_steps()
+        state = self.control.state()
         with self.client.atomic():
-            self.status.content = status_html(len(connected), sum(r.following for r in connected), mode.value,
-                                              paused)
-            self.pause.label = "Resume every screen" if paused is not None else "Pause every screen"
-            self._sync_checkbox(self.follow_me, mode is Mode.FOLLOW)
-            self._sync_checkbox(self.lock, self.room.cameras_locked)
-            self._sync_checkbox(self.show_names, self.room.names_shown())
-            self.roster.content = roster_html(rows, {n: k for k, n in enumerate(steps, 1)})
+            self.status.content = status_html(state.status)
+            self.pause.label = "Resume every screen" if state.status.paused is not None else "Pause every screen"
+            self._sync_checkbox(self.follow_me, state.follow_me)
+            self._sync_checkbox(self.lock, state.cameras_locked)
+            self._sync_checkbox(self.show_names, state.names_shown)
+            self.roster.content = roster_html(state.roster)
             self.snapshot.offer(self.host.student_tabs())
-            self.histogram.content = self._histogram_html()
-            allowed, paced = self.room.pacing()
-            self.pacing.content = pacing_html(allowed, paced, steps)
+            self.histogram.content = histogram_html(state.answers)
+            self.pacing.content = pacing_html(state.pacing)
 
     def _sync_checkbox(self, box: viser.GuiCheckboxHandle, state: bool) -> None:
         """Show the class's ``state`` in ``box`` when that state changed since it was last shown there.
@@ -237,11 +211,3 @@ class InstructorPanel:
                 box.value = state  # type: ignore[misc]
             finally:
                 self._syncing.on = False
-
-    def _histogram_html(self) -> str:
-        question = self.room.asked()
-        if question is None:
-            return '<div data-egtviz="histogram" data-n="0" style="padding:0 0.6em">No question asked.</div>'
-        hist = self.room.histogram(question, HISTOGRAM_BINS)
-        names = self.room.answers(question) if self.room.names_shown() else None
-        return histogram_html(hist, names=names)

@@ -6,16 +6,18 @@ Pure functions: the same data gives the same HTML, which is all the tests need t
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from html import escape
 from typing import TYPE_CHECKING
 
-from ...classroom import Histogram, RosterRow
+from ...controllers.class_state import AnswersView, PacingView, RosterLine, RoomStatus
 
 if TYPE_CHECKING:
     from ...lessons import LessonRun
 
-__all__ = ["histogram_html", "pause_html", "roster_html", "status_html", "step_caption", "student_status_html"]
+__all__ = [
+    "histogram_html", "pacing_html", "pause_html", "roster_html", "status_html", "step_caption", "student_status_html",
+]
 
 #: Bars of the histogram are drawn in this colour (the palette's blue, readable on a projector).
 BAR_COLOUR = "#0072B2"
@@ -26,60 +28,39 @@ _TD = "vertical-align:top;padding:0.2em 0.5em 0 0"
 _TH = "text-align:left;white-space:nowrap;padding:0 0.5em 0.1em 0;font-weight:600"
 
 
-def _where(row: RosterRow, numbers: Mapping[str, int]) -> tuple[str, str]:
-    """Where a roster row's student is: following, on their own scene, or away; and the lesson and step."""
-    state = "away" if not row.connected else "following" if row.following else "own scene"
-    if row.lesson is None:
-        return state, ""
-    lesson = f"lesson {numbers[row.lesson]}" if row.lesson in numbers else row.lesson
-    return state, lesson if row.step is None else f"{lesson} · step {row.step + 1}"
-
-
-def roster_html(rows: Sequence[RosterRow], numbers: Mapping[str, int] | None = None) -> str:
-    """The roster as a table that fits the instructor's panel without scrolling sideways, two lines a student:
-    their name and the tasks passed of the lesson's ("3/12"); under it, where they are (following, own scene or
-    away, and the lesson and step, from 1).
-
-    ``rows`` are :class:`egtviz.classroom.RosterRow`; ``numbers`` gives each lesson's number in the course (the
-    lesson is said as "lesson 6"; a lesson not in it by its name).
-    """
-    if not rows:
+def roster_html(lines: Sequence[RosterLine]) -> str:
+    """The roster (:func:`egtviz.controllers.class_state.roster_lines`) as a table that fits the instructor's panel
+    without scrolling sideways, two lines a student: their name and the tasks passed of the lesson's ("3/12");
+    under it, where they are (following, own scene or away, and the lesson and step, from 1)."""
+    if not lines:
         return '<div data-egtviz="roster" data-rows="0" style="padding:0.3em 0.6em">No student has joined yet.</div>'
-    numbers = numbers or {}
     head = f"<th style='{_TH}'>name</th><th style='{_TH};text-align:right;padding-right:0'>tasks</th>"
     body = []
-    for r in rows:
-        state, lesson = _where(r, numbers)
-        tasks = f"{r.tasks_passed}/{r.tasks_total}" if r.tasks_total else str(r.tasks_passed)
-        where = f"{state} · {lesson}" if lesson else state
+    for r in lines:
         body.append(
             f'<tr data-name="{escape(r.name)}" style="border-top:1px solid #ddd">'
             f'<td data-col="name" style="{_TD};overflow-wrap:anywhere;font-weight:600">{escape(r.name)}</td>'
             f'<td data-col="tasks" style="{_TD};text-align:right;white-space:nowrap;padding-right:0">'
-            f"{escape(tasks)}</td></tr>"
-            f'<tr data-where="{escape(r.name)}"><td colspan="2" data-col="where" data-state="{state}" '
+            f"{escape(r.tasks)}</td></tr>"
+            f'<tr data-where="{escape(r.name)}"><td colspan="2" data-col="where" data-state="{r.state}" '
             f'style="padding:0 0 0.25em 0.8em;font-size:0.92em;color:{"#555" if r.connected else "#999"}">'
-            f"{escape(where)}</td></tr>")
-    return (f'<div data-egtviz="roster" data-rows="{len(rows)}" style="padding:0 0.6em">'
+            f"{escape(r.where)}</td></tr>")
+    return (f'<div data-egtviz="roster" data-rows="{len(lines)}" style="padding:0 0.6em">'
             f'<table style="border-collapse:collapse;width:100%;font-size:0.9em"><thead><tr>{head}</tr></thead>'
             f'<tbody>{"".join(body)}</tbody></table></div>')
 
 
-def _number(x: float) -> str:
-    return f"{x:.4g}"
-
-
-def histogram_html(hist: Histogram, *, names: Mapping[str, float | str] | None = None, width_px: int = 320) -> str:
-    """A bar chart of the answers to one question (an :class:`egtviz.classroom.Histogram`), no names in it;
-    ``names`` (each student's answer) adds a list under it, for the instructor's eyes only."""
-    q = escape(hist.question)
-    if hist.n == 0:
+def histogram_html(view: AnswersView | None, *, width_px: int = 320) -> str:
+    """A bar chart of the answers to the question asked (:func:`egtviz.controllers.class_state.answers_view`), no
+    names in it; the answers by name, if the view has them, listed under it (for the instructor's eyes only).
+    None: no question asked."""
+    if view is None:
+        return '<div data-egtviz="histogram" data-n="0" style="padding:0 0.6em">No question asked.</div>'
+    q = escape(view.question)
+    if view.n == 0:
         return (f'<div data-egtviz="histogram" data-n="0" style="padding:0.3em 0.6em"><b>{q}</b><br>'
                 "No answer yet.</div>")
-    bars: list[tuple[str, int]] = []
-    for i, count in enumerate(hist.counts):
-        bars.append((f"{_number(hist.edges[i])} to {_number(hist.edges[i + 1])}", count))
-    bars += [(text, count) for text, count in hist.categories]
+    bars = view.bars
     top = max(count for _, count in bars) or 1
     row_h, label_w = 26, 150
     height = row_h * len(bars) + 8
@@ -94,21 +75,29 @@ def histogram_html(hist: Histogram, *, names: Mapping[str, float | str] | None =
                      f'<text x="{label_w + w + 5:.1f}" y="{y + 17}" font-size="15">{count}</text>')
     parts.append("</svg>")
     listing = ""
-    if names:
-        items = "".join(f"<li>{escape(n)}: {escape(v if isinstance(v, str) else _number(v))}</li>"
-                        for n, v in sorted(names.items(), key=lambda kv: kv[0].casefold()))
+    if view.by_name:
+        items = "".join(f"<li>{escape(n)}: {escape(v)}</li>" for n, v in view.by_name)
         listing = f'<ul data-egtviz="answers-by-name" style="margin:0.3em 0">{items}</ul>'
-    return (f'<div data-egtviz="histogram" data-n="{hist.n}" style="padding:0 0.6em"><b>{q}</b> '
-            f'({hist.n} answered){"".join(parts)}{listing}</div>')
+    return (f'<div data-egtviz="histogram" data-n="{view.n}" style="padding:0 0.6em"><b>{q}</b> '
+            f'({view.n} answered){"".join(parts)}{listing}</div>')
 
 
-def status_html(students: int, following: int, mode: str, paused: str | None) -> str:
+def status_html(status: RoomStatus) -> str:
     """The instructor's summary of the room, in a box two lines high whether or not it wraps: the controls below
     it stay where they are when a count, the mode or the pause changes (a click aimed at them lands on them)."""
-    pause = f' · <b style="color:#D55E00">paused</b>' if paused is not None else ""
+    pause = f' · <b style="color:#D55E00">paused</b>' if status.paused is not None else ""
     return (f'<div data-egtviz="room-status" style="padding:0 0.6em;font-size:1.05em;line-height:1.3;'
             f'min-height:2.6em">'
-            f"{students} connected · {following} following · mode: {escape(mode)}{pause}</div>")
+            f"{status.connected} connected · {status.following} following · mode: {escape(status.mode.value)}{pause}"
+            "</div>")
+
+
+def pacing_html(view: PacingView) -> str:
+    """What the panel says of the pacing: the lessons open, and the last step open of each paced one, "of n"."""
+    lines = "all lessons" if view.allowed is None else escape(", ".join(view.allowed))
+    for p in view.paced:
+        lines += f"<br>{escape(p.lesson)}: up to step {p.up_to}" + (f" of {p.of}" if p.of else "")
+    return f'<div data-egtviz="pacing" style="padding:0 0.6em">{lines}</div>'
 
 
 def student_status_html(name: str, following: bool, question: str | None) -> str:

@@ -1,9 +1,10 @@
 """A student's controls in a class: the name they join under, their bar (follow or not, the question asked,
 their answer) and the paused screen.
 
-The bar sits at the top of whatever the tab shows (a following view, their own workbench, a lesson); it is
-built again whenever the tab is cleared. Every callback's failure is shown in the tab
-(:func:`egtviz.viewer.workbench.fields.on_event`).
+The bar is a skin over a :class:`~egtviz.controllers.class_member.StudentController`: its buttons become the
+controller's intents and it draws the controller's state. It sits at the top of whatever the tab shows (a
+following view, their own workbench, a lesson); it is built again whenever the tab is cleared. Every callback's
+failure is shown in the tab (:func:`egtviz.viewer.workbench.fields.on_event`).
 """
 
 from __future__ import annotations
@@ -12,14 +13,14 @@ from collections.abc import Callable
 from typing import Protocol
 import viser
 
+from ...controllers.class_member import StudentController
+from ...controllers.class_state import StudentState
+from ...controllers.class_text import as_refusal
 from ..render.palette import PRESENT_GUI_CSS
-from ...classroom import ClassroomError
-from ...lessons.answers import AnswerError, read_number
-from ...lessons.progress import LearnerNameError
-from ..workbench.fields import FieldError, notify_error, on_event
+from ..workbench.fields import notify_error, on_event
 from .room_html import pause_html, student_status_html
 
-__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "notify_refusal", "stored_name", "typed_answer"]
+__all__ = ["BAR_ORDER", "JoinPage", "StudentBar", "notify_refusal", "stored_name"]
 
 #: GUI order of the bar: above everything a workbench or a lesson adds.
 BAR_ORDER = -1000.0
@@ -46,21 +47,6 @@ def stored_name(client: viser.ClientHandle, key: str, timeout: float) -> str | N
     except Exception:  # noqa: BLE001 - no storage, or no answer in time: the student types their name
         return None
     return value if isinstance(value, str) and value.strip() else None
-
-
-def typed_answer(text: object) -> float | str:
-    """An answer as typed: a plain finite decimal (``1,5`` reads as 1.5) is a number, anything else its text.
-
-    Raises:
-        FieldError: nothing typed.
-    """
-    if not isinstance(text, str) or not text.strip():
-        raise FieldError("your answer: type it first")
-    typed = text.strip()
-    try:  # the course's strict reader, with a poll's decimal comma taken as a point
-        return read_number(typed.replace(",", ".") if typed.count(",") == 1 else typed)
-    except AnswerError:
-        return typed
 
 
 class JoinPage:
@@ -94,12 +80,9 @@ class JoinPage:
 
 def notify_refusal(client: viser.ClientHandle, exc: BaseException) -> None:
     """:func:`~egtviz.viewer.workbench.fields.notify_error`, with the class's refusals (a name the course does not
-    take, a question or an answer it cannot keep) shown as the refusal they are, in their own words."""
-    if isinstance(exc, LearnerNameError):
-        exc = FieldError(f"your {exc}")
-    elif isinstance(exc, ClassroomError):
-        exc = FieldError(str(exc))
-    notify_error(client, exc)
+    take, a question or an answer it cannot keep) shown as the refusal they are, in their own words
+    (:func:`egtviz.controllers.class_text.as_refusal`)."""
+    notify_error(client, as_refusal(exc))
 
 
 class StudentBar:
@@ -107,16 +90,14 @@ class StudentBar:
 
     Args:
         client: the tab.
-        name: the student's name (shown as text).
-        on_follow: ``on_follow(True)`` to follow the instructor, ``False`` to leave follow.
-        on_answer: ``on_answer(question, value)`` records the student's answer (:func:`typed_answer`'s value).
+        student: the student's controller (what the buttons do, what the bar shows).
         report: shows an exception in the tab.
     """
 
-    def __init__(self, client: viser.ClientHandle, name: str, *, on_follow: Callable[[bool], None],
-                 on_answer: Callable[[str, float | str], None], report: Callable[[BaseException], None]) -> None:
+    def __init__(self, client: viser.ClientHandle, student: StudentController, *,
+                 report: Callable[[BaseException], None]) -> None:
         self.client = client
-        self.name = name
+        self.student = student
         self.following = False
         self.question: str | None = None
         self._modal: _Modal | None = None
@@ -127,24 +108,22 @@ class StudentBar:
                                              icon=viser.Icon.PLAYER_PLAY)
             self.answer = gui.add_text("your answer", "", order=BAR_ORDER + 0.2, visible=False)
             self.btn_answer = gui.add_button("Send my answer", order=BAR_ORDER + 0.3, visible=False)
-        on_event(self.btn_follow.on_click, lambda _: on_follow(not self.following), report)
-        on_event(self.btn_answer.on_click, lambda _: self._send(on_answer), report)
+        on_event(self.btn_follow.on_click, lambda _: student.follow(not self.following), report)
+        on_event(self.btn_answer.on_click, lambda _: self._send(), report)
 
-    def _send(self, on_answer: Callable[[str, float | str], None]) -> None:
-        question = self.question
-        if question is None:
-            raise FieldError("your answer: no question is asked at the moment")
-        on_answer(question, typed_answer(self.answer.value))
+    def _send(self) -> None:
+        self.student.answer(self.question, self.answer.value)  # the question the student reads
         self.client.add_notification("Answer sent", "The instructor sees it (without your name).", color="green",
                                      auto_close_seconds=3.0)
 
-    def show(self, following: bool, question: str | None) -> None:
-        """Say whether the tab follows the instructor, and show the question asked (None: none)."""
-        self.following, self.question = following, question
+    def show(self, state: StudentState) -> None:
+        """Show whether the tab follows the instructor, and the question asked (the pause is :meth:`set_paused`'s:
+        it is drawn only when it changes)."""
+        self.following, self.question = state.following, state.question
         with self.client.atomic():
-            self.status.content = student_status_html(self.name, following, question)
-            self.btn_follow.label = "Leave follow (my own scene)" if following else "Follow the instructor"
-            self.answer.visible = self.btn_answer.visible = question is not None
+            self.status.content = student_status_html(state.name, state.following, state.question)
+            self.btn_follow.label = "Leave follow (my own scene)" if state.following else "Follow the instructor"
+            self.answer.visible = self.btn_answer.visible = state.question is not None
 
     def set_paused(self, message: str | None) -> None:
         """Cover the screen with the instructor's message (None: take it away)."""

@@ -14,7 +14,8 @@ The numbers come from :func:`egtviz.scene.lab.run_lab`; this module only shows t
 * in 3D, the scene points the lab used, green when the chosen robust fit kept them, grey when it rejected them.
 
 The settings belong to the lesson (:attr:`egtviz.lessons.LessonRun.lab`): a slider applies a ``set_lab``
-change through the run, so the lesson's checks see what the lab shows.
+change through the run (:func:`egtviz.controllers.lesson_instruments.set_lab`), so the lesson's checks see what
+the lab shows; the panels through the lab are :func:`egtviz.controllers.lesson_instruments.through_lab`'s.
 """
 
 from __future__ import annotations
@@ -27,9 +28,8 @@ import numpy as np
 import viser
 from viser import uplot
 
-from ...lessons.changes import SetLab
+from ...controllers.lesson_instruments import MAX_RINGS, LessonInstruments, set_lab, through_lab
 from ...scene import Derived, Scene, SceneError
-from ...scene.derived import with_pair_lines
 from ...scene.limits import LAB_NOISE_PX, LAB_OUTLIER_PERCENT, LAB_THRESHOLD_PX
 from ...scene.lab import (
     METHOD_TITLES,
@@ -38,8 +38,8 @@ from ...scene.lab import (
     LabResult,
     run_lab,
 )
-from ..workbench.fields import FieldError, format_number, on_event
-from .lens_view import LessonInstruments
+from ...controllers.workbench_fields import FieldError, format_number
+from ..workbench.fields import on_event
 
 __all__ = ["LabPanel", "fits_table_html", "threshold_text"]
 
@@ -50,8 +50,6 @@ REJECTED_RGB = (150, 150, 150)
 NOISE_STEP, OUTLIER_STEP, THRESHOLD_STEP = 0.1, 1.0, 0.05
 #: The sliders offer up to these values (the lab accepts up to :data:`LAB_THRESHOLD_PX`; lessons stay below).
 THRESHOLD_SLIDER_MAX = 50.0
-#: Most rejected correspondences ringed in the panels.
-MAX_RINGS = 40
 
 
 def _num(x: float, digits: int = 3) -> str:
@@ -174,8 +172,7 @@ class LabPanel:
             return
         if isinstance(value, bool) or not isinstance(value, (int, float)):  # a raw client can send anything
             raise FieldError(f"estimation lab: {key} must be a number, got {str(value)[:40]!r}")
-        if getattr(self.run.lab, key) != float(value):
-            self.run.apply(SetLab(((key, float(value)),)))  # LabSettings checks the range
+        set_lab(self.run, key, float(value))
         self._redraw()
 
     def _choose(self, title: object) -> None:
@@ -242,20 +239,4 @@ class LabPanel:
             self.table.content = f'<div style="font-size:0.8em">The lab cannot run here: {escape(str(exc))}</div>'
             self._mask_3d(scene, None)
             return derived, frozenset()
-        fit = result.fit(self.drawn)
-        if fit.F is None or fit.e1 is None or fit.e2 is None:  # a fit's epipoles come with its F
-            return derived, frozenset()
-        data = result.data
-        n = len(scene.points)
-        points = [np.full((n, 2), np.nan), np.full((n, 2), np.nan)]
-        points[0][data.point_indices] = data.measured1
-        points[1][data.point_indices] = data.measured2
-        lines1, lines2 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
-        lines1[data.point_indices] = fit.lines1
-        lines2[data.point_indices] = fit.lines2
-        ringed: frozenset[int] = frozenset()
-        if fit.inliers is not None and np.count_nonzero(~fit.inliers) <= MAX_RINGS:
-            ringed = frozenset(int(i) for i in data.point_indices[~fit.inliers])
-        planes = with_pair_lines(derived, result.names, lines1=lines1, lines2=lines2, e1=fit.e1, e2=fit.e2,
-                             points=(points[0], points[1]), no_image="not used by the lab")
-        return planes, ringed
+        return through_lab(derived, result, self.drawn, len(scene.points))

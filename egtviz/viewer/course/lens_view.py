@@ -12,12 +12,14 @@ image 2, :math:`|l_{2i} \cdot m_{2i}|` with :math:`l_{2i} = F m_{1i}` scaled to 
 A working lens gives residuals near zero; a broken one does not.
 
 The toggles belong to the lesson (:attr:`egtviz.lessons.LessonRun.lens`): a click applies a ``set_lens``
-change through the run, so the lesson's checks see what the panels show.
+change through the run (:func:`egtviz.controllers.lesson_instruments.toggle_lens`), so the lesson's checks see
+what the panels show.
 
 A step that asks which mistake is on (a task that declares a possible diagnosis, while its lens has a mistake
-on) hides the lens's settings (:func:`hidden_lens`): the panels show the mistake's effect, and each box shows
-whether the learner switched that step of the computation since the step began, not whether the mistake is on
-(:meth:`~egtviz.scene.lens.LensToggles.switched`). Ticking the box of the hidden mistake repairs the lens.
+on) hides the lens's settings (:func:`egtviz.controllers.lesson_instruments.hidden_lens`): the panels show the
+mistake's effect, and each box shows whether the learner switched that step of the computation since the step
+began, not whether the mistake is on (:meth:`~egtviz.scene.lens.LensToggles.switched`). Ticking the box of the
+hidden mistake repairs the lens.
 """
 
 from __future__ import annotations
@@ -26,20 +28,16 @@ import math
 from collections.abc import Callable
 from dataclasses import fields
 from html import escape
-from typing import Protocol
 
 import numpy as np
 import viser
 
-from ...lessons import instruments
-from ...lessons.changes import Change, SetLens
+from ...controllers.lesson_instruments import LessonInstruments, hidden_lens, lens_shown, through_lens, toggle_lens
 from ...scene import Derived, Scene, SceneError
-from ...scene.derived import with_pair_lines
-from ...scene.lab import LabSettings
 from ...scene.lens import LensToggles, LensView, lens_view
 from ..workbench.fields import on_event
 
-__all__ = ["HIDDEN_NOTE", "LENS_LABELS", "LensPanel", "LessonInstruments", "hidden_lens", "residual_table_html"]
+__all__ = ["HIDDEN_NOTE", "LENS_LABELS", "LensPanel", "residual_table_html"]
 
 #: Each toggle of :class:`~egtviz.scene.lens.LensToggles` as the GUI names it (the mistake it applies).
 LENS_LABELS: dict[str, str] = {
@@ -54,24 +52,6 @@ MAX_RESIDUAL_ROWS = 12
 #: What the lens says while it hides the step's mistake (:func:`hidden_lens`).
 HIDDEN_NOTE = ("<small><b>A mistake is hidden in this step.</b> A ticked box is a step of the computation you "
                "switched, not a mistake that is on: find the switch that repairs the geometry.</small>")
-
-
-class LessonInstruments(Protocol):
-    """What the lab and the lens read and change: a :class:`~egtviz.lessons.LessonRun`."""
-
-    lab: LabSettings
-    lens: LensToggles
-
-    def apply(self, change: Change) -> None: ...
-
-
-def hidden_lens(run: LessonInstruments) -> LensToggles | None:
-    """The lens the current step set, when the step hides it (:func:`egtviz.lessons.instruments.hidden_lens`);
-    None when the lens shows its settings. A run without a lesson hides nothing."""
-    lesson, index = getattr(run, "lesson", None), getattr(run, "step_index", None)
-    if lesson is None or not isinstance(index, int):
-        return None
-    return instruments.hidden_lens(lesson, index)
 
 
 def _num(x: float, digits: int = 3) -> str:
@@ -124,18 +104,13 @@ class LensPanel:
                              "mistaken code computes.</small>")
             self.note = gui.add_markdown("")
             self.toggles: dict[str, viser.GuiCheckboxHandle] = {}
-            shown = self._shown()
+            shown = lens_shown(run)
             for f in fields(LensToggles):
                 box = gui.add_checkbox(LENS_LABELS[f.name], getattr(shown, f.name))
                 on_event(box.on_update, self._toggler(f.name), report)
                 self.toggles[f.name] = box
             self.readout = gui.add_html("")
         self.note.content = HIDDEN_NOTE if hidden_lens(run) is not None else ""
-
-    def _shown(self) -> LensToggles:
-        """What the boxes show: the run's toggles, or what was switched since the step hid its mistake."""
-        hidden = hidden_lens(self.run)
-        return self.run.lens if hidden is None else hidden.switched(self.run.lens)
 
     def _toggler(self, key: str) -> Callable[[viser.GuiEvent[viser.GuiCheckboxHandle]], None]:
         """The update callback of the checkbox for the lens toggle ``key``."""
@@ -146,17 +121,14 @@ class LensPanel:
             return
         if not isinstance(value, bool):  # a raw client can send anything
             raise SceneError(f"{LENS_LABELS[key]}: expected true or false, got {str(value)[:40]!r}")
-        hidden = hidden_lens(self.run)
-        wanted = value if hidden is None else getattr(hidden, key) != value
-        if getattr(self.run.lens, key) != wanted:
-            self.run.apply(SetLens(((key, wanted),)))
+        toggle_lens(self.run, key, value)
         self._redraw()
 
     def sync(self) -> None:
         """Show the run's toggles (after a step changed them), or what was switched while a step hides its lens."""
         self._syncing = True
         try:
-            shown = self._shown()
+            shown = lens_shown(self.run)
             self.note.content = HIDDEN_NOTE if hidden_lens(self.run) is not None else ""
             for key, box in self.toggles.items():
                 if box.value != getattr(shown, key):
@@ -175,5 +147,4 @@ class LensPanel:
             return derived, frozenset()
         self.view = view
         self.readout.content = residual_table_html(view, scene.selected_point)
-        return with_pair_lines(derived, view.names, lines1=view.lines1, lines2=view.lines2, e1=view.e1, e2=view.e2), \
-            frozenset()
+        return through_lens(derived, view), frozenset()

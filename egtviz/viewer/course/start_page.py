@@ -27,8 +27,10 @@ from ...lessons import Lesson, LessonRun, ProgressStore, list_lessons, load
 from ...lessons.progress import LessonProgress
 from ...lessons.records import records_csv
 from ...scene import Scene, SceneModel
-from ..workbench.fields import Debouncer, FieldError, notify_error, on_event
-from .lesson_view import HELD_NAME_HINT, LESSON_ORDER, LessonPanel, LessonTab, refuse_held_name, typed_learner_key
+from ...controllers.workbench_fields import FieldError
+from ..workbench.fields import Debouncer, notify_error, on_event
+from ...controllers.lesson import typed_learner_key
+from .lesson_view import HELD_NAME_HINT, LESSON_ORDER, LessonPanel, LessonTab, refuse_held_name
 from ..render.palette import PRESENT_GUI_CSS
 from ..render.panels import DEFAULT_WINDOW, WindowSize, window_from_canvas
 from .start_preview import start_preview_html

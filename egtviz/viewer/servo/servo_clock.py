@@ -1,23 +1,22 @@
-"""The playback clock of a servo demo: which frame of the run is shown, Play/Pause, steps and the time scrubber.
+"""The playback clock of a servo demo: Play/Pause, steps and the time scrubber, and the thread that plays.
 
 :class:`ServoClock` owns the *Playback* folder's buttons and time slider and the playback thread, which advances
-the frame at the chosen speed (simulated seconds per real second). It draws nothing: it asks its player to show a
-frame (``show(k)``, called with the lock held), and the player tells it which frame it drew (:attr:`frame`).
+the frame at the chosen speed (simulated seconds per real second). Which frame a button, the scrubber or the
+running clock lands on, and whether the run plays, is the tab's :class:`~egtviz.controllers.servo.ServoController`'s;
+the clock draws nothing: it asks its player to show the frame (``show(k)``, called with the lock held).
 """
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from collections.abc import Callable
 
-import numpy as np
 import viser
 
-from egtviz.servo import ServoResult
+from egtviz.controllers.servo import ServoController
 
-from ..workbench.fields import FieldError, on_event
+from ..workbench.fields import on_event
 
 __all__ = ["FPS", "ServoClock"]
 
@@ -29,25 +28,20 @@ class ServoClock:
     """Playback of one demo's run in one tab. Every method takes the player's lock.
 
     Args:
+        controller: the tab's demo (the run played, the frame shown, playing or not, the speed).
         lock: the player's lock (one per tab; the clock's thread and the GUI callbacks share it).
         closed: set once the player closed; the clock then does nothing and its thread ends.
-        run: the run played (``None`` before the first one or after a failed one).
-        show: draw frame ``k`` everywhere (called with the lock held; sets :attr:`frame`).
-        speed: the playback speed, simulated seconds per real second.
+        show: draw frame ``k`` everywhere (called with the lock held).
         name: the playback thread's name.
     """
 
-    def __init__(self, *, lock: threading.RLock, closed: threading.Event, run: Callable[[], ServoResult | None],
-                 show: Callable[[int], None], speed: Callable[[], float], name: str) -> None:
+    def __init__(self, controller: ServoController, *, lock: threading.RLock, closed: threading.Event,
+                 show: Callable[[int], None], name: str) -> None:
+        self.controller = controller
         self.lock = lock
         self._closed = closed
-        self._run = run
         self._show = show
-        self._speed = speed
         self._name = name
-        #: The frame shown (index into ``result.time``).
-        self.frame = 0
-        self.playing = False
         self._gen = 0
         self._thread: threading.Thread | None = None
         self._syncing = False
@@ -101,15 +95,9 @@ class ServoClock:
     # -- what is shown ------------------------------------------------------------------
 
     @property
-    def n_frames(self) -> int:
-        r = self._run()
-        return 0 if r is None else r.n_samples
-
-    @property
     def time(self) -> float:
         """Simulated time of the frame shown."""
-        r = self._run()
-        return 0.0 if r is None else float(r.time[self.frame])
+        return self.controller.time
 
     @property
     def thread(self) -> threading.Thread | None:
@@ -121,11 +109,13 @@ class ServoClock:
     def play(self) -> None:
         """Play from the current frame (from the start if at the end)."""
         with self.lock:
-            if self._closed.is_set() or self._run() is None or self.playing:
+            if self._closed.is_set() or self.controller.playing:
                 return
-            if self.frame >= self.n_frames - 1:
-                self._show(0)
-            self.playing = True
+            rewound = self.controller.play()
+            if not self.controller.playing:
+                return  # no run to play
+            if rewound is not None:
+                self._show(rewound)
             self._gen += 1
             gen = self._gen
             self.btn_play.label = "Pause"
@@ -136,21 +126,19 @@ class ServoClock:
     def pause(self) -> None:
         with self.lock:
             self._gen += 1
-            if self.playing:
-                self.playing = False
-                if not self._closed.is_set():
-                    self.btn_play.label = "Play"
-                    self.btn_play.icon = viser.Icon.PLAYER_PLAY
+            if self.controller.pause() and not self._closed.is_set():
+                self.btn_play.label = "Play"
+                self.btn_play.icon = viser.Icon.PLAYER_PLAY
 
     def halt(self) -> None:
         """Stop the playback thread for good (the player closes; the buttons are left as they are)."""
         with self.lock:
             self._gen += 1
-            self.playing = False
+            self.controller.pause()
 
     def toggle_play(self) -> None:
         with self.lock:
-            if self.playing:
+            if self.controller.playing:
                 self.pause()
             else:
                 self.play()
@@ -159,56 +147,53 @@ class ServoClock:
         """Pause and move ``n`` frames (negative: back)."""
         with self.lock:
             self.pause()
-            if self._run() is not None:
-                self._show(int(np.clip(self.frame + n, 0, self.n_frames - 1)))
+            k = self.controller.step(n)
+            if k is not None:
+                self._show(k)
 
     def seek(self, frame: int) -> None:
         """Show frame ``frame`` (clipped to the run)."""
         with self.lock:
-            if self._run() is not None:
-                self._show(int(np.clip(frame, 0, self.n_frames - 1)))
+            k = self.controller.seek(frame)
+            if k is not None:
+                self._show(k)
 
     def seek_time(self, t: float) -> None:
         """Show the frame at simulated time ``t`` (the nearest sample)."""
         with self.lock:
-            r = self._run()
-            if r is not None:
-                self._show(int(np.argmin(np.abs(r.time - float(t)))))
+            k = self.controller.seek_time(t)
+            if k is not None:
+                self._show(k)
 
     # -- the playback thread and the scrubber -------------------------------------------------
 
     def _loop(self, gen: int) -> None:
         t_last = time.perf_counter()
         with self.lock:
-            pos = float(self.frame)
+            pos = float(self.controller.frame)
         while not self._closed.wait(1.0 / FPS):
             with self.lock:
-                r = self._run()
-                if gen != self._gen or not self.playing or r is None:
+                if gen != self._gen or not self.controller.playing or self.controller.result is None:
                     return
                 now = time.perf_counter()
-                dt = float(r.params.get("dt", 0.05))
-                pos += (now - t_last) * self._speed() / dt
+                pos, k = self.controller.advance(pos, now - t_last)
                 t_last = now
-                last = self.n_frames - 1
-                k = min(int(pos), last)
-                if k != self.frame:
+                if k != self.controller.frame:
+                    self.controller.seek(k)
                     self._show(k)
-                if k >= last:
-                    self.playing = False
+                if not self.controller.playing:
                     self.btn_play.label = "Play"
                     self.btn_play.icon = viser.Icon.PLAYER_PLAY
                     return
 
     def _slider_event(self, event: viser.GuiEvent[viser.GuiSliderHandle[float]]) -> None:
         with self.lock:
-            r = self._run()
-            if self._syncing or self._closed.is_set() or r is None:
+            if self._syncing or self._closed.is_set():
                 return
-            t = self.slider.value
-            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
-                raise FieldError(f"time: expected a number of seconds, got {repr(t)[:40]}")
+            k = self.controller.frame_at(self.slider.value)
+            if k is None:
+                return
             self.pause()
-            k = int(np.argmin(np.abs(r.time - float(t))))
-            if k != self.frame:
+            if k != self.controller.frame:
+                self.controller.seek(k)
                 self._show(k)

@@ -22,10 +22,10 @@ from typing import Any, Literal
 import viser
 
 from .servo_panoramic_demo import PanoramicServoDemo
-from .servo_pinhole_demo import ESTIMATOR_CHOICES, PinholeServoDemo
-from .servo_player import SPEEDS, ServoPlayer
+from .servo_pinhole_demo import PinholeServoDemo
+from .servo_player import ServoPlayer
 
-__all__ = ["ESTIMATOR_CHOICES", "SERVO_DEMOS", "SPEEDS", "DemoKind", "ServoDemo", "make_servo_demo"]
+__all__ = ["SERVO_DEMOS", "DemoKind", "ServoDemo", "make_servo_demo"]
 
 DemoKind = Literal["pinhole", "panoramic"]
 

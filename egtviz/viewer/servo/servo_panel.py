@@ -15,8 +15,9 @@ import numpy as np
 import viser
 from viser import uplot
 
+from egtviz.controllers.servo import ServoFrameImage
 from egtviz.servo import ServoResult
-from egtviz.servo.frames import ServoFrames, trail_indices
+from egtviz.servo.frames import trail_indices
 
 from ..render.servo_svg import ServoImage, servo_image_svg, shared_zero_ranges
 from ..render.svg import NORMAL, PRESENT
@@ -171,16 +172,12 @@ class ServoPanel:
         if self.image_html is not None:
             self.image_html.content = self.svg
 
-    def draw_image(self, k: int, r: ServoResult, frames: ServoFrames, caption: str) -> None:
-        """The image plane at frame ``k``: features, goals, trails and the frame's epipolar geometry."""
-        g = frames.at(k)
-        message = g.message
-        if k == r.n_samples - 1 and not r.converged:
-            message = "did not converge (see the status on the left)"
-        self.send(ServoImage(demo=self.demo, width=self.width, height=self.height, frame=k, current=r.features[k],
-                             desired=r.desired_features, trails=frames.trail(k), lines=g.lines,
-                             conics=list(g.conics), epipoles=list(g.epipoles), rim=frames.rim, caption=caption,
-                             message=message))
+    def draw_image(self, image: ServoFrameImage) -> None:
+        """The image plane at a frame: features, goals, trails and the frame's epipolar geometry."""
+        self.send(ServoImage(demo=self.demo, width=self.width, height=self.height, frame=image.frame,
+                             current=image.current, desired=image.desired, trails=image.trails, lines=image.lines,
+                             conics=list(image.conics), epipoles=image.epipoles, rim=image.rim, caption=image.caption,
+                             message=image.message))
 
     def draw_plots(self, k: int, r: ServoResult) -> None:
         """Both charts revealed up to frame ``k``."""

@@ -6,59 +6,46 @@ In 3D: the robot (a disc with an orange heading arrow and a mast carrying the mi
 the rays from the mirror focus and the trajectory on the ground. The image plane shows the mirror rim, the
 bi-conic of each feature pair and the true epipoles ``e``, ``e'`` (:func:`egtviz.servo.frames.panoramic_frames`);
 the caption says which step runs. Only the shared run fields (:class:`~egtviz.viewer.servo.servo_player.ServoPlayer`).
+The model, its run parameters and its simulation are :class:`~egtviz.controllers.servo_demos.PanoramicServoModel`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import ClassVar, cast
+from typing import Any, ClassVar, cast
 
 import numpy as np
 import viser
 
-from egtviz.servo import ServoResult, simulate_panoramic
-from egtviz.servo.frames import ServoFrames, panoramic_frames
-from egtviz.servo.panoramic_robot import (
-    CAMERA_HEIGHT,
-    default_camera,
-    default_scene,
-    mirror_pose,
-)
+from egtviz.controllers.servo_demos import PanoramicServoModel
+from egtviz.servo.panoramic_robot import CAMERA_HEIGHT
 
 from .servo_nodes import ServoNodes
 from .servo_player import ServoPlayer
-from .servo_run_form import SimulationKwargs
 
 __all__ = ["MIRROR_DRAW_SCALE", "PanoramicServoDemo"]
 
 #: The panoramic mirror (2 cm rim) is drawn this much larger in 3D, so that it can be seen.
 MIRROR_DRAW_SCALE = 4.0
-#: The phases of the panoramic control law (``result.extras["phase"]``) as the caption names them.
-PHASES = {1: "step 1: rotation", 2: "step 2: translation"}
 
 
 class PanoramicServoDemo(ServoPlayer):
     """The panoramic demo in one tab; options as :class:`~egtviz.viewer.servo.servo_player.ServoPlayer`."""
 
-    kind: ClassVar[str] = "panoramic"
     TITLE: ClassVar[str] = "Visual servoing: panoramic camera on a mobile robot"
     INTRO: ClassVar[str] = ("Step 1 turns the robot until all bi-conics meet in the two epipoles (same "
                             "orientation); step 2 translates along the baseline until s(t), the feature distance, "
                             "is zero.")
-    DEFAULT_STEPS: ClassVar[int] = 1500
     CONTROL_TITLE: ClassVar[str] = "Robot velocity (robot frame)"
     CONTROL_KEY: ClassVar[str] = "robot_velocity"
     CONTROL_SERIES: ClassVar[tuple[tuple[str, str, str], ...]] = (
         ("v_x", "#0072B2", "v"), ("v_y", "#D55E00", "v"), ("ω (right axis)", "#009E73", "w"))
     FEATURE_ERROR_LABEL: ClassVar[str] = "s(t)"
 
-    def _setup_model(self) -> None:
-        self.camera = default_camera()
-        self.target_pose = mirror_pose(np.zeros(3))
-        self.points = default_scene()
-        self.width, self.height = self.camera.width, self.camera.height
-        self.rim = self.camera.rim_image()
+    def __init__(self, client: viser.ClientHandle, **options: Any) -> None:
+        #: The camera, the scene and the simulation.
+        self.model = PanoramicServoModel()
+        super().__init__(client, self.model, **options)
 
     def _build_scene(self) -> ServoNodes:
         import trimesh
@@ -75,7 +62,7 @@ class PanoramicServoDemo(ServoPlayer):
         shaft = trimesh.creation.box(extents=(0.22, 0.04, 0.04))
         shaft.apply_translation((0.2, 0, 0.16))
         heading = cast(trimesh.Trimesh, trimesh.util.concatenate([arrow, shaft]))  # of two meshes: one mesh
-        mv, mf = self.camera.mirror.surface(n_radial=12, n_angular=48)
+        mv, mf = self.model.camera.mirror.surface(n_radial=12, n_angular=48)
         mv = mv * MIRROR_DRAW_SCALE + np.array([0.0, 0.0, CAMERA_HEIGHT])
 
         def robot(root: str, colour: tuple[int, int, int], opacity: float | None) -> viser.FrameHandle:
@@ -98,16 +85,3 @@ class PanoramicServoDemo(ServoPlayer):
                                        ray_width=0.008)
         self._view(np.array([0.0, 0.0, 0.3]), np.array([2.0, -8.0, 6.0]))
         return nodes
-
-    def _simulate_run(self, kw: SimulationKwargs, progress: Callable[[int, int], None]) -> ServoResult:
-        return simulate_panoramic(**kw, camera=self.camera, progress=progress)
-
-    def _derive_frames(self, result: ServoResult, stop: Callable[[], bool]) -> ServoFrames | None:
-        return panoramic_frames(result, self.camera, self.target_pose, stop=stop)
-
-    def _caption(self, k: int) -> str:
-        phases = self.result.extras.get("phase") if self.result is not None else None
-        caption = super()._caption(k)
-        if phases is not None and k < len(phases) and np.isfinite(phases[k]):
-            caption += "  " + PHASES.get(int(phases[k]), PHASES[2])
-        return caption

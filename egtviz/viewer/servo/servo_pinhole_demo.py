@@ -4,44 +4,25 @@ In 3D: the arm (rtb-data's link meshes, placed at the link frames of :class:`~eg
 figure if the meshes are missing), the camera frustum on the end effector (black), the target frustum (green), the
 numbered scene points, the viewing rays and the camera's path. The image plane shows the epipolar line of each
 desired feature in the current image and the epipole (:func:`egtviz.servo.frames.pinhole_frames`). Run fields
-beside the shared ones (:class:`~egtviz.viewer.servo.servo_player.ServoPlayer`): beta and the F estimator.
+beside the shared ones (:class:`~egtviz.viewer.servo.servo_player.ServoPlayer`): beta and the F estimator. The model,
+its run parameters and its simulation are :class:`~egtviz.controllers.servo_demos.PinholeServoModel`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from functools import lru_cache
 from typing import Any, ClassVar, cast
 
 import numpy as np
 import viser
 
-from egtviz.geometry.poses import Pose
-from egtviz.servo import ServoResult, simulate_pinhole
-from egtviz.servo.frames import DHChain, ServoFrames, pinhole_frames
-from egtviz.servo.pinhole_arm import (
-    TARGET_Q,
-    camera_pose_from_q,
-    default_intrinsics,
-    default_scene,
-    puma,
-)
+from egtviz.controllers.servo_demos import PinholeServoModel, puma_chain
+from egtviz.servo.pinhole_arm import TARGET_Q, puma
 
-from ..workbench.fields import NumberRule
 from .servo_nodes import ServoNodes, pose_node
-from .servo_player import RUN_RULES, Choice, ServoPlayer
-from .servo_run_form import RunValue, SimulationKwargs
+from .servo_player import ServoPlayer
 
-__all__ = ["ESTIMATOR_CHOICES", "PinholeServoDemo", "PumaNodes", "puma_meshes"]
-
-#: The F estimator field's options and the simulation's ``f_algorithm`` of each.
-ESTIMATOR_CHOICES = {"true": None, "linear": 1, "normalized": 2, "sampson": 3}
-
-
-@lru_cache(maxsize=1)
-def puma_chain() -> DHChain:
-    """The Puma 560's Denavit-Hartenberg chain (forward kinematics of its link frames)."""
-    return DHChain.of_robot(puma()[0])
+__all__ = ["PinholeServoDemo", "PumaNodes", "puma_meshes"]
 
 
 @lru_cache(maxsize=1)
@@ -113,14 +94,9 @@ class PinholeServoDemo(ServoPlayer):
             speed, autorun, autoplay, on_back, show_panel, field_delay).
     """
 
-    kind: ClassVar[str] = "pinhole"
     TITLE: ClassVar[str] = "Visual servoing: pin-hole camera on a Puma 560"
     INTRO: ClassVar[str] = ("Rives' hybrid task: the *rotation* puts every feature on its epipolar line (priority "
                             "task), then the *translation* (weight beta) brings it to its desired position.")
-    DEFAULT_STEPS: ClassVar[int] = 1000
-    RULES: ClassVar[dict[str, NumberRule]] = {**RUN_RULES, "beta": NumberRule("beta", "", 0.0, 100.0)}
-    CHOICES: ClassVar[dict[str, Choice]] = {**ServoPlayer.CHOICES,
-                                            "estimator": ("F estimator", tuple(ESTIMATOR_CHOICES))}
     CONTROL_TITLE: ClassVar[str] = "Camera twist (camera frame): v solid, ω dashed"
     CONTROL_KEY: ClassVar[str] = "camera_twist"
     CONTROL_SERIES: ClassVar[tuple[tuple[str, str, str], ...]] = (
@@ -130,22 +106,19 @@ class PinholeServoDemo(ServoPlayer):
 
     def __init__(self, client: viser.ClientHandle, *, beta: float = 1.0, estimator: str = "true",
                  **options: Any) -> None:
-        super().__init__(client, beta=beta, estimator=estimator, **options)
-
-    def _setup_model(self) -> None:
-        self.intrinsics = default_intrinsics()
-        self.target_pose = camera_pose_from_q(TARGET_Q)
-        self.points = default_scene(self.target_pose)
-        self.width, self.height = self.intrinsics.width, self.intrinsics.height
+        #: The camera, the scene and the simulation.
+        self.model = PinholeServoModel()
+        super().__init__(client, self.model, beta=beta, estimator=estimator, **options)
 
     def _build_scene(self) -> ServoNodes:
         api = self.client.scene
         api.add_grid("/servo/grid", width=3.0, height=3.0, cell_size=0.1, section_size=0.5, position=(0.5, 0.0, 0.0))
         #: The arm's nodes.
         self.arm = PumaNodes(api)
-        fov, aspect = self.intrinsics.fov_y, self.intrinsics.aspect
+        model = self.model
+        fov, aspect = model.intrinsics.fov_y, model.intrinsics.aspect
         api.add_camera_frustum("/servo/target", fov=fov, aspect=aspect, scale=0.07, color=(0, 158, 115),
-                               thickness=0.004, wxyz=self.target_pose.quat_wxyz, position=self.target_pose.t)
+                               thickness=0.004, wxyz=model.target_pose.quat_wxyz, position=model.target_pose.t)
         # At the goal the camera sits on the target: their labels grow away from each other, never overlap.
         api.add_label("/servo/target/label", "target", position=(0.0, -0.06, 0.0), font_screen_scale=0.9,
                       anchor="bottom-right")
@@ -156,7 +129,7 @@ class PinholeServoDemo(ServoPlayer):
         nodes = self._add_common_nodes(camera, point_size=0.022, label_lift=0.02, label_scale=0.7, path_width=0.004,
                                        ray_width=0.0025)
         self.arm.pose(puma_chain().link_poses(TARGET_Q)[0])
-        centre = 0.5 * (self.points.mean(axis=0) + self.target_pose.t)
+        centre = 0.5 * (model.points.mean(axis=0) + model.target_pose.t)
         self._view(centre, centre + np.array([0.9, -1.6, 0.9]))
         return nodes
 
@@ -165,17 +138,6 @@ class PinholeServoDemo(ServoPlayer):
                                    "Weight of the translation (secondary) task, >= 0; 0 = rotation only.")
         self.form.add_choice_field("estimator", "F estimator",
                                    "F from the true poses, or estimated from the noisy features at every step.")
-
-    def _simulation_kwargs(self, values: dict[str, RunValue]) -> SimulationKwargs:
-        return {"beta": float(values["beta"]), "f_algorithm": ESTIMATOR_CHOICES[str(values["estimator"])]}
-
-    def _simulate_run(self, kw: SimulationKwargs, progress: Callable[[int, int], None]) -> ServoResult:
-        return simulate_pinhole(**kw, progress=progress)
-
-    def _derive_frames(self, result: ServoResult, stop: Callable[[], bool]) -> ServoFrames | None:
-        target = result.extras.get("target_pose")
-        target_pose = self.target_pose if target is None else Pose.from_matrix(target)
-        return pinhole_frames(result, self.intrinsics, target_pose, chain=puma_chain(), stop=stop)
 
     def _draw_body(self, k: int) -> None:
         super()._draw_body(k)

@@ -6,10 +6,10 @@ the demo (its robot in 3D, its extra run fields, its simulation); each demo is a
 coordinator (the tab's lock, the run shown, the 3D nodes) over three parts, each in its own module:
 
 * the run form (:class:`~egtviz.viewer.servo.servo_run_form.ServoRunForm`): a *Run* folder (seed, the demo's own fields,
-  noise, max steps, Run) and a status line that shows a failed or non-converged run in words; every field is
-  validated (:mod:`egtviz.viewer.workbench.fields`): a refused value gets a notification and the field shows the last valid
-  one. *Run* simulates in a background thread, within the server's frame budget
-  (:mod:`egtviz.viewer.servo.servo_budget`), and derives the per-frame geometry (:mod:`egtviz.servo.frames`) there too:
+  noise, max steps, Run) and a status line that shows a failed or non-converged run in words; every field's text is
+  judged by the controller (:mod:`egtviz.controllers.servo_run`): a refused value gets a notification and the field
+  shows the last valid one. *Run* simulates in a background thread, within the server's frame budget
+  (:mod:`egtviz.controllers.servo_budget`), and derives the per-frame geometry (:mod:`egtviz.servo.frames`) there too:
   playback only formats and sends;
 * the playback clock (:class:`~egtviz.viewer.servo.servo_clock.ServoClock`): a *Playback* folder (Play/Pause, step
   back/forward, speed, time scrubber) and a playback thread that advances the frame at the chosen speed;
@@ -17,20 +17,22 @@ coordinator (the tab's lock, the run shown, the 3D nodes) over three parts, each
   :mod:`egtviz.viewer.render.servo_svg`) and two uPlot charts (controls; errors) revealed up to the current time, and the
   frame's read-out.
 
+What the demo is (its run values, its last run, the frame shown, playing or not) is its headless
+:class:`~egtviz.controllers.servo.ServoController` (:attr:`ServoPlayer.controller`), with the demo's model
+(:mod:`egtviz.controllers.servo_demos`): the parts map widgets to its intents and draw its state.
+
 The player draws the 3D nodes under ``/servo/...`` (:class:`~egtviz.viewer.servo.servo_nodes.ServoNodes`: the
 moving body, the scene points with their numbers, the viewing rays and the path) from the run's
 :class:`~egtviz.servo.frames.ServoFrames`, and each frame everywhere inside ``client.atomic()``. The GUI handles
 belong to the part that adds them (``form.fields``, ``form.status``, ``clock.slider``, ``display.plot_controls``,
 ...). :meth:`ServoPlayer.close` stops both threads and removes the demo's nodes and GUI.
 
-A subclass sets the class attributes (``kind``, titles, plots, ``DEFAULT_STEPS``, ``RULES`` and ``CHOICES`` for its
-extra run parameters) and implements ``_setup_model``, ``_build_scene``, ``_add_run_fields``, ``_simulate_run``,
-``_derive_frames`` and, if it adds parameters, ``_simulation_kwargs``.
+A subclass passes its model (whose ``RULES`` and ``CHOICES`` hold its extra run parameters), sets the class
+attributes (titles, plots) and implements ``_build_scene`` and ``_add_run_fields``.
 """
 
 from __future__ import annotations
 
-import math
 import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable
@@ -39,30 +41,22 @@ from typing import ClassVar
 import numpy as np
 import viser
 
-from egtviz.scene.limits import SERVO_DEMO_STEPS
+from egtviz.controllers.servo import ServoController
+from egtviz.controllers.servo_budget import ServoBudget
+from egtviz.controllers.servo_demos import ServoDemoModel, SimulationKwargs
 from egtviz.servo import ServoResult
 from egtviz.servo.frames import ServoFrames
 
-from ..workbench.fields import NumberRule, notify_error, on_event
+from ..workbench.fields import notify_error, on_event
 from ..render.palette import PRESENT_GUI_CSS
 from ..render.panels import CONTROL_PX
-from .servo_budget import SERVER_BUDGET, ServoBudget
 from .servo_clock import FPS, ServoClock
 from .servo_nodes import ServoNodes, add_common_nodes, look_from, pose_node
 from .servo_panel import PANEL_WIDTH, PRESENT_PANEL_WIDTH, ServoPanel
-from .servo_run_form import Choice, RunField, RunHooks, RunValue, ServoRunForm, SimulationKwargs
+from .servo_run_form import RunField, RunHooks, ServoRunForm
 
-__all__ = ["FIELD_DELAY", "FPS", "PANEL_WIDTH", "PRESENT_PANEL_WIDTH", "RUN_RULES", "SPEEDS", "Choice",
-           "ServoPlayer"]
+__all__ = ["FIELD_DELAY", "FPS", "PANEL_WIDTH", "PRESENT_PANEL_WIDTH", "ServoPlayer"]
 
-SPEEDS = ("0.25x", "0.5x", "1x", "2x", "4x")
-#: What the run fields of every demo accept; a refused value gets a notification and the field shows the last
-#: valid one. A demo adds its own (``ServoPlayer.RULES``).
-RUN_RULES = {
-    "seed": NumberRule("seed", "", 0, 2**32 - 1, integer=True),
-    "noise_px": NumberRule("noise", "px", 0.0, 50.0),
-    "steps": NumberRule("max steps", "", SERVO_DEMO_STEPS.low, SERVO_DEMO_STEPS.high, integer=True),
-}
 #: Seconds a run field must stay unchanged before it is judged (see ``fields.Debouncer``).
 FIELD_DELAY = 0.6
 
@@ -75,38 +69,27 @@ class ServoPlayer(ABC):
 
     Args:
         client: the viser client (tab) to draw in.
+        model: the demo's model (its camera, scene, run parameters and simulation).
         seed: start pose / noise seed.
         noise_px: image noise, pixels.
         steps: maximum number of simulation steps (``None``: the demo's ``DEFAULT_STEPS``).
-        speed: playback speed, one of :data:`SPEEDS`.
+        speed: playback speed, one of :data:`~egtviz.controllers.servo_demos.SPEEDS`.
         autorun: start a run at once (in the background).
         autoplay: play each run as soon as it is ready.
         on_back: if given, a "Back" button calls it (the app uses it to return to the workbench).
         show_panel: add the right-hand panel (image plane and plots).
         field_delay: seconds a run field must stay unchanged before it is judged (0: at once).
-        budget: the server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo.servo_budget`).
+        budget: the server's frame budget this demo's runs reserve from (:mod:`egtviz.controllers.servo_budget`).
         present: presentation mode: large type in the GUI and the image panel (``egtviz serve --present``).
-        **params: the demo's own run parameters (its ``RULES`` and ``CHOICES``).
+        **params: the demo's own run parameters (its model's ``RULES`` and ``CHOICES``).
 
     Raises:
         ValueError: a parameter the demo does not have, or a value its rule or choices refuse.
     """
 
-    kind: ClassVar[str]
-    """The demo's name (``data-demo`` of its image, the thread names)."""
     TITLE: ClassVar[str]
     INTRO: ClassVar[str]
     """The demo's title and one paragraph (markdown) at the top of the side panel."""
-    DEFAULT_STEPS: ClassVar[int]
-    RULES: ClassVar[dict[str, NumberRule]] = RUN_RULES
-    """Every numeric run parameter and what its field accepts."""
-    width: int
-    height: int
-    """The demo camera's image size in pixels (each demo sets it before the shared set-up)."""
-    points: np.ndarray
-    """(N, 3) the demo's world points (each demo sets them before the shared set-up)."""
-    CHOICES: ClassVar[dict[str, Choice]] = {"speed": ("speed", SPEEDS)}
-    """Every drop-down parameter: its label and options."""
     CONTROL_TITLE: ClassVar[str]
     CONTROL_KEY: ClassVar[str]
     """The ``result.controls`` series plotted."""
@@ -119,6 +102,7 @@ class ServoPlayer(ABC):
     def __init__(
         self,
         client: viser.ClientHandle,
+        model: ServoDemoModel,
         *,
         seed: int = 0,
         noise_px: float = 0.0,
@@ -133,8 +117,9 @@ class ServoPlayer(ABC):
         present: bool = False,
         **params: object,
     ) -> None:
-        given = {"seed": seed, "noise_px": noise_px, "steps": self.DEFAULT_STEPS if steps is None else steps,
-                 "speed": speed, **params}
+        #: The demo without its page: run values, run, frame shown (:mod:`egtviz.controllers.servo`).
+        self.controller = ServoController(model, seed=seed, noise_px=noise_px, steps=steps, speed=speed,
+                                          budget=budget, owner=self, **params)
         self.client = client
         self.autoplay = autoplay
         self.present = bool(present)
@@ -142,27 +127,16 @@ class ServoPlayer(ABC):
         self._closed = threading.Event()
         self._listeners: list[Callable[[ServoResult], None]] = []
         self._on_back = on_back
-        #: The server's frame budget this demo's runs reserve from (:mod:`egtviz.viewer.servo.servo_budget`).
-        self.budget = SERVER_BUDGET if budget is None else budget
-        hooks = RunHooks(report=self.report, kwargs=self._simulation_kwargs, simulate=self._simulate_run,
-                         derive=self._derive_frames, land=self._land, finished=self._finished, before_run=self.pause)
-        #: The run fields, their values and the Run action (:mod:`egtviz.viewer.servo.servo_run_form`).
-        self.form = ServoRunForm(self, client=client, kind=self.kind, rules=self.RULES, choices=self.CHOICES,
-                                 given=given, field_delay=field_delay, budget=self.budget, lock=self.lock,
+        hooks = RunHooks(report=self.report, land=self._land, finished=self._finished, before_run=self.pause)
+        #: The run fields and the Run action (:mod:`egtviz.viewer.servo.servo_run_form`).
+        self.form = ServoRunForm(self.controller, client=client, field_delay=field_delay, lock=self.lock,
                                  closed=self._closed, hooks=hooks)
-        #: The frame shown and the *Playback* folder (:mod:`egtviz.viewer.servo.servo_clock`).
-        self.clock = ServoClock(lock=self.lock, closed=self._closed, run=lambda: self.result, show=self._show,
-                                speed=lambda: float(str(self.form.values["speed"]).rstrip("x")),
+        #: The *Playback* folder and thread (:mod:`egtviz.viewer.servo.servo_clock`).
+        self.clock = ServoClock(self.controller, lock=self.lock, closed=self._closed, show=self._show,
                                 name=f"servo-play-{self.kind}")
-        #: The last finished run (``None`` before the first one or after a failed one).
-        self.result: ServoResult | None = None
-        #: Its per-frame geometry.
-        self.frames: ServoFrames | None = None
-        self.rim: np.ndarray | None = None
-        self._setup_model()
         #: The image plane, the charts and the read-out (:mod:`egtviz.viewer.servo.servo_panel`).
-        self.display = ServoPanel(client, demo=self.kind, size=(self.width, self.height), n_points=len(self.points),
-                                  rim=self.rim, present=self.present, control_title=self.CONTROL_TITLE,
+        self.display = ServoPanel(client, demo=self.kind, size=(model.width, model.height),
+                                  n_points=len(model.points), rim=model.rim, present=self.present, control_title=self.CONTROL_TITLE,
                                   control_key=self.CONTROL_KEY, control_series=self.CONTROL_SERIES,
                                   dashed_rates=self.DASHED_RATES, feature_error_label=self.FEATURE_ERROR_LABEL)
         with self.lock, client.atomic():
@@ -178,11 +152,6 @@ class ServoPlayer(ABC):
     # -- what each demo provides ---------------------------------------------------------
 
     @abstractmethod
-    def _setup_model(self) -> None:
-        """Set ``points`` (N, 3), ``width``, ``height``, ``target_pose`` and (a mirror) ``rim``."""
-        raise NotImplementedError
-
-    @abstractmethod
     def _build_scene(self) -> ServoNodes:
         """Add the demo's 3D nodes; the shared ones last, with ``_add_common_nodes`` (its ``body`` is posed at
         ``frames.body_poses[k]``)."""
@@ -191,25 +160,6 @@ class ServoPlayer(ABC):
     def _add_run_fields(self) -> None:
         """Add the demo's own run fields (between seed and noise) with ``form.add_number_field`` and
         ``form.add_choice_field``."""
-
-    @abstractmethod
-    def _simulate_run(self, kw: SimulationKwargs, progress: Callable[[int, int], None]) -> ServoResult:
-        """Run the simulation with the keyword arguments of :meth:`params`."""
-        raise NotImplementedError
-
-    @abstractmethod
-    def _derive_frames(self, result: ServoResult, stop: Callable[[], bool]) -> ServoFrames | None:
-        """The run's per-frame geometry (None if ``stop()`` became True)."""
-        raise NotImplementedError
-
-    def _simulation_kwargs(self, values: dict[str, RunValue]) -> SimulationKwargs:
-        """The demo's own simulation keywords from its run values (beside seed, noise and steps)."""
-        return {}
-
-    def _caption(self, k: int) -> str:
-        """The image caption at frame ``k``."""
-        assert self.result is not None
-        return f"t = {self.result.time[k]:.2f} s"
 
     def _draw_body(self, k: int) -> None:
         """Pose the moving body at frame ``k`` (a demo with an arm also poses the arm)."""
@@ -221,7 +171,7 @@ class ServoPlayer(ABC):
     def _add_common_nodes(self, body: viser.SceneNodeHandle, **sizes: float) -> ServoNodes:
         """The numbered scene points, the path and the viewing rays; with ``body``, the nodes posed at every frame
         (``servo_nodes.add_common_nodes``)."""
-        return add_common_nodes(self.client.scene, self.points, body, **sizes)
+        return add_common_nodes(self.client.scene, self.controller.model.points, body, **sizes)
 
     def _view(self, look_at: np.ndarray, position: np.ndarray) -> None:
         look_from(self.client, look_at, position)
@@ -278,7 +228,7 @@ class ServoPlayer(ABC):
 
     def params(self) -> SimulationKwargs:
         """The run parameters the next run uses (the keyword arguments of the simulation)."""
-        return self.form.params()
+        return self.controller.params()
 
     def run(self, *, wait: bool = False, timeout: float = 60.0) -> bool:
         """Start a simulation with the GUI's parameters in a background thread; ``False`` if one is running.
@@ -345,8 +295,23 @@ class ServoPlayer(ABC):
     # -- state of the parts ---------------------------------------------------------------
 
     @property
+    def kind(self) -> str:
+        """The demo's name (``data-demo`` of its image, the thread names)."""
+        return self.controller.kind
+
+    @property
     def closed(self) -> bool:
         return self._closed.is_set()
+
+    @property
+    def result(self) -> ServoResult | None:
+        """The last finished run (``None`` before the first one or after a failed one)."""
+        return self.controller.result
+
+    @property
+    def frames(self) -> ServoFrames | None:
+        """The last run's per-frame geometry."""
+        return self.controller.frames
 
     @property
     def fields(self) -> dict[str, RunField]:
@@ -355,35 +320,31 @@ class ServoPlayer(ABC):
 
     @property
     def n_frames(self) -> int:
-        return self.clock.n_frames
+        return self.controller.n_frames
 
     @property
     def time(self) -> float:
         """Simulated time of the frame shown."""
-        return self.clock.time
+        return self.controller.time
 
     @property
     def frame(self) -> int:
         """The frame shown (index into ``result.time``)."""
-        return self.clock.frame
-
-    @frame.setter
-    def frame(self, k: int) -> None:
-        self.clock.frame = k
+        return self.controller.frame
 
     @property
     def playing(self) -> bool:
-        return self.clock.playing
+        return self.controller.playing
 
     @property
     def running(self) -> bool:
         """A run is being simulated (or waits for frames)."""
-        return self.form.running
+        return self.controller.running
 
     @property
     def error(self) -> str:
         """The last error message of a run that raised (bad parameters), else ""."""
-        return self.form.error
+        return self.controller.error
 
     @property
     def svg(self) -> str:
@@ -400,22 +361,16 @@ class ServoPlayer(ABC):
 
     # -- a run ends, a frame is drawn ------------------------------------------------------
 
-    def _land(self, result: ServoResult | None, frames: ServoFrames | None, error: str) -> None:
-        """The run form's run ended (the lock held, in one atomic update): show it, or the error."""
-        self.result, self.frames = result, frames
+    def _land(self) -> None:
+        """The controller took its run's outcome (the lock held, in one atomic update): show it, or the error."""
+        result = self.controller.result
         if result is None:
-            self.display.idle(error, colour="#a00")
+            self.display.idle(self.controller.error, colour="#a00")
             return
-        t_end = float(result.time[-1]) if result.n_samples > 1 else 1.0
-        dt = float(result.params.get("dt", 0.05))
+        t_end, dt = self.controller.time_span()
         self.clock.rewind(t_end, dt)
         self.display.install(result, t_end)
-        if result.converged:
-            self.form.say("ok", f"Converged in {result.sim_time_s:.2f} s ({result.steps} steps): rotation error "
-                                f"{math.degrees(result.final_rotation_error_rad):.3g} deg, translation error "
-                                f"{100 * result.final_translation_error:.3g} cm.")
-        else:
-            self.form.say("warn", f"Did not converge: {result.reason}")
+        self.form.show_status()
         self._show(0)
 
     def _finished(self, result: ServoResult) -> None:
@@ -434,13 +389,12 @@ class ServoPlayer(ABC):
             cb()
 
     def _show(self, k: int) -> None:
-        """Draw frame ``k`` everywhere, in one atomic update (call with the lock held)."""
+        """Draw frame ``k`` (the controller's) everywhere, in one atomic update (call with the lock held)."""
         r, frames = self.result, self.frames
         if r is None or frames is None or self._closed.is_set():
             return
-        self.clock.frame = k
         with self.client.atomic():
-            self.display.draw_image(k, r, frames, self._caption(k))
+            self.display.draw_image(self.controller.image(k))
             self._draw_3d(k)
             self.display.draw_plots(k, r)
             self.clock.show_time(r.time[k])
@@ -449,4 +403,4 @@ class ServoPlayer(ABC):
     def _draw_3d(self, k: int) -> None:
         assert self.frames is not None
         self._draw_body(k)
-        self.nodes.draw_path_and_rays(self.frames, k, self.points)
+        self.nodes.draw_path_and_rays(self.frames, k, self.controller.model.points)

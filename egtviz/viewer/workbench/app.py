@@ -1,8 +1,8 @@
-"""The interactive viewer: one ``SceneModel`` and one ``ClientView`` per browser tab.
+"""The interactive viewer: one ``SceneModel``, its ``WorkbenchController`` and one ``ClientView`` per browser tab.
 
 Data flow (one direction)::
 
-    GUI field / gizmo  ->  SceneModel (validates)  ->  notification
+    GUI field / gizmo  ->  an intent of the tab's WorkbenchController (judges it)  ->  SceneModel  ->  notification
         ->  model.derived (computed once, at commit)  ->  one `client.atomic()` update of the 3D
             scene, every image-plane panel, the F/E read-out and the fields.
 
@@ -19,9 +19,10 @@ always draws the model's *current* scene, so an event that arrives late (viser
 runs callbacks in a thread pool) cannot overwrite a newer state. GUI fields are
 written back under a guard so that the write does not look like a user edit.
 
-Every input is judged on the server. Number fields are text fields whose raw
+Every input is judged on the server, by the tab's headless controller
+(:class:`~egtviz.controllers.workbench.WorkbenchController`): number fields are text fields whose raw
 text is parsed and range-checked in the field's own units
-(:mod:`egtviz.viewer.workbench.fields`, ranges from :mod:`egtviz.scene.limits`), once the
+(:mod:`egtviz.controllers.workbench_fields`, ranges from :mod:`egtviz.scene.limits`), once the
 user stops typing; drop-down values are checked against the options offered,
 since a hand-written client can send any string. Every callback is attached
 through :func:`~egtviz.viewer.workbench.fields.on_event`: whatever it raises reaches the
@@ -43,6 +44,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import viser
 
+from ...controllers.workbench import WorkbenchController
 from ...scene import (
     Scene,
     SceneError,
@@ -115,8 +117,9 @@ class UpdateTiming:
 class ClientView:
     """One browser tab: the coordinator of its workbench.
 
-    It holds the lock every event and render runs under, the model subscription, and the render; the parts it owns
-    do the rest: :attr:`controls` (the control panel and scene actions), :attr:`cameras` (one
+    It holds the tab's :attr:`controller` (the scene model and the user's intents), the lock every event and render
+    runs under, the model subscription, and the render; the parts it owns map their widgets to the controller's
+    intents: :attr:`controls` (the control panel and scene actions), :attr:`cameras` (one
     :class:`~egtviz.viewer.workbench.camera_settings.CameraSettings` per camera folder), :attr:`drag` (gizmo input),
     :attr:`dock` (the panels) and :attr:`pair_readout` (the F/E read-out). A lesson view sets :attr:`policy`.
     The parts get :attr:`context` (a :class:`~egtviz.viewer.workbench.tab_context.TabContext`), never the view.
@@ -143,7 +146,10 @@ class ClientView:
                  field_delay: float = FIELD_DELAY, present: bool = False,
                  window: tuple[WindowSize, float] | None = None) -> None:
         self.client = client
-        self.model = model
+        #: The tab's headless controller (its scene model and every intent of the parts); it asks :attr:`policy`
+        #: about a typed value (a lesson view may replace the policy after the parts are built).
+        self.controller = WorkbenchController(model, field_guard=lambda camera, fields: self.policy.refusal(camera,
+                                                                                                            fields))
         #: ``open_demo(kind, **run_fields)`` replaces this tab by a servo demo (the app passes it); None: no demos.
         self.open_demo = open_demo
         self.lock = threading.RLock()
@@ -171,7 +177,7 @@ class ClientView:
         self._camera_sig: tuple = ()
         #: What the parts get of this tab (they never see the view itself).
         self.context = TabContext(
-            client=client, model=model, lock=self.lock, report=self.report, on=self._on,
+            client=client, controller=self.controller, lock=self.lock, report=self.report, on=self._on,
             user_event=self.user_event, text_event=self.text_event, event_started=self.event_started,
             is_closed=lambda: self.closed, redraw_now=self.redraw_now, policy=lambda: self.policy,
         )
@@ -190,6 +196,11 @@ class ClientView:
         self._unsubscribe = model.subscribe(self._on_change)
 
     # -- what the lesson views and the classroom read of the tab ------------------------------------------
+
+    @property
+    def model(self) -> SceneModel:
+        """The tab's own scene model (its controller's)."""
+        return self.controller.model
 
     @property
     def present(self) -> bool:

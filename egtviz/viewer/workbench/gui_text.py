@@ -1,4 +1,4 @@
-"""Small helpers the workbench's parts share: text safe to show, and GUI writes that are not user edits."""
+"""GUI writes that are not user edits (text safe to show is :func:`egtviz.controllers.workbench_fields.plain`)."""
 
 from __future__ import annotations
 
@@ -7,13 +7,7 @@ from typing import TYPE_CHECKING, TypeVar
 if TYPE_CHECKING:
     import viser
 
-__all__ = ["plain", "set_value"]
-
-
-def plain(text: str, limit: int = 80) -> str:
-    """Text from a file or a browser, safe to show: printable characters only, at most ``limit`` of them."""
-    clean = "".join(c if c.isprintable() else "?" for c in str(text))
-    return clean if len(clean) <= limit else clean[:limit] + "..."
+__all__ = ["set_value"]
 
 
 T = TypeVar("T")

@@ -12,18 +12,17 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from ...controllers.workbench import FieldGuard
 from ...lessons.display import PanelDisplay, thin_lines
 from ...scene import Scene
 from ...scene.derived import Derived
 from ..render.panel_view import ViewBox
 from ..render.panels import PanelView
 
-__all__ = ["ALLOW_ALL", "FieldGuard", "LessonPolicy", "PanelFilter"]
+__all__ = ["ALLOW_ALL", "LessonPolicy", "PanelFilter"]
 
 #: ``panel_filter(scene, derived) -> (derived for the panels, point indices to ring)``.
 PanelFilter = Callable[[Scene, Derived], tuple[Derived, frozenset[int]]]
-#: ``field_guard(camera, spec_fields) -> refusal message or None``.
-FieldGuard = Callable[[str, dict[str, object]], str | None]
 
 
 @dataclass(frozen=True)
@@ -33,8 +32,8 @@ class LessonPolicy:
     Attributes:
         panel_filter: what the image-plane panels draw instead of the model's derived quantities (a lesson's
             convention lens or estimation lab). The 3D view and the read-out always show the model's.
-        field_guard: asked before a camera field's new value is committed; a refusal reverts the field with
-            that message.
+        field_guard: asked before a camera field's new value is committed (the tab's controller asks it:
+            :class:`~egtviz.controllers.workbench.WorkbenchController`); a refusal reverts the field with that message.
         display: the current step's :class:`~egtviz.lessons.display.PanelDisplay` (how many epipolar lines,
             which point numbers, which view per camera).
     """

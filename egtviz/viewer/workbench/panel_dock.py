@@ -9,12 +9,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
+from ...controllers.workbench_fields import FieldError, plain
 from ...scene import CameraSpec, Scene, SceneError
 from ...scene.annotations import Plot
 from ...scene.extent import scene_extent
-from .fields import FieldError
 from ..render.figure_export import panel_svg_of
-from .gui_text import plain
 from ..render.palette import PRESENT_GUI_CSS
 from ..render.panels import (
     DEFAULT_WINDOW,
@@ -67,7 +66,7 @@ class PanelDock:
     """The tab's panels: where they are, what each shows, and the "Panels" folder.
 
     Args:
-        tab: the tab's services (its client, model, event wrappers, lesson policy and render are used).
+        tab: the tab's services (its client, controller, event wrappers, lesson policy and render are used).
         scene3d: the tab's 3D view (its labels follow presentation mode; its glyphs, the scene's size).
         present: start in presentation mode.
         window: the tab's window and device pixel ratio if known (a tab back from a servo demo), else None.
@@ -150,7 +149,7 @@ class PanelDock:
         """Apply a view button (one of :data:`~egtviz.viewer.render.panels.VIEW_ACTIONS`) to panel ``name`` and redraw it."""
         if action not in VIEW_ACTIONS:  # a raw client can send any string
             raise FieldError(f"{name}: no view button {plain(repr(action), 40)}")
-        plane = self.tab.model.derived.image_planes.get(name)
+        plane = self.tab.controller.derived.image_planes.get(name)
         if plane is None:
             return  # the camera was removed meanwhile
         view = self.panel_view(name, plane).after(action, plane)
@@ -161,9 +160,9 @@ class PanelDock:
         """Send panel ``name`` as it is shown (its view, the tab's style) as an SVG or PNG file."""
         if fmt not in DOWNLOAD_FORMATS:
             raise FieldError(f"{name}: no download format {plain(repr(fmt), 40)}")
-        model = self.tab.model
-        scene = model.scene
-        plane = model.derived.image_planes.get(name)
+        controller = self.tab.controller
+        scene = controller.scene
+        plane = controller.derived.image_planes.get(name)
         if plane is None:
             raise SceneError(f"{name}: no such camera")
         svg = panel_svg_of(plane, present=self.present, view=self.panel_view(name, plane).resolve(plane),
@@ -298,7 +297,7 @@ class PanelDock:
         if grid is None:
             return
         # What the scene holds (mirrors and their CCDs too) and its size: the glyphs are drawn at that size.
-        extent = scene_extent(self.tab.model.scene, self.tab.model.derived)
+        extent = scene_extent(self.tab.controller.scene, self.tab.controller.derived)
         self.scene3d.set_glyph(extent.glyph)
         aspect = max(grid.canvas_px, 120.0) / grid.window.height
         framed = framed_camera(extent.points, aspect, pad=extent.glyph, min_radius=3.0 * extent.glyph)

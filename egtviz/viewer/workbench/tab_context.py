@@ -1,4 +1,4 @@
-"""What a workbench tab's parts share: its client and model, its lock, its notifier and its event wrappers.
+"""What a workbench tab's parts share: its client and controller, its lock, its notifier and its event wrappers.
 
 The parts of a tab (:mod:`~egtviz.viewer.workbench.workbench_controls`,
 :mod:`~egtviz.viewer.workbench.camera_settings`, :mod:`~egtviz.viewer.workbench.drag_input`,
@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
     import viser
 
-    from ...scene import SceneModel
+    from ...controllers.workbench import WorkbenchController
     from .lesson_policy import LessonPolicy
 
 __all__ = ["Attach", "TabContext", "TextEvent"]
@@ -48,7 +48,8 @@ class TabContext:
 
     Attributes:
         client: the tab's :class:`viser.ClientHandle`.
-        model: the tab's :class:`~egtviz.scene.SceneModel`.
+        controller: the tab's :class:`~egtviz.controllers.workbench.WorkbenchController` (its scene model and the
+            user's intents).
         lock: the lock every event and render of the tab runs under (re-entrant).
         report: tells the tab what went wrong and puts its fields and gizmos back to the model's values.
         on: ``on(handle.on_update, callback)`` attaches ``callback`` to a handle's event; whatever it raises goes to
@@ -59,12 +60,12 @@ class TabContext:
             (latest text per ``key`` wins).
         event_started: ``event_started(wall, cpu)`` marks the start of a user event the part runs itself (a gizmo).
         is_closed: whether the tab has left (its events are then ignored).
-        redraw_now: draws the model's scene again; the caller holds the lock.
+        redraw_now: draws the controller's scene again; the caller holds the lock.
         policy: what a lesson allows in the tab now (a lesson view may replace it after the parts are built).
     """
 
     client: viser.ClientHandle
-    model: SceneModel
+    controller: WorkbenchController
     lock: threading.RLock
     report: Callable[[BaseException], None]
     on: Attach

@@ -5,7 +5,7 @@ from __future__ import annotations
 import viser
 
 from ....lessons.tasks import CHOICE, AnswerNeeds
-from ...workbench.fields import FieldError
+from ....controllers.workbench_fields import FieldError
 from .registry import sent_text, skin
 
 __all__ = ["CHOOSE", "ChoiceAnswer"]

@@ -9,7 +9,7 @@ from typing import Protocol, TypeVar
 import viser
 
 from ....lessons.tasks import AnswerNeeds
-from ...workbench.fields import MAX_FIELD_CHARS, FieldError
+from ....controllers.workbench_fields import MAX_FIELD_CHARS, FieldError
 
 __all__ = ["SKINS", "AnswerSkin", "AnswerWidget", "sent_text", "skin"]
 

@@ -16,14 +16,10 @@ import threading
 import time
 import weakref
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
-from egtviz.scene.limits import SERVO_SERVER_FRAMES
+from ..scene.limits import SERVO_SERVER_FRAMES
 
-if TYPE_CHECKING:
-    import viser
-
-__all__ = ["QUEUE_SECONDS", "SERVER_BUDGET", "ServoBudget", "ServoBusy", "notify_busy"]
+__all__ = ["QUEUE_SECONDS", "SERVER_BUDGET", "ServoBudget", "ServoBusy"]
 
 QUEUE_SECONDS = 30.0
 """How long a run that does not fit waits for the frames of other runs before it is refused."""
@@ -36,7 +32,7 @@ class ServoBusy(RuntimeError):
 
 
 class ServoBudget:
-    """Frames held per owner (a demo's player), at most ``frames`` in all. Thread-safe.
+    """Frames held per owner (a demo's tab), at most ``frames`` in all. Thread-safe.
 
     Args:
         frames: the budget (:data:`~egtviz.scene.limits.SERVO_SERVER_FRAMES` by default).
@@ -112,11 +108,3 @@ class ServoBudget:
 
 SERVER_BUDGET = ServoBudget()
 """The budget every demo of this process (the server's tabs) shares."""
-
-
-def notify_busy(client: viser.ClientHandle, exc: ServoBusy) -> None:
-    """Tell ``client``'s tab its run was refused (a yellow notification); a tab already gone is left alone."""
-    try:
-        client.add_notification("Server busy", str(exc), color="yellow", auto_close_seconds=8.0)
-    except Exception:  # noqa: BLE001 - the client may be gone
-        pass
