@@ -10,7 +10,7 @@ from egtviz.lessons import ProgressStore
 from egtviz.viewer.classroom import host as host_module
 from egtviz.viewer.classroom.host import ClassroomHost
 from egtviz.viewer.server.headless import FakeTab
-from egtviz.viewer.workbench.app import EgtvizApp
+from egtviz.viewer.tabs import EgtvizApp
 
 from _waiting import PATIENCE, wait_for
 

@@ -23,7 +23,7 @@ from egtviz.viewer.classroom.links import INSTRUCTOR_PREFIX
 from egtviz.viewer.server.guard import install_guards
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.server.viser_adapter import gizmo_moved_by_client, value_sent_by_client
-from egtviz.viewer.workbench.app import EgtvizApp
+from egtviz.viewer.tabs import EgtvizApp
 
 from _class_course import watch_opened
 from _waiting import PATIENCE, wait_for

@@ -18,7 +18,7 @@ from egtviz.viewer.classroom.course_gate import CourseGate
 from egtviz.viewer.course.lesson_view import HELD_NAME_HINT, LessonPanel
 from egtviz.viewer.course.start_page import StartPage
 from egtviz.viewer.server.headless import FakeTab
-from egtviz.viewer.workbench.app import EgtvizApp
+from egtviz.viewer.tabs import EgtvizApp
 
 from _class_course import classroom, paced  # noqa: F401 - the fixture
 from _waiting import PATIENCE, wait_for

@@ -94,7 +94,7 @@ def test_the_token_is_shortened_in_every_log_record(caplog):
     from egtviz.classroom import Classroom
     from egtviz.viewer.classroom import ClassroomHost
     from egtviz.viewer.server.guard import install_guards
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:

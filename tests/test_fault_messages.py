@@ -53,7 +53,7 @@ def zoom_step_tab(tmp_path):
     from egtviz.lessons import ProgressStore
     from egtviz.viewer.course.lesson_view import LessonPanel
     from egtviz.viewer.server.headless import FakeTab
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     tab = None

@@ -480,7 +480,7 @@ def test_titles_and_names_from_files_are_shown_as_text():
 
 
 def test_a_tab_whose_scene_cannot_be_built_falls_back_to_the_default_scene(monkeypatch):
-    import egtviz.viewer.workbench.app as app_module
+    import egtviz.viewer.tabs as app_module
 
     scene = default_scene().replace(title="broken")
     real = app_module.SceneModel

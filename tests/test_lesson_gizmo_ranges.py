@@ -221,7 +221,7 @@ def _drag_arrow(page, camera, box: dict, centre: np.ndarray, axis: np.ndarray, d
 def test_in_the_browser_a_dragged_camera_stops_at_the_range_and_its_gizmo_is_put_there():
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
     from egtviz.viewer.server.browser import open_viewer, shared_chromium
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)

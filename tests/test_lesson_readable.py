@@ -20,7 +20,7 @@ from egtviz.lessons.cli import check_file
 from egtviz.lessons.changes import RandomPoints, SetField
 from egtviz.lessons.display import PanelDisplay, thin_lines
 from egtviz.lessons.progress import ProgressStore
-from egtviz.viewer.workbench.app import EgtvizApp
+from egtviz.viewer.tabs import EgtvizApp
 from egtviz.scene.examples import SCENES
 from egtviz.viewer.server.headless import FakeTab, start_headless
 from egtviz.viewer.workbench.lesson_policy import LessonPolicy

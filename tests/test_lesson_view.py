@@ -16,7 +16,7 @@ from scipy.optimize import least_squares
 
 from egtviz.lessons import ProgressStore, load
 from egtviz.scene import SceneError
-from egtviz.viewer.workbench.app import EgtvizApp
+from egtviz.viewer.tabs import EgtvizApp
 from egtviz.controllers.workbench_fields import format_number
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.controllers.lesson_instruments import lesson_instruments

@@ -388,7 +388,7 @@ def test_presentation_mode_toggle(four_camera_tab):
 def test_present_option_starts_every_tab_in_presentation_mode():
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:

@@ -19,7 +19,8 @@ import viser
 from egtviz.lessons import LessonRun, ProgressStore, load
 from egtviz.lessons.cli import run_progress
 from egtviz.lessons.progress import SCHEMA_VERSION
-from egtviz.viewer.workbench.app import ClientView, EgtvizApp
+from egtviz.viewer.tabs import EgtvizApp
+from egtviz.viewer.workbench.app import ClientView
 from egtviz.viewer.server.headless import FakeTab
 from egtviz.viewer.course.lesson_view import LessonPanel
 from egtviz.viewer.course.start_page import StartPage

@@ -60,7 +60,7 @@ def test_the_panel_says_an_answer_was_not_read_with_no_verdict_and_keeps_the_hin
 
     from egtviz.viewer.course.lesson_view import LessonPanel
     from egtviz.viewer.server.headless import FakeTab
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     store = ProgressStore(tmp_path / "p.sqlite3")
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)

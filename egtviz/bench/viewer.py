@@ -166,7 +166,7 @@ def browser_latency(scene: Any, n: int = BROWSER_EVENTS, *, width: int = 1600, h
     """
     import viser
 
-    from ..viewer.workbench.app import EgtvizApp
+    from ..viewer.tabs import EgtvizApp
     from ..viewer.server.browser import chromium, chromium_available, open_viewer
 
     if not chromium_available():

@@ -10,10 +10,14 @@ __all__ = ["image_plane_svg", "EgtvizApp", "ClientView", "serve"]
 
 
 def __getattr__(name: str):  # lazy: importing the SVG builder must not start viser
-    if name in ("EgtvizApp", "ClientView"):
-        from .workbench import app
+    if name == "EgtvizApp":
+        from .tabs import EgtvizApp
 
-        return getattr(app, name)
+        return EgtvizApp
+    if name == "ClientView":
+        from .workbench.app import ClientView
+
+        return ClientView
     if name == "serve":
         from .server.cli import serve
 

@@ -35,7 +35,7 @@ def _serve(tmp_path, room=None):
     import viser
 
     from egtviz.viewer.server.guard import install_guards
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     install_guards(server)

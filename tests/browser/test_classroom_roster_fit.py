@@ -27,7 +27,7 @@ def test_the_roster_fits_the_instructors_panel(browser, tmp_path, width, height,
     import viser
 
     from egtviz.viewer.server.guard import install_guards
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     store = ProgressStore(tmp_path / "progress.db")
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)

@@ -23,7 +23,7 @@ TITLE = "3. Intrinsics"
 def course(tmp_path):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, course=True, progress=ProgressStore(tmp_path / "progress.sqlite3"))

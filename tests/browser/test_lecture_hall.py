@@ -70,7 +70,7 @@ POINTS_JS = """(camera) => {
 def _serve(scene, *, present=False):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, scene, present=present)
@@ -282,7 +282,7 @@ PANEL_SCROLL_JS = """() => [...document.querySelectorAll('svg[data-egtviz="image
 def _serve_app(*, present=False, **kw):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, present=present, **kw)

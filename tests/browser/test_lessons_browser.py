@@ -38,7 +38,7 @@ ASSETS = Path(__file__).resolve().parents[2] / "assets"
 def course(tmp_path):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, course=True, progress=ProgressStore(tmp_path / "progress.sqlite3"))

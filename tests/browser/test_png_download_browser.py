@@ -26,7 +26,7 @@ CAM1 = "cam1 (pin-hole)"
 def served(browser):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, default_scene(), field_delay=0.0)  # a field's text is judged at once

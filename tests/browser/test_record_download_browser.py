@@ -20,7 +20,7 @@ LESSON6 = "06-pinhole-epipolar"
 def test_download_my_record_gives_the_learners_rows_as_csv(browser, tmp_path):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
     from egtviz.viewer.course.start_page import StartPage
 
     store = ProgressStore(tmp_path / "data" / "progress.sqlite3")

@@ -22,7 +22,7 @@ CONICS_JS = """(camera) => [...document.querySelectorAll(
 def test_moving_the_xi_slider_moves_the_conics(browser):
     import viser
 
-    from egtviz.viewer.workbench.app import EgtvizApp
+    from egtviz.viewer.tabs import EgtvizApp
 
     base = default_scene()
     scene = Scene(cameras=(UnifiedSpec("uni", (-3.0, -8.0, 1.5), (20.0, -3.0, 0.0), xi=0.8), base.cameras[1]),

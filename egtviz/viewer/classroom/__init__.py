@@ -2,7 +2,7 @@
 their own scene, and the links (with a QR code) that ``egtviz serve --classroom`` prints.
 
 The class's state is :class:`egtviz.classroom.Classroom` (headless); :class:`ClassroomHost` puts it on an
-:class:`~egtviz.viewer.workbench.app.EgtvizApp`.
+:class:`~egtviz.viewer.tabs.EgtvizApp`.
 """
 
 from .host import ClassroomHost as ClassroomHost

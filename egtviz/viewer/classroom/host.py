@@ -1,4 +1,4 @@
-"""A class on an :class:`~egtviz.viewer.workbench.app.EgtvizApp`: which tab is the instructor's, what each
+"""A class on an :class:`~egtviz.viewer.tabs.EgtvizApp`: which tab is the instructor's, what each
 student's tab shows, and the room's scene sent to every follower.
 
 * **Who is who.** The instructor opens ``/egtviz-instructor/<token>`` (:mod:`.links`); the token is read from
@@ -44,7 +44,8 @@ from .instructor_panel import InstructorPanel
 
 if TYPE_CHECKING:
     from ...lessons import LessonRun
-    from ..workbench.app import ClientView, EgtvizApp
+    from ..tabs import EgtvizApp
+    from ..workbench.app import ClientView
 
 __all__ = ["NAME_KEY", "ClassroomHost"]
 

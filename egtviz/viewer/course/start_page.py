@@ -51,7 +51,7 @@ _Shown = TypeVar("_Shown")
 
 
 class CourseApp(Protocol):
-    """What the course uses of the app that serves it: an :class:`~egtviz.viewer.workbench.app.EgtvizApp` (named
+    """What the course uses of the app that serves it: an :class:`~egtviz.viewer.tabs.EgtvizApp` (named
     by what it offers: the app builds the course, so the course cannot import it)."""
 
     @property
@@ -273,7 +273,7 @@ class StartPage:
 
 
 class Course:
-    """The course served by an :class:`~egtviz.viewer.workbench.app.EgtvizApp`: what each tab shows, and its learner.
+    """The course served by an :class:`~egtviz.viewer.tabs.EgtvizApp`: what each tab shows, and its learner.
 
     Args:
         app: the app (its ``show_workbench`` and ``clear_tab`` build and clear a tab).

@@ -68,7 +68,7 @@ def start_headless(scene=None, *, tabs: int = 1, field_delay: float = 0.0):
     field's text inside the assignment to ``handle.value``, so a test can read the result at once.
     Returns ``(server, app, fake_tabs, views)``; call ``server.stop()`` when done.
     """
-    from ..workbench.app import EgtvizApp
+    from ..tabs import EgtvizApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = EgtvizApp(server, scene, field_delay=field_delay)

@@ -187,7 +187,7 @@ def start(host: str = "127.0.0.1", port: int = 8080, scene_path: str | Path | No
     """
     import viser
 
-    from ..workbench.app import EgtvizApp
+    from ..tabs import EgtvizApp
     from .guard import GuardLimits, allowed_hosts, install_guards
 
     limits = GuardLimits(allowed_hosts=allowed_hosts(allow_hosts))

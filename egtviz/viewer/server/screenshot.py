@@ -25,7 +25,7 @@ def take_screenshot(out: str | Path = DEFAULT_OUT, *, width: int = 1600, height:
     import viser
 
     from ...scene import default_scene
-    from ..workbench.app import EgtvizApp
+    from ..tabs import EgtvizApp
     from .browser import chromium, close_notifications, open_viewer
 
     out = Path(out)

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     import viser
 
     from ..classroom import ClassroomHost
-    from ..workbench.app import EgtvizApp
+    from ..tabs import EgtvizApp
     from .class_bus import ClassroomBus
     from .class_patch import JsonObject
 

@@ -16,7 +16,7 @@ SVG_SELECTOR = 'svg[data-egtviz="servo-image"]'
 def take(kind: str, out: str | Path, *, frac: float = 0.3, width: int = 1366, height: int = 768) -> Path:
     import viser
 
-    from ..workbench.app import EgtvizApp
+    from ..tabs import EgtvizApp
     from ..server.browser import chromium, close_notifications
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
